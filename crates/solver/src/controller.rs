@@ -1,0 +1,312 @@
+//! Step-size controllers: the general Söderlind digital filter and its presets, plus the
+//! separate layer of limits (safety, growth and shrink caps, dead-band, h_min, h_max).
+//!
+//! ```text
+//! Söderlind filter (Söderlind 2003, "Digital filters in adaptive time-stepping", ACM TOMS 29;
+//! SUNDIALS SUNAdaptController_Soderlind), with ε_n the scaled error norm of step n (≤ 1 accepts)
+//! and k = p̂ + 1 (p̂ the order of the error estimate):
+//!
+//!   h_{n+1} = h_n · ε_n^{−k1/k} · ε_{n−1}^{−k2/k} · ε_{n−2}^{−k3/k}
+//!                 · (h_n / h_{n−1})^{k4} · (h_{n−1} / h_{n−2})^{k5}
+//! ```
+//!
+//! The controller only proposes a raw factor; [`StepLimits`] applies the safety factor and the
+//! caps. History is committed only after a step is accepted ([`Controller::accept`]), so a
+//! rejected step never pollutes it. Missing history (first steps, after a reset) is replaced
+//! by the current values, which makes every preset start as an I controller.
+
+use crate::error::SolveError;
+
+/// The controller presets. Names are the contract of INTERFACES.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerKind {
+    /// Integral (elementary) controller: k = (1, 0, 0, 0, 0).
+    I,
+    /// PI controller (Gustafsson 1991; SUNDIALS defaults): k = (0.8, −0.31, 0, 0, 0).
+    Pi,
+    /// PID controller (SUNDIALS defaults): k = (0.58, −0.21, 0.1, 0, 0).
+    Pid,
+    /// Söderlind's H211b (b = 4): k = (1/4, 1/4, 0, −1/4, 0).
+    H211,
+    /// Söderlind's H312b (b = 8): k = (1/8, 2/8, 1/8, −3/8, −1/8).
+    H312,
+    /// Gustafsson's predictive controller (Gustafsson 1994; SUNDIALS "ImpGus"):
+    /// h_{n+1} = h_n (h_n/h_{n−1}) ε_n^{−k1/k} (ε_n/ε_{n−1})^{−k2/k}, k1 = 0.98, k2 = 0.95,
+    /// i.e. k = (1.93, −0.95, 0, 1, 0).
+    Gustafsson,
+}
+
+impl ControllerKind {
+    /// All presets.
+    pub const ALL: [ControllerKind; 6] = [
+        ControllerKind::I,
+        ControllerKind::Pi,
+        ControllerKind::Pid,
+        ControllerKind::H211,
+        ControllerKind::H312,
+        ControllerKind::Gustafsson,
+    ];
+
+    /// Name in the CLI and summary.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::I => "i",
+            ControllerKind::Pi => "pi",
+            ControllerKind::Pid => "pid",
+            ControllerKind::H211 => "h211",
+            ControllerKind::H312 => "h312",
+            ControllerKind::Gustafsson => "gustafsson",
+        }
+    }
+
+    /// Parses a controller name.
+    pub fn from_name(s: &str) -> Option<ControllerKind> {
+        ControllerKind::ALL.into_iter().find(|c| c.name() == s)
+    }
+
+    /// The five Söderlind coefficients (k1, k2, k3, k4, k5) of this preset.
+    pub fn coefficients(self) -> [f64; 5] {
+        match self {
+            ControllerKind::I => [1.0, 0.0, 0.0, 0.0, 0.0],
+            ControllerKind::Pi => [0.8, -0.31, 0.0, 0.0, 0.0],
+            ControllerKind::Pid => [0.58, -0.21, 0.1, 0.0, 0.0],
+            ControllerKind::H211 => [0.25, 0.25, 0.0, -0.25, 0.0],
+            ControllerKind::H312 => [0.125, 0.25, 0.125, -0.375, -0.125],
+            ControllerKind::Gustafsson => [1.93, -0.95, 0.0, 1.0, 0.0],
+        }
+    }
+
+    /// A fresh controller of this preset.
+    pub fn build(self) -> Soderlind {
+        Soderlind::new(self.coefficients())
+    }
+}
+
+impl std::fmt::Display for ControllerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A step-size controller: proposes, then commits history on acceptance.
+pub trait Controller {
+    /// Raw step factor h_{n+1}/h_n proposed after a step of size `h` whose scaled error norm is
+    /// `err` (> 0; ≤ 1 means accepted), for an error estimate of order `p_hat` (exponent
+    /// 1/(p_hat + 1)). Does not change history.
+    fn factor(&self, h: f64, err: f64, p_hat: usize) -> f64;
+    /// Commits (h, err) of an accepted step to the history.
+    fn accept(&mut self, h: f64, err: f64);
+    /// Forgets the history (after an event, a restart, or a change of order).
+    fn reset(&mut self);
+}
+
+/// The general Söderlind filter with five coefficients.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Soderlind {
+    /// Coefficients (k1, …, k5).
+    pub k: [f64; 5],
+    /// ε_{n−1}, ε_{n−2} of accepted steps (None until known).
+    err_hist: [Option<f64>; 2],
+    /// h_{n−1}, h_{n−2} of accepted steps.
+    h_hist: [Option<f64>; 2],
+}
+
+impl Soderlind {
+    /// A controller with the given coefficients and empty history.
+    pub fn new(k: [f64; 5]) -> Self {
+        Soderlind {
+            k,
+            err_hist: [None; 2],
+            h_hist: [None; 2],
+        }
+    }
+}
+
+/// Floor on error norms before taking powers (an exact step would give ε = 0).
+const ERR_FLOOR: f64 = 1e-10;
+
+impl Controller for Soderlind {
+    fn factor(&self, h: f64, err: f64, p_hat: usize) -> f64 {
+        let ord = (p_hat + 1) as f64;
+        let e0 = err.max(ERR_FLOOR);
+        let e1 = self.err_hist[0].unwrap_or(e0);
+        let e2 = self.err_hist[1].unwrap_or(e1);
+        let h1 = self.h_hist[0].unwrap_or(h);
+        let h2 = self.h_hist[1].unwrap_or(h1);
+        let [k1, k2, k3, k4, k5] = self.k;
+        e0.powf(-k1 / ord)
+            * e1.powf(-k2 / ord)
+            * e2.powf(-k3 / ord)
+            * (h / h1).powf(k4)
+            * (h1 / h2).powf(k5)
+    }
+
+    fn accept(&mut self, h: f64, err: f64) {
+        self.err_hist = [Some(err.max(ERR_FLOOR)), self.err_hist[0]];
+        self.h_hist = [Some(h), self.h_hist[0]];
+    }
+
+    fn reset(&mut self) {
+        self.err_hist = [None; 2];
+        self.h_hist = [None; 2];
+    }
+}
+
+/// Limits applied around any controller (ARKODE's adaptivity layer).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StepLimits {
+    /// Safety factor multiplying every proposed factor. Default 0.9; range (0, 1].
+    pub safety: f64,
+    /// Largest growth factor after an accepted step. Default 5; > 1.
+    pub max_growth: f64,
+    /// Largest growth factor on the first accepted step. Default 10 000 (ARKODE's etamx1); > 1.
+    pub max_first_growth: f64,
+    /// Smallest factor (largest shrink) after any step. Default 0.2; range (0, 1).
+    pub min_shrink: f64,
+    /// Largest factor after a rejected step. Default 0.9; range (0, 1].
+    pub max_after_reject: f64,
+    /// Largest factor after an accepted step that directly follows a rejection. Default 1.
+    pub max_growth_after_reject: f64,
+    /// Largest factor after two or more error-test failures in a row. Default 0.3 (ARKODE
+    /// etamxf).
+    pub max_after_repeated_reject: f64,
+    /// Dead-band: factors inside [lower, upper] keep h unchanged (saves Jacobian refactoring).
+    /// Default (1, 1) (no dead-band); lower ≤ 1 ≤ upper.
+    pub deadband: (f64, f64),
+}
+
+impl Default for StepLimits {
+    fn default() -> Self {
+        StepLimits {
+            safety: 0.9,
+            max_growth: 5.0,
+            max_first_growth: 10_000.0,
+            min_shrink: 0.2,
+            max_after_reject: 0.9,
+            max_growth_after_reject: 1.0,
+            max_after_repeated_reject: 0.3,
+            deadband: (1.0, 1.0),
+        }
+    }
+}
+
+impl StepLimits {
+    /// Checks the ranges documented on each field.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let bad = |m: &str| Err(SolveError::InvalidOptions(format!("limits: {m}")));
+        if !(self.safety > 0.0 && self.safety <= 1.0) {
+            return bad("safety must be in (0, 1]");
+        }
+        if !(self.max_growth > 1.0 && self.max_growth.is_finite()) {
+            return bad("max_growth must be finite and > 1");
+        }
+        if !(self.max_first_growth > 1.0 && self.max_first_growth.is_finite()) {
+            return bad("max_first_growth must be finite and > 1");
+        }
+        if !(self.min_shrink > 0.0 && self.min_shrink < 1.0) {
+            return bad("min_shrink must be in (0, 1)");
+        }
+        if !(self.max_after_reject > 0.0 && self.max_after_reject <= 1.0) {
+            return bad("max_after_reject must be in (0, 1]");
+        }
+        if !(self.max_growth_after_reject >= 1.0 && self.max_growth_after_reject.is_finite()) {
+            return bad("max_growth_after_reject must be finite and >= 1");
+        }
+        if !(self.max_after_repeated_reject > 0.0 && self.max_after_repeated_reject <= 1.0) {
+            return bad("max_after_repeated_reject must be in (0, 1]");
+        }
+        let (lo, hi) = self.deadband;
+        if !(lo > 0.0 && lo <= 1.0 && hi >= 1.0 && hi.is_finite()) {
+            return bad("deadband must satisfy 0 < lower <= 1 <= upper");
+        }
+        Ok(())
+    }
+}
+
+/// A controller with its limits and the per-solve counters the limits need: what every
+/// adaptive stepper of this crate holds.
+pub struct StepSizeControl {
+    controller: Box<dyn Controller>,
+    limits: StepLimits,
+    /// Error-test failures in a row on the current step.
+    rejects_in_row: usize,
+    /// Whether the previous attempt was rejected (caps the growth of the next accepted step).
+    after_reject: bool,
+    /// Whether no step has been accepted since the start or the last reset.
+    first: bool,
+}
+
+impl StepSizeControl {
+    /// Wraps a controller with limits.
+    pub fn new(controller: Box<dyn Controller>, limits: StepLimits) -> Self {
+        StepSizeControl {
+            controller,
+            limits,
+            rejects_in_row: 0,
+            after_reject: false,
+            first: true,
+        }
+    }
+
+    /// The limits in force.
+    pub fn limits(&self) -> &StepLimits {
+        &self.limits
+    }
+
+    /// After an accepted step of size `h` with error `err` (≤ 1): commits history and returns the
+    /// next step size (before h_min/h_max clipping, which the stepper does).
+    pub fn accept(&mut self, h: f64, err: f64, p_hat: usize) -> f64 {
+        let l = &self.limits;
+        let mut fac = l.safety * self.controller.factor(h, err, p_hat);
+        let cap = if self.first {
+            l.max_first_growth
+        } else if self.after_reject {
+            l.max_growth_after_reject
+        } else {
+            l.max_growth
+        };
+        fac = fac.clamp(l.min_shrink, cap);
+        if fac >= l.deadband.0 && fac <= l.deadband.1 {
+            fac = 1.0;
+        }
+        self.controller.accept(h, err);
+        self.rejects_in_row = 0;
+        self.after_reject = false;
+        self.first = false;
+        h * fac
+    }
+
+    /// After a step of size `h` rejected by the error test with error `err` (> 1): returns the
+    /// step size to retry with. History is not touched.
+    pub fn reject(&mut self, h: f64, err: f64, p_hat: usize) -> f64 {
+        let l = &self.limits;
+        self.rejects_in_row += 1;
+        self.after_reject = true;
+        let cap = if self.rejects_in_row >= 2 {
+            l.max_after_repeated_reject
+        } else {
+            l.max_after_reject
+        };
+        // The rejected step uses the elementary controller: the filter's history belongs to
+        // accepted steps only.
+        let ord = (p_hat + 1) as f64;
+        let fac = (l.safety * err.max(ERR_FLOOR).powf(-1.0 / ord)).clamp(l.min_shrink, cap);
+        h * fac
+    }
+
+    /// After a step rejected for another reason (Newton failure): shrink by a quarter.
+    pub fn reject_newton(&mut self, h: f64) -> f64 {
+        self.after_reject = true;
+        h * 0.25
+    }
+
+    /// Forgets all history (event restart).
+    pub fn reset(&mut self) {
+        self.controller.reset();
+        self.rejects_in_row = 0;
+        self.after_reject = false;
+        self.first = true;
+    }
+}

@@ -1,0 +1,85 @@
+//! Typed solver failures. Every failure carries the time and, where one exists, the state.
+
+/// Why an integration failed. Never a panic, never a silent NaN.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// The step size needed to meet the tolerance fell below `h_min` (or below the floating
+    /// point resolution of t).
+    #[error("step size too small at t = {t:e}: h = {h:e}")]
+    StepSizeTooSmall {
+        /// Time of the last accepted state.
+        t: f64,
+        /// The step size that was rejected.
+        h: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+    },
+    /// `max_steps` steps were taken before reaching the end time.
+    #[error("too many steps: {steps} steps taken, reached t = {t:e}")]
+    TooManySteps {
+        /// Time reached.
+        t: f64,
+        /// Number of steps taken.
+        steps: usize,
+        /// Last accepted state.
+        y: Vec<f64>,
+    },
+    /// The right-hand side or the state became non-finite (NaN or ±∞), or the state grew past
+    /// the divergence bound.
+    #[error("non-finite or diverging state at t = {t:e}")]
+    NonFiniteState {
+        /// Time of the last finite state.
+        t: f64,
+        /// Last finite state.
+        y: Vec<f64>,
+    },
+    /// The Newton iteration of an implicit method failed to converge even at the smallest step.
+    #[error("Newton iteration failed at t = {t:e}: {reason}")]
+    NewtonFailure {
+        /// Time of the last accepted state.
+        t: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+        /// What failed (singular matrix, divergence, backend message).
+        reason: String,
+    },
+    /// The options are inconsistent or out of range.
+    #[error("invalid options: {0}")]
+    InvalidOptions(String),
+    /// A budget (wall clock) ran out before the end time.
+    #[error("budget exhausted at t = {t:e}: {reason}")]
+    BudgetExhausted {
+        /// Time reached.
+        t: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+        /// Which budget.
+        reason: String,
+    },
+}
+
+impl SolveError {
+    /// Time at which the failure happened (None for invalid options).
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            SolveError::StepSizeTooSmall { t, .. }
+            | SolveError::TooManySteps { t, .. }
+            | SolveError::NonFiniteState { t, .. }
+            | SolveError::NewtonFailure { t, .. }
+            | SolveError::BudgetExhausted { t, .. } => Some(*t),
+            SolveError::InvalidOptions(_) => None,
+        }
+    }
+
+    /// State at the failure (None for invalid options).
+    pub fn state(&self) -> Option<&[f64]> {
+        match self {
+            SolveError::StepSizeTooSmall { y, .. }
+            | SolveError::TooManySteps { y, .. }
+            | SolveError::NonFiniteState { y, .. }
+            | SolveError::NewtonFailure { y, .. }
+            | SolveError::BudgetExhausted { y, .. } => Some(y),
+            SolveError::InvalidOptions(_) => None,
+        }
+    }
+}

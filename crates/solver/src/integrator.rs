@@ -1,0 +1,524 @@
+//! The driver: steps any [`Stepper`], locates events on its dense output, runs the system's
+//! event hook, restarts, and records output.
+//!
+//! ```text
+//! after each accepted step [t_a, t_b]:
+//!   sample g at t_a + j (t_b − t_a)/(s + 1), j = 1..s (s = event_samples), and at t_b
+//!   first sub-interval with a sign change of some g_i in its direction
+//!     → each such i: Illinois (modified regula falsi) on g_i(t, y_dense(t)) until the
+//!       bracket is below event_rtol · max(|t|, |t_b − t_a|)
+//!     → t* = earliest root (the right end of its final bracket, where g_i already has its
+//!       new sign); every component whose root lies within the tolerance of t* is reported
+//!   hook: y* = on_event(hits, y_dense(t*)); then stop, or restart the stepper at (t*, y*)
+//! ```
+//!
+//! Rule for zeros: an event function that is exactly zero at the start (or after a restart)
+//! has no sign yet; it takes the sign of its first nonzero value, and no event is reported for
+//! that first value. A crossing is a change between nonzero signs. Because the event time is
+//! taken on the far side of the root, a restart never begins with the triggering function at
+//! exactly zero (the diffsol pitfall of a missed next crossing).
+
+use std::time::Instant;
+
+use crate::error::SolveError;
+use crate::options::{Output, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::{make_stepper, Stepper};
+use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
+
+/// What one call of [`Integrator::step`] did, and where the state is afterwards.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepOutcome {
+    /// A step was accepted; the state is at `t`, the end of the step. The dense output covers
+    /// [t_prev, t].
+    Accepted {
+        /// End of the step.
+        t: f64,
+    },
+    /// One or more events were located in the step; the state is at the event time `t`, after
+    /// the hook ran (so it may differ from the dense output's left limit at `t`). The dense
+    /// output covers [t_prev, t]. If the hook asked to stop, the integration is finished.
+    Event {
+        /// Event time.
+        t: f64,
+        /// The events, all at `t` within the location tolerance.
+        hits: Vec<EventHit>,
+        /// Whether the integration stopped there.
+        stopped: bool,
+    },
+    /// The end time was reached; the state is at `t = t_end`. Further calls return this again.
+    StopTime {
+        /// The end time.
+        t: f64,
+    },
+}
+
+/// A solver in motion: call [`Integrator::step`] until it returns `StopTime` (or a stopping
+/// event), or use [`solve`] for the whole span.
+pub struct Integrator<'a, S: OdeSystem + ?Sized> {
+    sys: &'a S,
+    stepper: Box<dyn Stepper + 'a>,
+    opts: SolverOptions,
+    t_end: f64,
+    specs: Vec<EventSpec>,
+    /// Last nonzero sign of each event function (0 = none yet).
+    signs: Vec<i8>,
+    g_a: Vec<f64>,
+    g_b: Vec<f64>,
+    ybuf: Vec<f64>,
+    /// Segment end: the end of the step, or the event time when a step was cut.
+    seg_end: f64,
+    /// State set by an event hook, applied to the stepper at the next step.
+    pending_restart: Option<(f64, Vec<f64>)>,
+    /// Copy of the state after the last step (post-hook after an event).
+    y_cur: Vec<f64>,
+    t_cur: f64,
+    finished: bool,
+    started: Instant,
+}
+
+impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
+    /// Validates the options and builds the method at (t0, y0) for integration up to `t_end`.
+    pub fn new(
+        sys: &'a S,
+        t0: f64,
+        t_end: f64,
+        y0: &[f64],
+        opts: &SolverOptions,
+    ) -> Result<Self, SolveError> {
+        let n = sys.dim();
+        if y0.len() != n {
+            return Err(SolveError::InvalidOptions(format!(
+                "y0 has {} entries, the system {n}",
+                y0.len()
+            )));
+        }
+        if !(t0.is_finite() && t_end.is_finite() && t_end > t0) {
+            return Err(SolveError::InvalidOptions(format!(
+                "time span must be finite with t_end > t0, got [{t0}, {t_end}]"
+            )));
+        }
+        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::InvalidOptions(format!("y0[{i}] is not finite")));
+        }
+        opts.validate(n)?;
+        let stepper = make_stepper(sys, t0, y0, opts)?;
+        let m = if opts.events { sys.n_events() } else { 0 };
+        let specs = (0..m).map(|i| sys.event_spec(i)).collect();
+        let mut it = Integrator {
+            sys,
+            stepper,
+            opts: opts.clone(),
+            t_end,
+            specs,
+            signs: vec![0; m],
+            g_a: vec![0.0; m],
+            g_b: vec![0.0; m],
+            ybuf: vec![0.0; n],
+            seg_end: t0,
+            pending_restart: None,
+            y_cur: y0.to_vec(),
+            t_cur: t0,
+            finished: false,
+            started: Instant::now(),
+        };
+        if m > 0 {
+            it.sys.events(t0, y0, &mut it.g_a);
+            it.stepper.stats_mut().event_evals += 1;
+            for i in 0..m {
+                it.signs[i] = sign(it.g_a[i]);
+            }
+        }
+        Ok(it)
+    }
+
+    /// Current time (end of the last step, or the event time).
+    pub fn t(&self) -> f64 {
+        self.t_cur
+    }
+
+    /// Current state (after the hook, when the last step ended in an event).
+    pub fn y(&self) -> &[f64] {
+        &self.y_cur
+    }
+
+    /// Start of the last step.
+    pub fn t_prev(&self) -> f64 {
+        self.stepper.t_prev()
+    }
+
+    /// Whether the end time or a stopping event was reached.
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> &Stats {
+        self.stepper.stats()
+    }
+
+    /// Dense output of the last step: y(t) for t in [t_prev, t] (the left limit at an event).
+    pub fn interpolate(&self, t: f64, out: &mut [f64]) {
+        if t >= self.seg_end && self.pending_restart.is_none() {
+            out.copy_from_slice(&self.y_cur);
+        } else {
+            self.stepper.interpolate(t, out);
+        }
+    }
+
+    /// Takes one step; see [`StepOutcome`] for where the state is afterwards.
+    pub fn step(&mut self) -> Result<StepOutcome, SolveError> {
+        if self.finished {
+            return Ok(StepOutcome::StopTime { t: self.t_cur });
+        }
+        if let Some((t, y)) = self.pending_restart.take() {
+            self.stepper.restart(t, &y)?;
+        }
+        if let Some(w) = self.opts.max_wall_time {
+            if self.started.elapsed().as_secs_f64() > w {
+                return Err(SolveError::BudgetExhausted {
+                    t: self.t_cur,
+                    y: self.y_cur.clone(),
+                    reason: format!("wall-clock budget of {w} s used"),
+                });
+            }
+        }
+        self.stepper.step(self.t_end)?;
+        let t_b = self.stepper.t();
+        {
+            let y = self.stepper.y();
+            let bound = self.opts.divergence_bound;
+            if !y.iter().all(|v| v.is_finite() && v.abs() <= bound) {
+                return Err(SolveError::NonFiniteState {
+                    t: self.t_cur,
+                    y: self.y_cur.clone(),
+                });
+            }
+        }
+        if !self.specs.is_empty() {
+            if let Some((t_ev, hits)) = self.locate_events(t_b) {
+                return self.handle_event(t_ev, hits);
+            }
+        }
+        self.t_cur = t_b;
+        self.seg_end = t_b;
+        self.y_cur.copy_from_slice(self.stepper.y());
+        if t_b >= self.t_end {
+            self.finished = true;
+            Ok(StepOutcome::StopTime { t: t_b })
+        } else {
+            Ok(StepOutcome::Accepted { t: t_b })
+        }
+    }
+
+    fn eval_g_dense(&mut self, t: f64, g: &mut [f64]) {
+        self.stepper.interpolate(t, &mut self.ybuf);
+        self.sys.events(t, &self.ybuf, g);
+        self.stepper.stats_mut().event_evals += 1;
+    }
+
+    /// Scans the step [t_prev, t_b]; returns the earliest event time and its hits, having
+    /// updated the signs, or None (signs updated to the end of the step).
+    fn locate_events(&mut self, t_b: f64) -> Option<(f64, Vec<EventHit>)> {
+        let m = self.specs.len();
+        let t_a0 = self.stepper.t_prev();
+        let samples = self.opts.event_samples;
+        let mut t_a = t_a0;
+        let mut g_a = vec![0.0; m];
+        let mut g_b = std::mem::take(&mut self.g_b);
+        for j in 1..=samples + 1 {
+            let t_j = if j == samples + 1 {
+                t_b
+            } else {
+                t_a0 + (t_b - t_a0) * j as f64 / (samples + 1) as f64
+            };
+            if j == samples + 1 {
+                self.sys.events(t_b, self.stepper.y(), &mut g_b);
+                self.stepper.stats_mut().event_evals += 1;
+            } else {
+                self.eval_g_dense(t_j, &mut g_b);
+            }
+            // Components crossing in [t_a, t_j].
+            let mut crossing: Vec<usize> = Vec::new();
+            for i in 0..m {
+                let s_new = sign(g_b[i]);
+                if s_new == 0 {
+                    continue;
+                }
+                let s_old = self.signs[i];
+                if s_old != 0 && s_old != s_new {
+                    let dir_ok = self.specs[i].direction.matches(s_old as f64, s_new as f64);
+                    if dir_ok {
+                        crossing.push(i);
+                    } else {
+                        self.signs[i] = s_new;
+                    }
+                } else {
+                    self.signs[i] = s_new;
+                }
+            }
+            if !crossing.is_empty() {
+                // g at the left end of the sub-interval, for each crossing component.
+                if t_a == t_a0 {
+                    self.eval_g_dense_left(t_a, &mut g_a);
+                }
+                let tol = self.opts.event_rtol * t_j.abs().max((t_b - t_a0).abs());
+                let mut roots: Vec<(usize, f64)> = Vec::new();
+                for &i in &crossing {
+                    let left = if sign(g_a[i]) == self.signs[i] {
+                        g_a[i]
+                    } else {
+                        // The left value is zero or on the wrong side (a dense-output
+                        // artefact): use the sign that was recorded.
+                        -(self.signs[i] as f64) * f64::MIN_POSITIVE
+                    };
+                    let r = self.illinois(i, t_a, left, t_j, g_b[i], tol);
+                    roots.push((i, r));
+                }
+                let t_star = roots.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+                let hits: Vec<EventHit> = roots
+                    .iter()
+                    .filter(|(_, r)| *r <= t_star + tol)
+                    .map(|&(i, _)| EventHit {
+                        index: i,
+                        t: t_star,
+                        rising: self.signs[i] < 0,
+                    })
+                    .collect();
+                self.g_b = g_b;
+                return Some((t_star, hits));
+            }
+            t_a = t_j;
+            g_a.copy_from_slice(&g_b);
+        }
+        self.g_b = g_b;
+        None
+    }
+
+    fn eval_g_dense_left(&mut self, t: f64, g: &mut [f64]) {
+        // At the start of the step the state is known exactly; g_a holds g there.
+        g.copy_from_slice(&self.g_a);
+        let _ = t;
+    }
+
+    /// Illinois method on component i over [ta, tb] with g(ta) = ga, g(tb) = gb of opposite
+    /// signs. Returns the right end of the final bracket (g has its new sign there).
+    fn illinois(
+        &mut self,
+        i: usize,
+        mut ta: f64,
+        mut ga: f64,
+        mut tb: f64,
+        mut gb: f64,
+        tol: f64,
+    ) -> f64 {
+        let m = self.specs.len();
+        let mut g = vec![0.0; m];
+        let mut side = 0i8;
+        for _ in 0..200 {
+            if (tb - ta).abs() <= tol {
+                break;
+            }
+            let mut tm = tb - gb * (tb - ta) / (gb - ga);
+            if !(tm > ta && tm < tb) {
+                tm = 0.5 * (ta + tb);
+            }
+            self.eval_g_dense(tm, &mut g);
+            let gm = g[i];
+            if gm == 0.0 {
+                // Exactly on the root: step just past it so that the new sign holds.
+                let nudge = tol.max(f64::EPSILON * tm.abs());
+                return (tm + nudge).min(tb);
+            }
+            if sign(gm) == sign(gb) {
+                tb = tm;
+                gb = gm;
+                if side == 1 {
+                    ga *= 0.5;
+                }
+                side = 1;
+            } else {
+                ta = tm;
+                ga = gm;
+                if side == -1 {
+                    gb *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        tb
+    }
+
+    fn handle_event(&mut self, t_ev: f64, hits: Vec<EventHit>) -> Result<StepOutcome, SolveError> {
+        let n = self.ybuf.len();
+        let mut y = vec![0.0; n];
+        self.stepper.interpolate(t_ev, &mut y);
+        let mut stop = false;
+        for h in &hits {
+            if self.sys.on_event(h, &mut y) == EventAction::Stop {
+                stop = true;
+            }
+        }
+        self.stepper.stats_mut().events += hits.len();
+        // Signs after the hook (the hook may move the state across a surface).
+        let m = self.specs.len();
+        let mut g = vec![0.0; m];
+        self.sys.events(t_ev, &y, &mut g);
+        self.stepper.stats_mut().event_evals += 1;
+        for i in 0..m {
+            let s = sign(g[i]);
+            if s != 0 {
+                self.signs[i] = s;
+            } else if hits.iter().any(|h| h.index == i) {
+                // Zero after the hook: keep the sign the crossing produced.
+                self.signs[i] = if self.signs[i] < 0 { 1 } else { -1 };
+            }
+        }
+        for h in &hits {
+            // Record the post-crossing sign for the triggering components when g was nonzero.
+            let s = sign(g[h.index]);
+            if s != 0 {
+                self.signs[h.index] = s;
+            }
+        }
+        self.g_a.copy_from_slice(&g);
+        self.t_cur = t_ev;
+        self.seg_end = t_ev;
+        self.y_cur.copy_from_slice(&y);
+        if stop || t_ev >= self.t_end {
+            self.finished = true;
+        } else {
+            self.pending_restart = Some((t_ev, y));
+        }
+        Ok(StepOutcome::Event {
+            t: t_ev,
+            hits,
+            stopped: stop,
+        })
+    }
+}
+
+fn sign(v: f64) -> i8 {
+    if v > 0.0 {
+        1
+    } else if v < 0.0 {
+        -1
+    } else {
+        0
+    }
+}
+
+/// The result of [`solve`].
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Solution {
+    /// Dimension n.
+    pub dim: usize,
+    /// Output times.
+    pub t: Vec<f64>,
+    /// Output states, row-major: state k is `y[k*dim .. (k+1)*dim]`.
+    pub y: Vec<f64>,
+    /// Located events, in order.
+    pub events: Vec<EventHit>,
+    /// Counters.
+    pub stats: Stats,
+    /// Final time reached (t_end, or a stopping event's time).
+    pub t_final: f64,
+    /// Final state.
+    pub y_final: Vec<f64>,
+}
+
+impl Solution {
+    /// The state at output index k.
+    pub fn state(&self, k: usize) -> &[f64] {
+        &self.y[k * self.dim..(k + 1) * self.dim]
+    }
+    /// Number of output points.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// True when nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}
+
+/// Integrates `sys` from `t_span.0` to `t_span.1` starting at `y0`.
+pub fn solve<S: OdeSystem + ?Sized>(
+    sys: &S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &SolverOptions,
+) -> Result<Solution, SolveError> {
+    let mut it = Integrator::new(sys, t_span.0, t_span.1, y0, opts)?;
+    let n = y0.len();
+    let mut sol = Solution {
+        dim: n,
+        ..Default::default()
+    };
+    let times: &[f64] = match &opts.output {
+        Output::Times(ts) => ts,
+        _ => &[],
+    };
+    let mut next_time = 0usize;
+    // Output times at or before the start.
+    while next_time < times.len() && times[next_time] <= t_span.0 {
+        sol.t.push(times[next_time]);
+        sol.y.extend_from_slice(y0);
+        next_time += 1;
+    }
+    if matches!(opts.output, Output::Steps) {
+        sol.t.push(t_span.0);
+        sol.y.extend_from_slice(y0);
+    }
+    let mut buf = vec![0.0; n];
+    loop {
+        let outcome = it.step()?;
+        let t_now = it.t();
+        if let Output::Times(_) = opts.output {
+            while next_time < times.len() && times[next_time] <= t_now {
+                let tq = times[next_time];
+                if tq >= t_now {
+                    buf.copy_from_slice(it.y());
+                } else {
+                    it.interpolate(tq, &mut buf);
+                }
+                sol.t.push(tq);
+                sol.y.extend_from_slice(&buf);
+                next_time += 1;
+            }
+        } else if matches!(opts.output, Output::Steps) {
+            sol.t.push(t_now);
+            sol.y.extend_from_slice(it.y());
+        }
+        match outcome {
+            StepOutcome::Accepted { .. } => {}
+            StepOutcome::Event { hits, stopped, .. } => {
+                sol.events.extend(hits);
+                if stopped {
+                    break;
+                }
+            }
+            StepOutcome::StopTime { .. } => break,
+        }
+        if it.is_finished() {
+            break;
+        }
+    }
+    sol.t_final = it.t();
+    sol.y_final = it.y().to_vec();
+    if matches!(opts.output, Output::Final) {
+        sol.t.push(sol.t_final);
+        sol.y.extend_from_slice(&sol.y_final);
+    }
+    sol.stats = it.stats().clone();
+    Ok(sol)
+}
+
+/// Convenience for direction filtering in tests and tools.
+pub fn direction_of(rising: bool) -> Direction {
+    if rising {
+        Direction::Rising
+    } else {
+        Direction::Falling
+    }
+}

@@ -1,0 +1,35 @@
+//! # lash-solver
+//!
+//! ODE integrators for stiff contact problems, knowing nothing about mechanisms.
+//!
+//! ```text
+//! y' = f(t, y),  y(t0) = y0,  events g_i(t, y) = 0
+//! ```
+//!
+//! - [`OdeSystem`]: the problem (right-hand side, optional Jacobian, event functions and the
+//!   hook an event runs).
+//! - [`SolverOptions`]: method, tolerances, step limits, controller, output, events.
+//! - [`solve`] integrates a span; [`Integrator`] steps one step at a time and says where the
+//!   state is after each ([`StepOutcome`]).
+//! - [`Stats`] counts the work; [`SolveError`] says why a run failed, with time and state.
+//!
+//! Methods: the paper's fixed-step RK4 ([`rk4`]).
+
+#![warn(missing_docs)]
+
+pub mod controller;
+pub mod error;
+pub mod integrator;
+pub mod options;
+pub mod rk4;
+pub mod stats;
+pub mod stepper;
+pub mod system;
+
+pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
+pub use error::SolveError;
+pub use integrator::{solve, Integrator, Solution, StepOutcome};
+pub use options::{Atol, Method, Output, SolverOptions};
+pub use stats::Stats;
+pub use stepper::{make_stepper, Stepper};
+pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};

@@ -1,0 +1,194 @@
+//! The paper's method: classical fourth-order Runge–Kutta with a fixed step.
+//!
+//! ```text
+//! k1 = f(t, y)
+//! k2 = f(t + h/2, y + h/2 k1)
+//! k3 = f(t + h/2, y + h/2 k2)
+//! k4 = f(t + h,   y + h k3)
+//! y_{n+1} = y_n + h/6 (k1 + 2 k2 + 2 k3 + k4)
+//! ```
+//! Kutta (1901); HNW I, Table 1.2 (p. 138). The step is fixed; only the last step is shortened
+//! to land on the stop time. Dense output is the cubic Hermite interpolant through
+//! (y_n, f_n) and (y_{n+1}, f_{n+1}) (order 3, continuous derivative); f_{n+1} is the next
+//! step's k1, so it costs nothing extra: 4 RHS evaluations per step, plus 1 at the start.
+//!
+//! Without error control a step past the stability limit makes the state grow without bound;
+//! the integrator reports that as `NonFiniteState` once a component exceeds the divergence
+//! bound or stops being finite.
+
+use crate::error::SolveError;
+use crate::options::{Method, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::Stepper;
+use crate::system::OdeSystem;
+
+/// Fixed-step classical RK4.
+pub struct Rk4<'a, S: OdeSystem + ?Sized> {
+    sys: &'a S,
+    h: f64,
+    max_steps: usize,
+    t: f64,
+    t_prev: f64,
+    y: Vec<f64>,
+    y_prev: Vec<f64>,
+    /// f(t_prev, y_prev)
+    f_prev: Vec<f64>,
+    /// f(t, y)
+    f: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+    tmp: Vec<f64>,
+    stats: Stats,
+}
+
+impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
+    /// Builds the stepper at (t0, y0) with `opts.step` as the step.
+    pub fn new(sys: &'a S, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
+        let h = opts
+            .step
+            .ok_or_else(|| SolveError::InvalidOptions("rk4 needs a fixed step".into()))?;
+        let n = y0.len();
+        let mut s = Rk4 {
+            sys,
+            h,
+            max_steps: opts.max_steps,
+            t: t0,
+            t_prev: t0,
+            y: y0.to_vec(),
+            y_prev: y0.to_vec(),
+            f_prev: vec![0.0; n],
+            f: vec![0.0; n],
+            k2: vec![0.0; n],
+            k3: vec![0.0; n],
+            k4: vec![0.0; n],
+            tmp: vec![0.0; n],
+            stats: Stats::default(),
+        };
+        s.eval_f()?;
+        s.f_prev.copy_from_slice(&s.f);
+        Ok(s)
+    }
+
+    fn eval_f(&mut self) -> Result<(), SolveError> {
+        self.sys.rhs(self.t, &self.y, &mut self.f);
+        self.stats.rhs_evals += 1;
+        if self.f.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            })
+        }
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
+    fn method(&self) -> Method {
+        Method::Rk4
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        if self.stats.steps >= self.max_steps {
+            return Err(SolveError::TooManySteps {
+                t: self.t,
+                steps: self.stats.steps,
+                y: self.y.clone(),
+            });
+        }
+        let remaining = t_stop - self.t;
+        // Land exactly on t_stop when the last step would leave a sliver below 1e-10·h.
+        let h = if remaining <= self.h * (1.0 + 1e-10) {
+            remaining
+        } else {
+            self.h
+        };
+        if h.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h,
+                y: self.y.clone(),
+            });
+        }
+        let n = self.y.len();
+        let (t, sys) = (self.t, self.sys);
+        // k1 = self.f
+        for i in 0..n {
+            self.tmp[i] = self.y[i] + 0.5 * h * self.f[i];
+        }
+        sys.rhs(t + 0.5 * h, &self.tmp, &mut self.k2);
+        for i in 0..n {
+            self.tmp[i] = self.y[i] + 0.5 * h * self.k2[i];
+        }
+        sys.rhs(t + 0.5 * h, &self.tmp, &mut self.k3);
+        for i in 0..n {
+            self.tmp[i] = self.y[i] + h * self.k3[i];
+        }
+        sys.rhs(t + h, &self.tmp, &mut self.k4);
+        self.stats.rhs_evals += 3;
+        self.stats.steps += 1;
+        self.y_prev.copy_from_slice(&self.y);
+        self.f_prev.copy_from_slice(&self.f);
+        for i in 0..n {
+            self.y[i] += h / 6.0 * (self.f[i] + 2.0 * self.k2[i] + 2.0 * self.k3[i] + self.k4[i]);
+        }
+        self.t_prev = t;
+        self.t = if h == remaining { t_stop } else { t + h };
+        self.stats.accepted += 1;
+        self.stats.record_step_size(h);
+        if !self.y.iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFiniteState {
+                t: self.t_prev,
+                y: self.y_prev.clone(),
+            });
+        }
+        self.eval_f()
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let h = self.t - self.t_prev;
+        if h == 0.0 {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        let s = (t - self.t_prev) / h;
+        // Cubic Hermite basis.
+        let h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s);
+        let h10 = s * (1.0 - s) * (1.0 - s);
+        let h01 = s * s * (3.0 - 2.0 * s);
+        let h11 = s * s * (s - 1.0);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = h00 * self.y_prev[i]
+                + h10 * h * self.f_prev[i]
+                + h01 * self.y[i]
+                + h11 * h * self.f[i];
+        }
+    }
+
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        self.y_prev.copy_from_slice(y);
+        self.eval_f()?;
+        self.f_prev.copy_from_slice(&self.f);
+        Ok(())
+    }
+
+    fn stats(&self) -> &Stats {
+        &self.stats
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+}

@@ -1,0 +1,115 @@
+//! The problem interface: a first-order ODE `y' = f(t, y)` with optional Jacobian and event
+//! functions.
+//!
+//! ```text
+//! y' = f(t, y),  y(t0) = y0,  y ∈ ℝⁿ
+//! events: g_i(t, y), i = 0..m; a crossing of zero in the chosen direction is located,
+//!         the hook `on_event` runs (it may change y and the system's own state),
+//!         and integration either stops or restarts from the event state.
+//! ```
+//!
+//! All methods take `&self`: the solvers (diffsol's included) hold a shared reference for the
+//! whole integration. A system that keeps state changed by events (an impact velocity, a contact
+//! mode) or scratch buffers keeps them behind `Cell`/`RefCell`.
+
+use faer::MatMut;
+
+/// Which sign changes of an event function count as events.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    /// g goes from negative to positive.
+    Rising,
+    /// g goes from positive to negative.
+    Falling,
+    /// Either sign change.
+    #[default]
+    Either,
+}
+
+impl Direction {
+    /// Whether a change of sign from `before` to `after` is an event in this direction.
+    pub fn matches(self, before: f64, after: f64) -> bool {
+        let rising = before < 0.0 && after > 0.0;
+        let falling = before > 0.0 && after < 0.0;
+        match self {
+            Direction::Rising => rising,
+            Direction::Falling => falling,
+            Direction::Either => rising || falling,
+        }
+    }
+}
+
+/// What the integrator does after an event has been located and the hook has run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EventAction {
+    /// Restart from the event state (controller history, FSAL stage and multistep history are
+    /// discarded) and go on.
+    #[default]
+    Continue,
+    /// End the integration at the event.
+    Stop,
+}
+
+/// The declaration of one event function.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+pub struct EventSpec {
+    /// Which crossings count.
+    pub direction: Direction,
+    /// What to do after the hook has run (the hook may override it).
+    pub action: EventAction,
+}
+
+/// A located event, as passed to [`OdeSystem::on_event`] and recorded in the solution.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EventHit {
+    /// Index of the event function.
+    pub index: usize,
+    /// Event time (the end of the final bracket on the side after the crossing, so that
+    /// `g(t, y)` already has its new sign there).
+    pub t: f64,
+    /// True for a crossing from negative to positive.
+    pub rising: bool,
+}
+
+/// A first-order ODE system `y' = f(t, y)`.
+pub trait OdeSystem {
+    /// Dimension n of the state.
+    fn dim(&self) -> usize;
+
+    /// Right-hand side: writes `f(t, y)` into `dy` (length n). A system that cannot evaluate
+    /// (for example a singular constraint matrix) writes non-finite values; the solvers turn
+    /// them into [`crate::SolveError::NonFiniteState`].
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]);
+
+    /// Whether [`OdeSystem::jacobian`] is implemented. When false, implicit methods use finite
+    /// differences of `rhs`.
+    fn has_jacobian(&self) -> bool {
+        false
+    }
+
+    /// Dense Jacobian ∂f/∂y at (t, y), written into `jac` (n × n). Called only when
+    /// [`OdeSystem::has_jacobian`] returns true.
+    fn jacobian(&self, _t: f64, _y: &[f64], _jac: MatMut<'_, f64>) {}
+
+    /// Number m of event functions.
+    fn n_events(&self) -> usize {
+        0
+    }
+
+    /// Direction and action of event function `i`.
+    fn event_spec(&self, _i: usize) -> EventSpec {
+        EventSpec::default()
+    }
+
+    /// Evaluates all m event functions into `g`.
+    fn events(&self, _t: f64, _y: &[f64], _g: &mut [f64]) {}
+
+    /// Runs after an event has been located, with the state at the event time. It may change
+    /// `y` (a bounce) and the system's own state (an impact velocity stored for a contact law).
+    /// Returns what the integrator does next; the default is the event's declared action.
+    fn on_event(&self, hit: &EventHit, _y: &mut [f64]) -> EventAction {
+        self.event_spec(hit.index).action
+    }
+}

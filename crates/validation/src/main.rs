@@ -1,0 +1,2 @@
+//! The `lash` command.
+fn main() {}
