@@ -14,6 +14,13 @@
 //! ```
 
 /// Everything the force laws need about one clearance joint at one instant.
+///
+/// ```text
+/// e = r_J^P − r_B^P,  n = e/|e|,  t = (−n_y, n_x),  δ = |e| − c,  δ̇ = n·ė
+/// v_T = t·ė + R_J φ̇_J − R_B φ̇_B,  ε = |e|/c,  ε̇ = δ̇/c,  Ω = φ̇_J + φ̇_B − 2γ̇
+/// ```
+/// MODEL.md §2 and §4 (Peng et al. 2025, Lubricants 13(3) 124, §2.1 and §2.3, with the
+/// material-point slip of MODEL.md §2 in v_T).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClearanceState {
     /// Eccentricity vector e (m).
@@ -39,6 +46,12 @@ pub struct ClearanceState {
 }
 
 /// Journal and bearing data needed by [`ClearanceState::compute`].
+///
+/// ```text
+/// r_k^P = r_k + A(φ_k) s'_k,   ṙ_k^P = ṙ_k + φ̇_k k × (A(φ_k) s'_k),   k = J, B
+/// ```
+/// The joint centres and their velocities, already transformed to the global frame
+/// (MODEL.md §1; Peng et al. 2025 §3); radii satisfy R_B > R_J > 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClearanceInput {
     /// Global position of the journal centre P_J.
@@ -60,14 +73,19 @@ pub struct ClearanceInput {
 }
 
 impl ClearanceState {
-    /// Evaluates the clearance kinematics of MODEL.md §2.
+    /// Evaluates the clearance kinematics of MODEL.md §2 (see the type's equations).
+    ///
+    /// Centred guard: when |e| < 1e-12·c (or |e| = 0) the normal is n = (1, 0) and γ̇ = 0, so
+    /// Ω = φ̇_J + φ̇_B. The result is finite for finite input with R_B > R_J.
     #[inline]
     pub fn compute(inp: &ClearanceInput) -> ClearanceState {
         let c = inp.radius_b - inp.radius_j;
         let e = [inp.r_j[0] - inp.r_b[0], inp.r_j[1] - inp.r_b[1]];
         let ed = [inp.v_j[0] - inp.v_b[0], inp.v_j[1] - inp.v_b[1]];
         let e_norm = (e[0] * e[0] + e[1] * e[1]).sqrt();
-        let centred = e_norm < 1e-12 * c;
+        // `e_norm == 0` also covers a degenerate c ≤ 0, where the relative test alone would
+        // let 0/0 through.
+        let centred = e_norm < 1e-12 * c || e_norm == 0.0;
         let n = if centred {
             [1.0, 0.0]
         } else {
@@ -80,7 +98,8 @@ impl ClearanceState {
         let gamma_dot = if centred {
             0.0
         } else {
-            (e[0] * ed[1] - e[1] * ed[0]) / (e_norm * e_norm)
+            // (e_x ė_y − e_y ė_x)/|e|² written as (n × ė)/|e|: |e|² cannot underflow.
+            (n[0] * ed[1] - n[1] * ed[0]) / e_norm
         };
         ClearanceState {
             e,

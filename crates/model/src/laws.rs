@@ -3,6 +3,48 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A force-law parameter outside its valid range.
+///
+/// ```text
+/// K > 0, c_max ≥ 0, d_max > 0, 0 < c_r ≤ 1              (normal laws, MODEL.md §3)
+/// μ_d ≥ 0, 0 ≤ v₀ ≤ v₁                                  (friction, MODEL.md §3)
+/// μ > 0, L > 0, R > 0, c > 0, 0 < ε_cap < 1             (film, MODEL.md §4)
+/// ```
+/// Every value must also be finite. Ranges follow from the laws of MODEL.md §3–§4: outside
+/// them a force is infinite, NaN or unphysical (negative damping, c_r = 0 in Flores' 1/c_r).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{law}: {parameter} = {value} is outside its valid range {range}")]
+pub struct LawError {
+    /// The law (`impact`, `lankarani_nikravesh`, `flores`, `hunt_crossley`, `coulomb`, `film`).
+    pub law: &'static str,
+    /// The parameter's symbol.
+    pub parameter: &'static str,
+    /// The offending value.
+    pub value: f64,
+    /// The valid range, as text.
+    pub range: &'static str,
+}
+
+/// `Ok` when `ok` holds and `value` is finite, else the [`LawError`].
+fn check(
+    law: &'static str,
+    parameter: &'static str,
+    value: f64,
+    ok: bool,
+    range: &'static str,
+) -> Result<(), LawError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(LawError {
+            law,
+            parameter,
+            value,
+            range,
+        })
+    }
+}
+
 /// ADAMS STEP(δ, 0, 0, d_max, c_max): the damping coefficient of the IMPACT law.
 ///
 /// ```text
@@ -23,6 +65,10 @@ pub fn step_damping(delta: f64, d_max: f64, c_max: f64) -> f64 {
 /// ```text
 /// K = 4 / (3(σ_B + σ_J)) · sqrt(R_B R_J / (R_B − R_J)),  σ_k = (1 − ν_k²)/E_k
 /// ```
+/// The Hertz sphere-in-sphere stiffness with the conformal radius R_B R_J/(R_B − R_J), as used
+/// for revolute clearance joints by Flores, Ambrósio, Claro and Lankarani (Kinematics and
+/// Dynamics of Multibody Systems with Imperfect Joints, Springer 2008). Needs
+/// R_B > R_J > 0, E_k > 0, ν_k in (−1, 1); the scene validates these before calling.
 pub fn hertz_stiffness(
     radius_b: f64,
     radius_j: f64,
@@ -91,6 +137,33 @@ impl NormalLaw {
             | NormalLaw::LankaraniNikravesh { k, .. }
             | NormalLaw::Flores { k, .. }
             | NormalLaw::HuntCrossley { k, .. } => k,
+        }
+    }
+
+    /// Checks the parameters: K > 0; c_max ≥ 0 and d_max > 0 (IMPACT); 0 < c_r ≤ 1 (the
+    /// restitution laws). All finite.
+    pub fn validate(&self) -> Result<(), LawError> {
+        let (law, k) = match *self {
+            NormalLaw::Impact { k, .. } => ("impact", k),
+            NormalLaw::LankaraniNikravesh { k, .. } => ("lankarani_nikravesh", k),
+            NormalLaw::Flores { k, .. } => ("flores", k),
+            NormalLaw::HuntCrossley { k, .. } => ("hunt_crossley", k),
+        };
+        check(law, "K", k, k > 0.0, "(0, ∞)")?;
+        match *self {
+            NormalLaw::Impact { c_max, d_max, .. } => {
+                check(law, "c_max", c_max, c_max >= 0.0, "[0, ∞)")?;
+                check(law, "d_max", d_max, d_max > 0.0, "(0, ∞)")
+            }
+            NormalLaw::LankaraniNikravesh { restitution, .. }
+            | NormalLaw::Flores { restitution, .. }
+            | NormalLaw::HuntCrossley { restitution, .. } => check(
+                law,
+                "c_r",
+                restitution,
+                restitution > 0.0 && restitution <= 1.0,
+                "(0, 1]",
+            ),
         }
     }
 
@@ -167,6 +240,18 @@ pub enum FrictionLaw {
 }
 
 impl FrictionLaw {
+    /// Checks the parameters: μ_d ≥ 0 and 0 ≤ v₀ ≤ v₁, all finite (`None` is always valid).
+    pub fn validate(&self) -> Result<(), LawError> {
+        match *self {
+            FrictionLaw::None => Ok(()),
+            FrictionLaw::Coulomb { mu, v0, v1 } => {
+                check("coulomb", "mu_d", mu, mu >= 0.0, "[0, ∞)")?;
+                check("coulomb", "v0", v0, v0 >= 0.0, "[0, v1]")?;
+                check("coulomb", "v1", v1, v1 >= v0, "[v0, ∞)")
+            }
+        }
+    }
+
     /// Ambrósio's correction coefficient c_d(|v|) (1 for v₀ = v₁ ≤ |v|).
     #[inline]
     pub fn cd(v: f64, v0: f64, v1: f64) -> f64 {
@@ -197,6 +282,15 @@ impl FrictionLaw {
 }
 
 /// Which hydrodynamic film model (MODEL.md §4).
+///
+/// ```text
+/// long_gumbel             infinitely long bearing, Gümbel (half-Sommerfeld), as printed
+/// long_gumbel_mirrored    (F_r, F_t)(ε, ε̇, Ω) = (F_r, sign(Ω) F_t)(ε, ε̇, |Ω|) of long_gumbel
+/// long_sommerfeld         infinitely long bearing, full Sommerfeld
+/// short_ocvirk            short (Ocvirk) bearing, Gümbel conditions
+/// short_ocvirk_mirrored   the same mirroring applied to short_ocvirk
+/// ```
+/// Formulas on [`Film`]; Peng et al. 2025 §2.3 (long Gümbel, with R³ for R²), MODEL.md §4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FilmModel {
@@ -226,7 +320,10 @@ pub enum FilmModel {
 /// mirrored: F_r(ε, ε̇, |Ω|), F_t = sign(Ω)·F_t(ε, ε̇, |Ω|)  (sign(0) = +1)
 /// ε is capped: ε_eff = min(ε, ε_cap); (1−ε²)^{−k} is never evaluated at ε ≥ 1.
 /// ```
-/// f_J = F_r n + F_t t on the journal, −f_J on the bearing.
+/// f_J = F_r n + F_t t on the journal, −f_J on the bearing. Long bearing with Gümbel
+/// conditions: Peng et al. 2025 §2.3 (printed with R² for R³); full Sommerfeld and short
+/// (Ocvirk) bearing: MODEL.md §4, checked there against a numerical Reynolds solution and
+/// MBDyn's bearing models.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Film {
     /// The model.
@@ -244,10 +341,39 @@ pub struct Film {
 }
 
 impl Film {
+    /// Checks the parameters: μ, L, R, c > 0 and 0 < ε_cap < 1, all finite. With them,
+    /// [`Film::force`] is finite for every finite (ε, ε̇, Ω).
+    pub fn validate(&self) -> Result<(), LawError> {
+        let pos = |p: &'static str, v: f64| check("film", p, v, v > 0.0, "(0, ∞)");
+        pos("mu", self.viscosity)?;
+        pos("L", self.length)?;
+        pos("R", self.radius)?;
+        pos("c", self.clearance)?;
+        check(
+            "film",
+            "eps_cap",
+            self.eps_cap,
+            self.eps_cap > 0.0 && self.eps_cap < 1.0,
+            "(0, 1)",
+        )
+    }
+
     /// Film force (F_r, F_t) on the journal, radial along n and tangential along t (N).
+    ///
+    /// ε is replaced by ε_eff = min(ε, ε_cap) (and by 0 if negative); ε̇ and Ω are used as
+    /// given. A NaN ε gives NaN forces (it is not hidden).
     #[inline]
     pub fn force(&self, eps: f64, eps_dot: f64, omega: f64) -> (f64, f64) {
-        let e = eps.min(self.eps_cap).max(0.0);
+        // ε_eff = min(ε, ε_cap), and ε ≥ 0. Written with comparisons rather than
+        // `f64::min/max` so that a NaN ε propagates (the solver reports it) instead of being
+        // silently replaced by ε_cap.
+        let e = if eps > self.eps_cap {
+            self.eps_cap
+        } else if eps < 0.0 {
+            0.0
+        } else {
+            eps
+        };
         let (mirrored, om) = match self.model {
             FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored => (true, omega.abs()),
             _ => (false, omega),
