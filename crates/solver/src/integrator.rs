@@ -152,7 +152,9 @@ impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
         self.finished
     }
 
-    /// Counters so far.
+    /// Counters so far. RHS evaluations a stepper makes lazily for the dense output of the
+    /// last step (DOP853's three extra stages) are added at the next step; [`solve`] returns
+    /// them all.
     pub fn stats(&self) -> &Stats {
         self.stepper.stats()
     }
@@ -510,7 +512,8 @@ pub fn solve<S: OdeSystem + ?Sized>(
         sol.t.push(sol.t_final);
         sol.y.extend_from_slice(&sol.y_final);
     }
-    sol.stats = it.stats().clone();
+    // stats_mut folds in work a stepper did lazily (DOP853's dense stages) after its last step.
+    sol.stats = it.stepper.stats_mut().clone();
     Ok(sol)
 }
 
