@@ -60,11 +60,17 @@ fn linear_spiral_global_error_tracks_tolerance() {
             })
             .collect();
         let k = slope(&tols, &errs);
-        assert!((k - 1.0).abs() <= 0.15, "{m}: slope {k:.3}, errors {errs:?}");
+        assert!(
+            (k - 1.0).abs() <= 0.15,
+            "{m}: slope {k:.3}, errors {errs:?}"
+        );
         // And the error is of the size of the tolerance (measured err/tol: bs32 14,
         // dopri54 1.5, tsit54 0.5–1.7, dop853 0.25).
         for (e, t) in errs.iter().zip(&tols) {
-            assert!(*e / t > 0.05 && *e / t < 50.0, "{m}: err {e:e} at tol {t:e}");
+            assert!(
+                *e / t > 0.05 && *e / t < 50.0,
+                "{m}: err {e:e} at tol {t:e}"
+            );
         }
     }
 }
@@ -92,7 +98,10 @@ fn nan_stage_is_a_rejection_and_the_step_shrinks() {
         let s = solve(&Domain, (0.0, 6.0), &[1.0], &o).unwrap();
         assert!(s.stats.rejected_error >= 1, "{m}");
         assert!(s.stats.h_max_used < 3.0, "{m}");
-        assert!((s.y_final[0] - (1.0 + 0.4 * 6f64.sin())).abs() < 1e-7, "{m}");
+        assert!(
+            (s.y_final[0] - (1.0 + 0.4 * 6f64.sin())).abs() < 1e-7,
+            "{m}"
+        );
     }
 }
 
@@ -203,7 +212,10 @@ fn restart_resets_fsal_and_reuses_the_last_step() {
         assert_eq!(st.stats().rhs_evals, rhs + 1, "{m}: f(t, y) at the restart");
         let mut out = [0.0; 2];
         st.interpolate(t, &mut out);
-        assert_eq!(out, y, "{m}: dense output after restart is the restart state");
+        assert_eq!(
+            out, y,
+            "{m}: dense output after restart is the restart state"
+        );
         let rej = st.stats().rejected_error;
         st.step(100.0).unwrap();
         assert_eq!(st.stats().rejected_error, rej, "{m}");

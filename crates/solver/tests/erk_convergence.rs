@@ -20,7 +20,10 @@ fn kepler_error(method: Method, n: usize) -> f64 {
     let t_end = 2.0 * std::f64::consts::PI;
     let h = t_end / n as f64;
     let s = solve(&sys, (0.0, t_end), &sys.y0(), &fixed(method, h)).unwrap();
-    assert_eq!(s.stats.accepted, n, "{method}: fixed mode must take exactly N steps");
+    assert_eq!(
+        s.stats.accepted, n,
+        "{method}: fixed mode must take exactly N steps"
+    );
     assert_eq!(s.stats.rejected_error, 0);
     dist(&s.y_final, &sys.y0())
 }

@@ -66,4 +66,3 @@ fn pinned_counts_per_controller() {
         check(Method::Dopri54, Some(c), counts);
     }
 }
-

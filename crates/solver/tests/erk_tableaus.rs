@@ -175,8 +175,12 @@ fn rooted_tree_counts_match_oeis_a000081() {
     assert_eq!(gam[bushy], 4.0);
     let tall = list
         .iter()
-        .position(|t| t.order == 4 && t.children.len() == 1 && list[t.children[0]].order == 3
-            && list[t.children[0]].children.len() == 1)
+        .position(|t| {
+            t.order == 4
+                && t.children.len() == 1
+                && list[t.children[0]].order == 3
+                && list[t.children[0]].children.len() == 1
+        })
         .unwrap();
     assert_eq!(gam[tall], 24.0);
 }

@@ -321,7 +321,11 @@ impl<'a, S: OdeSystem + ?Sized> ErkStepper<'a, S> {
                 let mut acc = 0.0;
                 for (j, a) in row.iter().enumerate() {
                     if *a != 0.0 {
-                        let kj = if j < base { self.k[j][q] } else { k[j - base][q] };
+                        let kj = if j < base {
+                            self.k[j][q]
+                        } else {
+                            k[j - base][q]
+                        };
                         acc += a * kj;
                     }
                 }

@@ -27,7 +27,12 @@ impl Kepler {
         }
         let s = (1.0 - e * e).sqrt();
         let den = 1.0 - e * ea.cos();
-        [ea.cos() - e, s * ea.sin(), -ea.sin() / den, s * ea.cos() / den]
+        [
+            ea.cos() - e,
+            s * ea.sin(),
+            -ea.sin() / den,
+            s * ea.cos() / den,
+        ]
     }
     pub fn y0(&self) -> [f64; 4] {
         self.exact(0.0)
@@ -156,5 +161,8 @@ pub fn slope(hs: &[f64], errs: &[f64]) -> f64 {
 
 /// Max-norm distance.
 pub fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
