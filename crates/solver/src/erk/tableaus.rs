@@ -121,7 +121,7 @@ impl Tableau {
         self.b.iter().zip(e).map(|(b, e)| b - e).collect()
     }
 
-    /// The dense-output weights as polynomials in θ: entry [i][m] is the coefficient of
+    /// The dense-output weights as polynomials in θ: entry `[i][m]` is the coefficient of
     /// θ^(m+1) in b_i(θ), for every stored stage i, so that
     /// y(t_n + θh) = y_n + h Σ_i b_i(θ) k_i.
     pub fn dense_weights(&self) -> Vec<Vec<f64>> {

@@ -1,5 +1,7 @@
 //! Test problems with closed forms or published reference values, shared by the ERK tests.
 #![allow(dead_code)]
+// Published values are kept with all their printed digits.
+#![allow(clippy::excessive_precision)]
 
 use lash_solver::*;
 
