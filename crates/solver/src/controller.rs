@@ -230,6 +230,8 @@ impl Controller for Soderlind {
 /// rejected step:  η = clamp(safety · ε^(−1/k), min_shrink, max_after_reject)
 ///                 (max_after_repeated_reject from the second failure in a row on)
 /// ```
+/// A rejected step uses the elementary controller, as Hairer's codes do (HNW I §II.4);
+/// ARKODE applies its full filter there too (arkCheckTemporalError → arkAdapt).
 /// safety, max_first_growth (etamx1) and max_after_repeated_reject (etamxf after small_nef = 2
 /// failures) are ARKODE's defaults; ARKODE grows by at most 20 and shrinks by at least 0.1,
 /// the defaults here (5, 0.2) are the tighter bounds of Hairer's codes (HNW I §II.4).

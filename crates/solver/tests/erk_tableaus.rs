@@ -363,3 +363,28 @@ fn dense_outputs_have_their_orders() {
         assert_dense(tab);
     }
 }
+
+#[test]
+fn shapes_are_validated() {
+    for tab in ALL {
+        assert_eq!(tab.validate(), Ok(()), "{}", tab.name);
+    }
+    // A custom tableau with a short row of A is refused with a typed error, not a panic.
+    static BROKEN: Tableau = Tableau {
+        name: "broken",
+        a: &[&[], &[0.5], &[1.0]],
+        ..BS32
+    };
+    struct Zero;
+    impl lash_solver::OdeSystem for Zero {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&self, _t: f64, _y: &[f64], dy: &mut [f64]) {
+            dy[0] = 0.0;
+        }
+    }
+    let opts = lash_solver::SolverOptions::default();
+    let r = lash_solver::erk::ErkStepper::with_tableau(&Zero, 0.0, &[1.0], &opts, &BROKEN);
+    assert!(matches!(r, Err(lash_solver::SolveError::InvalidOptions(_))));
+}

@@ -47,8 +47,7 @@ use std::cell::{Cell, RefCell};
 
 pub use tableaus::{Dense, ErrorEstimate, Tableau, BS32, DOP853, DOPRI54, TSIT54};
 
-use crate::controller::StepSizeControl;
-use crate::controller::{Controller, ControllerKind};
+use crate::controller::{Controller, ControllerKind, StepSizeControl};
 use crate::error::SolveError;
 use crate::options::{Method, SolverOptions};
 use crate::stats::Stats;
@@ -104,6 +103,10 @@ pub struct ErkStepper<'a, S: OdeSystem + ?Sized> {
     ytmp: Vec<f64>,
     errv: Vec<f64>,
     errv3: Vec<f64>,
+    /// Error weights e = b − b̂ (DOP853: e5).
+    err_w: Vec<f64>,
+    /// DOP853 only: b − b̂3.
+    err_w3: Vec<f64>,
     /// Trial step for the next attempt (None: starting-step estimate needed).
     h_next: Option<f64>,
     /// Size of the last accepted step (None before the first one).
@@ -136,6 +139,7 @@ impl<'a, S: OdeSystem + ?Sized> ErkStepper<'a, S> {
         tab: &'static Tableau,
     ) -> Result<Self, SolveError> {
         let n = y0.len();
+        tab.validate().map_err(SolveError::InvalidOptions)?;
         if !opts.adaptive && opts.h0.is_none() {
             return Err(SolveError::InvalidOptions(
                 "adaptive = false needs h0 (the fixed step)".into(),
@@ -144,6 +148,13 @@ impl<'a, S: OdeSystem + ?Sized> ErkStepper<'a, S> {
         let kind = opts.controller.unwrap_or(ControllerKind::Pi);
         let controller: Box<dyn Controller> = Box::new(kind.build());
         let n_extra = tab.total_stages() - tab.f_new_stage() - 1;
+        let (err_w, err_w3) = match tab.error {
+            ErrorEstimate::Embedded { e } => (e.to_vec(), vec![]),
+            ErrorEstimate::Dop853 { e5, b3 } => (
+                e5.to_vec(),
+                tab.b.iter().zip(b3).map(|(b, b3)| b - b3).collect(),
+            ),
+        };
         let mut s = ErkStepper {
             sys,
             method: opts.method,
@@ -161,6 +172,8 @@ impl<'a, S: OdeSystem + ?Sized> ErkStepper<'a, S> {
             ytmp: vec![0.0; n],
             errv: vec![0.0; n],
             errv3: vec![0.0; n],
+            err_w,
+            err_w3,
             h_next: opts.h0,
             h_last: None,
             dense: RefCell::new(DenseCache {
@@ -263,26 +276,21 @@ impl<'a, S: OdeSystem + ?Sized> ErkStepper<'a, S> {
                 out[q] = h * acc;
             }
         };
-        match tab.error {
-            ErrorEstimate::Embedded { e } => {
-                comb(e, &self.k, &mut self.errv);
-                error_norm(&self.errv, &self.y, &self.y_new, &self.opts)
-            }
-            ErrorEstimate::Dop853 { e5, b3 } => {
-                comb(e5, &self.k, &mut self.errv);
-                let e3: Vec<f64> = tab.b.iter().zip(b3).map(|(b, b3)| b - b3).collect();
-                comb(&e3, &self.k, &mut self.errv3);
-                let n5 = error_norm(&self.errv, &self.y, &self.y_new, &self.opts);
-                let n3 = error_norm(&self.errv3, &self.y, &self.y_new, &self.opts);
-                let den = (n5 * n5 + 0.01 * n3 * n3).sqrt();
-                if !den.is_finite() {
-                    f64::INFINITY
-                } else if den > 0.0 {
-                    n5 * n5 / den
-                } else {
-                    0.0
-                }
-            }
+        comb(&self.err_w, &self.k, &mut self.errv);
+        let n5 = error_norm(&self.errv, &self.y, &self.y_new, &self.opts);
+        if self.err_w3.is_empty() {
+            return n5;
+        }
+        // DOP853: err = E₅² / √(E₅² + 0.01 E₃²) (HNW I §II.10; dop853.f).
+        comb(&self.err_w3, &self.k, &mut self.errv3);
+        let n3 = error_norm(&self.errv3, &self.y, &self.y_new, &self.opts);
+        let den = (n5 * n5 + 0.01 * n3 * n3).sqrt();
+        if !den.is_finite() {
+            f64::INFINITY
+        } else if den > 0.0 {
+            n5 * n5 / den
+        } else {
+            0.0
         }
     }
 

@@ -16,6 +16,11 @@
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
 /// How the dense output of a step is built.
+///
+/// ```text
+/// y(t_n + θh) = y_n + h Σ_i b_i(θ) k_i,   b_i(0) = 0,  b_i(1) = b_i
+/// ```
+/// (HNW I §II.6, continuous Runge–Kutta methods).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Dense {
     /// Cubic Hermite interpolation through (y_n, f_n) and (y_{n+1}, f_{n+1}), order 3; f_{n+1}
@@ -44,6 +49,10 @@ pub enum Dense {
 }
 
 /// How the local error estimate is formed from the stages.
+///
+/// ```text
+/// ε = ‖h Σ_i e_i k_i‖,  e = b − b̂        (HNW I §II.4, embedded formulas)
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ErrorEstimate {
     /// One embedded formula: ‖h Σ e_i k_i‖ with e = b − b̂.
@@ -63,6 +72,12 @@ pub enum ErrorEstimate {
 }
 
 /// An explicit embedded Runge–Kutta pair with its continuous extension.
+///
+/// ```text
+/// k_i = f(t_n + c_i h, y_n + h Σ_{j<i} a_ij k_j),  y_{n+1} = y_n + h Σ b_i k_i
+/// ```
+/// (Butcher tableau notation, HNW I §II.1 (1.8)); the constants of this module name their
+/// sources.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tableau {
     /// Short name (the method's CLI name).
@@ -110,6 +125,53 @@ impl Tableau {
     /// non-FSAL pair, and the extra dense-output stages.
     pub fn total_stages(&self) -> usize {
         self.c.len()
+    }
+
+    /// Checks the shapes of the data (row i of A has i entries, one node per stage, weights
+    /// and error weights over the main stages, dense data over all stages, FSAL rows equal
+    /// to b) so that a custom tableau cannot make the stepper index out of bounds.
+    pub fn validate(&self) -> Result<(), String> {
+        let ns = self.c.len();
+        let s = self.b.len();
+        if s == 0 || self.a.len() != ns {
+            return Err(format!(
+                "{}: A has {} rows, c {} entries",
+                self.name,
+                self.a.len(),
+                ns
+            ));
+        }
+        if let Some(i) = (0..ns).find(|&i| self.a[i].len() != i) {
+            return Err(format!("{}: row {i} of A must have {i} entries", self.name));
+        }
+        if self.f_new_stage() >= ns {
+            return Err(format!("{}: no stage holds f(t+h, y_(n+1))", self.name));
+        }
+        if self.a[self.f_new_stage()] != &self.b[..self.f_new_stage()] {
+            return Err(format!(
+                "{}: the f(t+h, y_(n+1)) row of A must equal b",
+                self.name
+            ));
+        }
+        let e_ok = match self.error {
+            ErrorEstimate::Embedded { e } => e.len() == s,
+            ErrorEstimate::Dop853 { e5, b3 } => e5.len() == s && b3.len() == s,
+        };
+        if !e_ok {
+            return Err(format!("{}: error weights need {s} entries", self.name));
+        }
+        let dense_ok = match self.dense {
+            Dense::Hermite3 => true,
+            Dense::Hairer { d } => d.len() <= 4 && d.iter().all(|r| r.len() == ns),
+            Dense::Polynomial { r } => r.len() == ns,
+        };
+        if !dense_ok {
+            return Err(format!(
+                "{}: dense-output data has the wrong shape",
+                self.name
+            ));
+        }
+        Ok(())
     }
 
     /// Weights b̂ of the embedded solution (b − e; for DOP853 the 5th-order one).
