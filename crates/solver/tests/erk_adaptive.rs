@@ -224,3 +224,17 @@ fn restart_resets_fsal_and_reuses_the_last_step() {
         assert!(dh.abs() <= 4.0 * f64::EPSILON * st.t(), "{m}: {dh:e}");
     }
 }
+
+#[test]
+fn a_step_ending_within_ulps_of_the_stop_time_lands_on_it() {
+    // Fixed steps of 1e-5 from t = 1 to 1 + 2e-5 + 2e-15: the sliver 2e-15 left after two
+    // steps is below 16 ulps of t (3.6e-15), which no step could take; the second step is
+    // stretched to end exactly on t_end.
+    let sys = Spiral { a: 0.1, w: 1.0 };
+    let t_end = 1.0 + 2e-5 + 2e-15;
+    for (m, _) in PAIRS {
+        let s = solve(&sys, (1.0, t_end), &[1.0, 0.0], &fixed(m, 1e-5)).unwrap();
+        assert_eq!(s.stats.accepted, 2, "{m}");
+        assert_eq!(s.t_final, t_end, "{m}");
+    }
+}

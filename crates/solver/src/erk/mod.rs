@@ -399,11 +399,13 @@ impl<S: OdeSystem + ?Sized> Stepper for ErkStepper<'_, S> {
                 });
             }
             let remaining = t_stop - self.t;
-            // Land exactly on t_stop when the step would leave a sliver below 1e-10·h.
-            let lands = remaining <= h * (1.0 + 1e-10);
+            // Land exactly on t_stop when the step would leave a sliver below 1e-10·h or
+            // within 16 ulps of t_stop (a sliver no later step could take).
+            let sliver = (1e-10 * h).max(16.0 * f64::EPSILON * t_stop.abs());
+            let lands = remaining - h <= sliver;
             let h_try = if lands { remaining } else { h };
             let floor = 16.0 * f64::EPSILON * self.t.abs();
-            if !(h_try > floor) || self.t + h_try == self.t {
+            if !(h_try > 0.0) || (!lands && (!(h_try > floor) || self.t + h_try == self.t)) {
                 return Err(self.too_small(h_try, last_nonfinite));
             }
             let err = self.attempt(h_try);
