@@ -4,9 +4,14 @@
 //! global error  ‖y_N − y(T)‖ = C h^p + O(h^{p+1})       → slope p of log err vs log h
 //! dense output  ‖u(t0 + θh) − y(t0 + θh)‖ = C h^{q+1}     (one step from the exact state)
 //! ```
-//! Problem: Kepler's two-body problem with eccentricity 0.1 (HNW I §II.10), exact solution
-//! from Kepler's equation. Step ranges are chosen per method where the error lies between
-//! about 1e-5 and 1e-12: past the pre-asymptotic regime, above round-off (≈ 1e-14).
+//! Problem: Kepler's two-body problem (HNW I §II.10), exact solution from Kepler's equation,
+//! eccentricity 0.1, except 0.05 for DOP853 (its 8th-order terms stay pre-asymptotic near
+//! the pericentre longer) and 0.5 for Tsitouras' dense output (on the milder orbit its error
+//! constant changes sign across θ and the slopes wobble). Measured slopes: global bs32 2.99,
+//! dopri54 4.97, tsit54 5.00, dop853 7.93, rk4 4.06; dense bs32 4.02, dopri54 5.01,
+//! tsit54 5.04, dop853 7.91. Step ranges
+//! are chosen per method where the error lies between about 1e-5 and 1e-13: past the
+//! pre-asymptotic regime, above round-off (≈ 1e-14).
 
 mod common;
 use common::*;
@@ -15,8 +20,8 @@ use lash_solver::*;
 const E: f64 = 0.1;
 
 /// Global error after one period (t = 2π) with N fixed steps; the exact solution is y0.
-fn kepler_error(method: Method, n: usize) -> f64 {
-    let sys = Kepler { e: E };
+fn kepler_error(method: Method, n: usize, e: f64) -> f64 {
+    let sys = Kepler { e };
     let t_end = 2.0 * std::f64::consts::PI;
     let h = t_end / n as f64;
     let s = solve(&sys, (0.0, t_end), &sys.y0(), &fixed(method, h)).unwrap();
@@ -28,9 +33,9 @@ fn kepler_error(method: Method, n: usize) -> f64 {
     dist(&s.y_final, &sys.y0())
 }
 
-fn assert_global_order(method: Method, p: usize, ns: &[usize]) {
+fn assert_global_order(method: Method, p: usize, ns: &[usize], e: f64) {
     let hs: Vec<f64> = ns.iter().map(|&n| 1.0 / n as f64).collect();
-    let errs: Vec<f64> = ns.iter().map(|&n| kepler_error(method, n)).collect();
+    let errs: Vec<f64> = ns.iter().map(|&n| kepler_error(method, n, e)).collect();
     let order = slope(&hs, &errs);
     assert!(
         (order - p as f64).abs() <= 0.2,
@@ -42,27 +47,27 @@ fn assert_global_order(method: Method, p: usize, ns: &[usize]) {
 
 #[test]
 fn bs32_fixed_step_order_3() {
-    assert_global_order(Method::Bs32, 3, &[320, 640, 1280]);
+    assert_global_order(Method::Bs32, 3, &[320, 640, 1280], E);
 }
 
 #[test]
 fn dopri54_fixed_step_order_5() {
-    assert_global_order(Method::Dopri54, 5, &[160, 320, 640]);
+    assert_global_order(Method::Dopri54, 5, &[160, 320, 640], E);
 }
 
 #[test]
 fn tsit54_fixed_step_order_5() {
-    assert_global_order(Method::Tsit54, 5, &[160, 320, 640]);
+    assert_global_order(Method::Tsit54, 5, &[160, 320, 640], E);
 }
 
 #[test]
 fn dop853_fixed_step_order_8() {
-    assert_global_order(Method::Dop853, 8, &[28, 40, 57]);
+    assert_global_order(Method::Dop853, 8, &[32, 40, 48, 57], 0.05);
 }
 
 #[test]
 fn rk4_fixed_step_order_4() {
-    assert_global_order(Method::Rk4, 4, &[320, 640, 1280]);
+    assert_global_order(Method::Rk4, 4, &[320, 640, 1280], E);
 }
 
 #[test]
@@ -109,10 +114,10 @@ fn fixed_mode_counts_are_stages_per_step() {
     }
 }
 
-/// Max over θ ∈ {0.3, 0.5, 0.7} of the dense-output error of one step of size h from the
+/// Max over θ ∈ {0.1, …, 0.9} of the dense-output error of one step of size h from the
 /// exact state at t0 = 0.7 (a generic point of the orbit).
-fn dense_error(method: Method, h: f64) -> f64 {
-    let sys = Kepler { e: E };
+fn dense_error(method: Method, h: f64, e: f64) -> f64 {
+    let sys = Kepler { e };
     let t0 = 0.7;
     let y0 = sys.exact(t0);
     let mut it = Integrator::new(&sys, t0, t0 + h, &y0, &fixed(method, h)).unwrap();
@@ -120,15 +125,16 @@ fn dense_error(method: Method, h: f64) -> f64 {
     assert_eq!(out, StepOutcome::StopTime { t: t0 + h });
     let mut worst: f64 = 0.0;
     let mut y = [0.0; 4];
-    for theta in [0.3, 0.5, 0.7] {
+    for j in 1..10 {
+        let theta = j as f64 / 10.0;
         it.interpolate(t0 + theta * h, &mut y);
         worst = worst.max(dist(&y, &sys.exact(t0 + theta * h)));
     }
     worst
 }
 
-fn assert_dense_order(method: Method, q: usize, hs: &[f64]) {
-    let errs: Vec<f64> = hs.iter().map(|&h| dense_error(method, h)).collect();
+fn assert_dense_order(method: Method, q: usize, hs: &[f64], e: f64) {
+    let errs: Vec<f64> = hs.iter().map(|&h| dense_error(method, h, e)).collect();
     let order = slope(hs, &errs);
     assert!(
         (order - (q + 1) as f64).abs() <= 0.2,
@@ -141,23 +147,24 @@ fn assert_dense_order(method: Method, q: usize, hs: &[f64]) {
 #[test]
 fn bs32_hermite_dense_output_order_3() {
     // Local interpolation error O(h⁴) for a dense output of order 3.
-    assert_dense_order(Method::Bs32, 3, &[0.05, 0.025, 0.0125]);
+    assert_dense_order(Method::Bs32, 3, &[0.05, 0.025, 0.0125], E);
 }
 
 #[test]
 fn dopri54_dense_output_order_4() {
-    assert_dense_order(Method::Dopri54, 4, &[0.05, 0.025, 0.0125]);
+    assert_dense_order(Method::Dopri54, 4, &[0.05, 0.025, 0.0125], E);
 }
 
 #[test]
 fn tsit54_dense_output_order_4() {
-    assert_dense_order(Method::Tsit54, 4, &[0.05, 0.025, 0.0125]);
+    assert_dense_order(Method::Tsit54, 4, &[0.1, 0.05, 0.025, 0.0125], 0.5);
 }
 
 #[test]
 fn dop853_dense_output_order_7() {
-    // The three extra stages are evaluated on first use of the step's dense output.
-    assert_dense_order(Method::Dop853, 7, &[0.4, 0.2, 0.1]);
+    // The three extra stages are evaluated on first use of the step's dense output. Local
+    // error O(h⁸) for a dense output of order 7.
+    assert_dense_order(Method::Dop853, 7, &[0.3, 0.2, 0.15, 0.1], 0.05);
 }
 
 #[test]
