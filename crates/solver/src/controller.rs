@@ -2,18 +2,24 @@
 //! separate layer of limits (safety, growth and shrink caps, dead-band, h_min, h_max).
 //!
 //! ```text
-//! Söderlind filter (Söderlind 2003, "Digital filters in adaptive time-stepping", ACM TOMS 29;
-//! SUNDIALS SUNAdaptController_Soderlind), with ε_n the scaled error norm of step n (≤ 1 accepts)
-//! and k = p̂ + 1 (p̂ the order of the error estimate):
+//! Söderlind filter (Söderlind 2003, "Digital filters in adaptive time-stepping", ACM TOMS 29(1)
+//! 1–26; SUNDIALS SUNAdaptController_Soderlind, sunadaptcontroller_soderlind.c), with ε_n the
+//! scaled error norm of step n (≤ 1 accepts) and k = q̂ + 1 (q̂ the order of the error
+//! estimate, ARKODE's p + 1 with p the embedding order):
 //!
 //!   h_{n+1} = h_n · ε_n^{−k1/k} · ε_{n−1}^{−k2/k} · ε_{n−2}^{−k3/k}
 //!                 · (h_n / h_{n−1})^{k4} · (h_{n−1} / h_{n−2})^{k5}
+//!
+//! start-up (as SUNDIALS): a preset needs m accepted steps of history, m = 2 if k3 or k5 ≠ 0,
+//! else 1 if k2 or k4 ≠ 0, else 0; until it has them it is the I controller
+//!   h_{n+1} = h_n · ε_n^{−1/k}
 //! ```
 //!
 //! The controller only proposes a raw factor; [`StepLimits`] applies the safety factor and the
 //! caps. History is committed only after a step is accepted ([`Controller::accept`]), so a
-//! rejected step never pollutes it. Missing history (first steps, after a reset) is replaced
-//! by the current values, which makes every preset start as an I controller.
+//! rejected step never pollutes it (SUNDIALS calls `UpdateH` only on accepted steps). Error
+//! norms are floored at 1e-10 before taking powers, so an exact step (ε = 0) gives a finite
+//! factor that the growth cap then limits.
 
 use crate::error::SolveError;
 
@@ -21,19 +27,46 @@ use crate::error::SolveError;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ControllerKind {
-    /// Integral (elementary) controller: k = (1, 0, 0, 0, 0).
+    /// Integral (elementary) controller, k = (1, 0, 0, 0, 0):
+    /// ```text
+    /// h_{n+1} = h_n ε_n^{−1/k}
+    /// ```
+    /// HNW I (4.13); SUNDIALS `SUNAdaptController_I` (DEFAULT_I_K1 = 1).
     I,
-    /// PI controller (Gustafsson 1991; SUNDIALS defaults): k = (0.8, −0.31, 0, 0, 0).
+    /// PI controller, k = (0.8, −0.31, 0, 0, 0):
+    /// ```text
+    /// h_{n+1} = h_n ε_n^{−0.8/k} ε_{n−1}^{0.31/k}
+    /// ```
+    /// SUNDIALS `SUNAdaptController_PI` defaults (DEFAULT_PI_K1 = 0.8, DEFAULT_PI_K2 = −0.31;
+    /// the PI structure of Gustafsson 1991, ACM TOMS 17(4) 533–554, and Söderlind 2003).
     Pi,
-    /// PID controller (SUNDIALS defaults): k = (0.58, −0.21, 0.1, 0, 0).
+    /// PID controller, k = (0.58, −0.21, 0.1, 0, 0):
+    /// ```text
+    /// h_{n+1} = h_n ε_n^{−0.58/k} ε_{n−1}^{0.21/k} ε_{n−2}^{−0.1/k}
+    /// ```
+    /// SUNDIALS `SUNAdaptController_PID` defaults (DEFAULT_PID_K1..K3).
     Pid,
-    /// Söderlind's H211b (b = 4): k = (1/4, 1/4, 0, −1/4, 0).
+    /// Söderlind's H211b digital filter with b = 4, k = (1/4, 1/4, 0, −1/4, 0):
+    /// ```text
+    /// h_{n+1} = h_n ε_n^{−1/(4k)} ε_{n−1}^{−1/(4k)} (h_n/h_{n−1})^{−1/4}
+    /// ```
+    /// Söderlind 2003, ACM TOMS 29(1), H211b (β₁ = β₂ = 1/b, α₂ = 1/b);
+    /// SUNDIALS `SUNAdaptController_H211`.
     H211,
-    /// Söderlind's H312b (b = 8): k = (1/8, 2/8, 1/8, −3/8, −1/8).
+    /// Söderlind's H312b digital filter with b = 8, k = (1/8, 2/8, 1/8, −3/8, −1/8):
+    /// ```text
+    /// h_{n+1} = h_n (ε_n ε_{n−1}² ε_{n−2})^{−1/(8k)} (h_n/h_{n−1})^{−3/8} (h_{n−1}/h_{n−2})^{−1/8}
+    /// ```
+    /// Söderlind 2003, ACM TOMS 29(1), H312b (β = (1, 2, 1)/b, α = (3, 1)/b);
+    /// SUNDIALS `SUNAdaptController_H312`.
     H312,
-    /// Gustafsson's predictive controller (Gustafsson 1994; SUNDIALS "ImpGus"):
-    /// h_{n+1} = h_n (h_n/h_{n−1}) ε_n^{−k1/k} (ε_n/ε_{n−1})^{−k2/k}, k1 = 0.98, k2 = 0.95,
-    /// i.e. k = (1.93, −0.95, 0, 1, 0).
+    /// Gustafsson's predictive controller for implicit methods, k = (1.93, −0.95, 0, 1, 0):
+    /// ```text
+    /// h_{n+1} = h_n (h_n/h_{n−1}) ε_n^{−k̂1/k} (ε_n/ε_{n−1})^{−k̂2/k},  k̂1 = 0.98, k̂2 = 0.95
+    ///         ⇔ k1 = k̂1 + k̂2 = 1.93, k2 = −k̂2 = −0.95, k4 = 1
+    /// ```
+    /// Gustafsson 1994, ACM TOMS 20(4) 496–512; SUNDIALS `SUNAdaptController_ImpGus`
+    /// (DEFAULT_IMPGUS_K1 = 0.98, DEFAULT_IMPGUS_K2 = 0.95, SetParams_ImpGus mapping).
     Gustafsson,
 }
 
@@ -102,6 +135,12 @@ pub trait Controller {
 }
 
 /// The general Söderlind filter with five coefficients.
+///
+/// ```text
+/// h_{n+1}/h_n = ε_n^{−k1/k} ε_{n−1}^{−k2/k} ε_{n−2}^{−k3/k} (h_n/h_{n−1})^{k4} (h_{n−1}/h_{n−2})^{k5}
+/// (ε_n^{−1/k} until `history_needed()` steps have been accepted)
+/// ```
+/// Söderlind 2003; SUNDIALS `SUNAdaptController_EstimateStep_Soderlind`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Soderlind {
     /// Coefficients (k1, …, k5).
@@ -110,6 +149,8 @@ pub struct Soderlind {
     err_hist: [Option<f64>; 2],
     /// h_{n−1}, h_{n−2} of accepted steps.
     h_hist: [Option<f64>; 2],
+    /// Accepted steps since the start or the last reset, capped at `history_needed()`.
+    accepted: usize,
 }
 
 impl Soderlind {
@@ -119,6 +160,20 @@ impl Soderlind {
             k,
             err_hist: [None; 2],
             h_hist: [None; 2],
+            accepted: 0,
+        }
+    }
+
+    /// Accepted steps of history the full filter needs: 2 if k3 or k5 ≠ 0, else 1 if k2 or
+    /// k4 ≠ 0, else 0 (SUNDIALS' `historysize`).
+    pub fn history_needed(&self) -> usize {
+        let [_, k2, k3, k4, k5] = self.k;
+        if k3 != 0.0 || k5 != 0.0 {
+            2
+        } else if k2 != 0.0 || k4 != 0.0 {
+            1
+        } else {
+            0
         }
     }
 }
@@ -130,30 +185,56 @@ impl Controller for Soderlind {
     fn factor(&self, h: f64, err: f64, p_hat: usize) -> f64 {
         let ord = (p_hat + 1) as f64;
         let e0 = err.max(ERR_FLOOR);
-        let e1 = self.err_hist[0].unwrap_or(e0);
-        let e2 = self.err_hist[1].unwrap_or(e1);
-        let h1 = self.h_hist[0].unwrap_or(h);
-        let h2 = self.h_hist[1].unwrap_or(h1);
+        let need = self.history_needed();
+        if self.accepted < need {
+            // Not enough history: the I controller (SUNDIALS falls back the same way).
+            return e0.powf(-1.0 / ord);
+        }
         let [k1, k2, k3, k4, k5] = self.k;
-        e0.powf(-k1 / ord)
-            * e1.powf(-k2 / ord)
-            * e2.powf(-k3 / ord)
-            * (h / h1).powf(k4)
-            * (h1 / h2).powf(k5)
+        let mut fac = e0.powf(-k1 / ord);
+        if need >= 1 {
+            let e1 = self.err_hist[0].unwrap_or(e0);
+            let h1 = self.h_hist[0].unwrap_or(h);
+            fac *= e1.powf(-k2 / ord) * (h / h1).powf(k4);
+        }
+        if need >= 2 {
+            let e2 = self.err_hist[1].unwrap_or(e0);
+            let h1 = self.h_hist[0].unwrap_or(h);
+            let h2 = self.h_hist[1].unwrap_or(h1);
+            fac *= e2.powf(-k3 / ord) * (h1 / h2).powf(k5);
+        }
+        fac
     }
 
     fn accept(&mut self, h: f64, err: f64) {
         self.err_hist = [Some(err.max(ERR_FLOOR)), self.err_hist[0]];
         self.h_hist = [Some(h), self.h_hist[0]];
+        if self.accepted < self.history_needed() {
+            self.accepted += 1;
+        }
     }
 
     fn reset(&mut self) {
         self.err_hist = [None; 2];
         self.h_hist = [None; 2];
+        self.accepted = 0;
     }
 }
 
-/// Limits applied around any controller (ARKODE's adaptivity layer).
+/// Limits applied around any controller (ARKODE's adaptivity layer, arkode_adapt.c).
+///
+/// ```text
+/// accepted step:  η = clamp(safety · controller factor, min_shrink, cap)
+///                 cap = max_first_growth (first step), max_growth_after_reject (after a
+///                 rejection), max_growth (otherwise); η ∈ deadband → η = 1
+/// rejected step:  η = clamp(safety · ε^(−1/k), min_shrink, max_after_reject)
+///                 (max_after_repeated_reject from the second failure in a row on)
+/// ```
+/// A rejected step uses the elementary controller, as Hairer's codes do (HNW I §II.4);
+/// ARKODE applies its full filter there too (arkCheckTemporalError → arkAdapt).
+/// safety, max_first_growth (etamx1) and max_after_repeated_reject (etamxf after small_nef = 2
+/// failures) are ARKODE's defaults; ARKODE grows by at most 20 and shrinks by at least 0.1,
+/// the defaults here (5, 0.2) are the tighter bounds of Hairer's codes (HNW I §II.4).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StepLimits {
@@ -227,6 +308,11 @@ impl StepLimits {
 
 /// A controller with its limits and the per-solve counters the limits need: what every
 /// adaptive stepper of this crate holds.
+///
+/// ```text
+/// h_next = h · clamp(safety · C(h, ε, history), limits)   (see [`StepLimits`])
+/// ```
+/// The proposal/commit split of SUNDIALS' SUNAdaptController (EstimateStep, UpdateH).
 pub struct StepSizeControl {
     controller: Box<dyn Controller>,
     limits: StepLimits,

@@ -5,8 +5,9 @@
 //! after each accepted step [t_a, t_b]:
 //!   sample g at t_a + j (t_b − t_a)/(s + 1), j = 1..s (s = event_samples), and at t_b
 //!   first sub-interval with a sign change of some g_i in its direction
-//!     → each such i: Illinois (modified regula falsi) on g_i(t, y_dense(t)) until the
-//!       bracket is below event_rtol · max(|t|, |t_b − t_a|)
+//!     → each such i: Illinois (modified regula falsi) on g_i(t, y_dense(t)), trial points
+//!       kept tol/2 inside the bracket, until the bracket is below
+//!       tol = event_rtol · max(|t|, |t_b − t_a|)
 //!     → t* = earliest root (the right end of its final bracket, where g_i already has its
 //!       new sign); every component whose root lies within the tolerance of t* is reported
 //!   hook: y* = on_event(hits, y_dense(t*)); then stop, or restart the stepper at (t*, y*)
@@ -152,7 +153,9 @@ impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
         self.finished
     }
 
-    /// Counters so far.
+    /// Counters so far. RHS evaluations a stepper makes lazily for the dense output of the
+    /// last step (DOP853's three extra stages) are added at the next step; [`solve`] returns
+    /// them all.
     pub fn stats(&self) -> &Stats {
         self.stepper.stats()
     }
@@ -291,6 +294,9 @@ impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
             t_a = t_j;
             g_a.copy_from_slice(&g_b);
         }
+        // No event: the end of this step is the start of the next one, so g there becomes the
+        // left bracket value of the next step's root finding.
+        self.g_a.copy_from_slice(&g_b);
         self.g_b = g_b;
         None
     }
@@ -320,9 +326,19 @@ impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
                 break;
             }
             let mut tm = tb - gb * (tb - ta) / (gb - ga);
-            if !(tm > ta && tm < tb) {
+            if !tm.is_finite() {
                 tm = 0.5 * (ta + tb);
             }
+            // Keep the trial point at least tol/2 inside the bracket (the bracket is wider than
+            // tol here). When one end is already within rounding of the root, the secant point
+            // equals that end; without the margin it fell back to bisection, halving the far
+            // end ~30 times. With it the next bracket is at most tol wide (Dekker's and
+            // Brent's minimal step).
+            let margin = (0.5 * tol).max(4.0 * f64::EPSILON * tb.abs());
+            if tb - ta <= 2.0 * margin {
+                break;
+            }
+            tm = tm.clamp(ta + margin, tb - margin);
             self.eval_g_dense(tm, &mut g);
             let gm = g[i];
             if gm == 0.0 {
@@ -510,7 +526,8 @@ pub fn solve<S: OdeSystem + ?Sized>(
         sol.t.push(sol.t_final);
         sol.y.extend_from_slice(&sol.y_final);
     }
-    sol.stats = it.stats().clone();
+    // stats_mut folds in work a stepper did lazily (DOP853's dense stages) after its last step.
+    sol.stats = it.stepper.stats_mut().clone();
     Ok(sol)
 }
 

@@ -13,11 +13,13 @@
 //!   state is after each ([`StepOutcome`]).
 //! - [`Stats`] counts the work; [`SolveError`] says why a run failed, with time and state.
 //!
-//! Methods: the paper's fixed-step RK4 ([`rk4`]).
+//! Methods: the paper's fixed-step RK4 ([`rk4`]); the explicit embedded pairs Bogacki–Shampine
+//! 3(2), Dormand–Prince 5(4), Tsitouras 5(4) and DOP853 ([`erk`]).
 
 #![warn(missing_docs)]
 
 pub mod controller;
+pub mod erk;
 pub mod error;
 pub mod integrator;
 pub mod options;

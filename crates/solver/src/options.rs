@@ -138,7 +138,14 @@ pub struct SolverOptions {
     /// Fixed step of fixed-step methods (s). Required for `rk4`, rejected otherwise; > 0.
     pub step: Option<f64>,
     /// Initial step. Default None: chosen by Hairer's starting-step algorithm (HNW I, II.4).
+    /// With `adaptive = false` it is the fixed step of every step.
     pub h0: Option<f64>,
+    /// Whether adaptive methods control the step size. Default true. When false, an adaptive
+    /// method of ours (the explicit pairs, Rosenbrock) takes `h0` (required) on every step,
+    /// shortening only the last one to land on the end time, computes no error estimate and
+    /// never rejects a step: the mode of fixed-step convergence-order tests. Ignored by `rk4`
+    /// (always fixed-step); not available for diffsol's methods.
+    pub adaptive: bool,
     /// Smallest step allowed before failing with `StepSizeTooSmall`. Default 0 (then
     /// 16·ε·|t| is the floor); ≥ 0.
     pub h_min: f64,
@@ -177,6 +184,7 @@ impl Default for SolverOptions {
             atol: Atol::default(),
             step: None,
             h0: None,
+            adaptive: true,
             h_min: 0.0,
             h_max: f64::INFINITY,
             max_steps: 1_000_000,
@@ -248,6 +256,17 @@ impl SolverOptions {
         if let Some(h0) = self.h0 {
             if !(h0.is_finite() && h0 > 0.0) {
                 return bad(format!("h0 must be finite and > 0, got {h0}"));
+            }
+        }
+        if !self.adaptive && !self.method.is_fixed_step() {
+            if self.method.is_diffsol() {
+                return bad(format!(
+                    "adaptive = false is not available for {}",
+                    self.method
+                ));
+            }
+            if self.h0.is_none() {
+                return bad("adaptive = false needs h0 (the fixed step)".into());
             }
         }
         if self.max_steps == 0 {

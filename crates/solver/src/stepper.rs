@@ -46,6 +46,9 @@ pub fn make_stepper<'a, S: OdeSystem + ?Sized>(
 ) -> Result<Box<dyn Stepper + 'a>, SolveError> {
     match opts.method {
         Method::Rk4 => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, opts)?)),
+        Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
+            Ok(Box::new(crate::erk::ErkStepper::new(sys, t0, y0, opts)?))
+        }
         m => Err(SolveError::InvalidOptions(format!(
             "method {m} is not built yet"
         ))),
