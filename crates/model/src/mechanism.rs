@@ -90,7 +90,6 @@ pub(crate) struct Prescription {
     /// Parent body and its local point; None: the ground at `ground_at`.
     pub parent: Option<(usize, [f64; 2])>,
     pub ground_at: [f64; 2],
-    pub pin_joint: usize,
     pub driver_joint: usize,
 }
 
@@ -220,9 +219,6 @@ pub(crate) struct Scratch {
     pub clr: Vec<ClrEval>,
     /// Jacobian blocks of every row with respect to each of its terms' bodies (full mode).
     pub term_jac: Vec<[[f64; 3]; 2]>,
-    pub ybuf: Vec<f64>,
-    pub fbuf: Vec<f64>,
-    pub fbuf2: Vec<f64>,
 }
 
 /// A planar mechanism as an ODE: build it with [`Mechanism::from_scene`], integrate it with
@@ -312,7 +308,6 @@ impl Mechanism {
                         s_own,
                         parent,
                         ground_at,
-                        pin_joint: pj,
                         driver_joint: dj,
                     });
                     changed = true;
@@ -452,9 +447,6 @@ impl Mechanism {
             qdd: vec![0.0; nq],
             clr: vec![ClrEval::default(); clr.len()],
             term_jac: vec![[[0.0; 3]; 2]; m],
-            ybuf: vec![0.0; 2 * nq],
-            fbuf: vec![0.0; 2 * nq],
-            fbuf2: vec![0.0; 2 * nq],
         };
         let roles = Roles::resolve(scene, &clr);
         let mut mech = Mechanism {

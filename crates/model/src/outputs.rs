@@ -380,17 +380,11 @@ impl Mechanism {
         let k = self
             .scene
             .body_index(body)
-            .ok_or_else(|| SceneError::Unknown {
-                what: "body".into(),
-                name: body.into(),
-            })?;
+            .ok_or_else(|| SceneError::Unknown(format!("body '{body}'")))?;
         let s = *self.bodies[k]
             .points
             .get(point)
-            .ok_or_else(|| SceneError::Unknown {
-                what: format!("point on body '{body}'"),
-                name: point.into(),
-            })?;
+            .ok_or_else(|| SceneError::Unknown(format!("point '{point}' on body '{body}'")))?;
         let mut sc = self.scratch.borrow_mut();
         let ok = self.evaluate(t, y, &mut sc, false);
         let a = rot(sc.cs[k], s);

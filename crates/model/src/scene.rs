@@ -81,13 +81,8 @@ pub enum SceneError {
         reason: String,
     },
     /// An output asked for a body or point the scene does not have.
-    #[error("unknown {what} '{name}'")]
-    Unknown {
-        /// "body" or "point on body 'x'".
-        what: String,
-        /// The name asked for.
-        name: String,
-    },
+    #[error("unknown {0}")]
+    Unknown(String),
     /// The scene file could not be read.
     #[error("cannot read {path}: {message}")]
     Io {
