@@ -47,7 +47,10 @@ fn main() {
                     }
                     println!("{stem:28} h={h:8.1e} ok   wall={wall:7.3}s max|Phi|={phi:9.2e} eps_max={eps:6.3} rhs={}", sol.stats.rhs_evals);
                 }
-                Err(e) => println!("{stem:28} h={h:8.1e} FAIL wall={wall:7.3}s {}", e.to_string().chars().take(80).collect::<String>()),
+                Err(e) => println!(
+                    "{stem:28} h={h:8.1e} FAIL wall={wall:7.3}s {}",
+                    e.to_string().chars().take(80).collect::<String>()
+                ),
             }
         }
     }

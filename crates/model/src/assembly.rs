@@ -30,8 +30,14 @@ const RANK_TOL: f64 = 1e-9;
 fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
     let mut rows = mech.rows.clone();
     for c in &mech.clr {
-        if !c.bearing.body.is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
-            && !c.journal.body.is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
+        if !c
+            .bearing
+            .body
+            .is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
+            && !c
+                .journal
+                .body
+                .is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
         {
             continue;
         }
@@ -152,9 +158,13 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<Vec<f64>, SceneError> {
         return Ok(y);
     }
     let worst = |phi: &[f64]| -> (usize, f64) {
-        phi.iter()
-            .enumerate()
-            .fold((0, 0.0), |(bi, bv), (i, v)| if !(v.abs() <= bv) { (i, v.abs()) } else { (bi, bv) })
+        phi.iter().enumerate().fold((0, 0.0), |(bi, bv), (i, v)| {
+            if !(v.abs() <= bv) {
+                (i, v.abs())
+            } else {
+                (bi, bv)
+            }
+        })
     };
     let fail = |mech: &Mechanism, phi: &[f64], jac: &Mat<f64>, what: &str, iters: usize| {
         check_rank(mech, &rows, jac)?;

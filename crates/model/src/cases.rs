@@ -98,7 +98,13 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
             r + l / 2.0,
             &[("A", [-l / 2.0, 0.0]), ("B", [l / 2.0, 0.0])],
         ),
-        body("slider", SLIDER_MASS, 1.0, round12(r + l), &[("B", [0.0, 0.0])]),
+        body(
+            "slider",
+            SLIDER_MASS,
+            1.0,
+            round12(r + l),
+            &[("B", [0.0, 0.0])],
+        ),
     ];
     let mut joints = vec![
         JointSpec::Revolute(RevoluteSpec {
@@ -224,16 +230,28 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
 /// at the four speeds.
 pub fn press_catalogue() -> Vec<(String, Scene)> {
     let mut out = Vec::new();
-    for (kind, name) in [(PressJoint::Dry, "dry"), (PressJoint::Lubricated, "lubricated")] {
+    for (kind, name) in [
+        (PressJoint::Dry, "dry"),
+        (PressJoint::Lubricated, "lubricated"),
+    ] {
         for rpm in [120.0, 150.0, 180.0, 200.0] {
-            out.push((format!("{name}_{rpm}rpm_c0.1"), press_scene(kind, rpm, 1e-4)));
+            out.push((
+                format!("{name}_{rpm}rpm_c0.1"),
+                press_scene(kind, rpm, 1e-4),
+            ));
         }
         for (c, label) in [(2e-4, "0.2"), (3e-4, "0.3"), (5e-4, "0.5")] {
-            out.push((format!("{name}_150rpm_c{label}"), press_scene(kind, 150.0, c)));
+            out.push((
+                format!("{name}_150rpm_c{label}"),
+                press_scene(kind, 150.0, c),
+            ));
         }
     }
     for rpm in [120.0, 150.0, 180.0, 200.0] {
-        out.push((format!("ideal_{rpm}rpm"), press_scene(PressJoint::Ideal, rpm, 0.0)));
+        out.push((
+            format!("ideal_{rpm}rpm"),
+            press_scene(PressJoint::Ideal, rpm, 0.0),
+        ));
     }
     out
 }

@@ -263,7 +263,9 @@ impl Mechanism {
         loop {
             let mut changed = false;
             for (dj, joint) in scene.joints.iter().enumerate() {
-                let JointSpec::Driver(d) = joint else { continue };
+                let JointSpec::Driver(d) = joint else {
+                    continue;
+                };
                 if used[dj] {
                     continue;
                 }
@@ -273,7 +275,9 @@ impl Mechanism {
                 }
                 // A revolute joint from k to the ground or to a prescribed body.
                 let found = scene.joints.iter().enumerate().find_map(|(pj, pjoint)| {
-                    let JointSpec::Revolute(r) = pjoint else { return None };
+                    let JointSpec::Revolute(r) = pjoint else {
+                        return None;
+                    };
                     if used[pj] {
                         return None;
                     }
@@ -470,7 +474,9 @@ impl Mechanism {
         mech.t_end = match (scene.t_end, scene.revolutions) {
             (Some(te), _) => te,
             (None, Some(n)) => {
-                let w = mech.crank_speed().expect("validated: revolutions need a crank driver");
+                let w = mech
+                    .crank_speed()
+                    .expect("validated: revolutions need a crank driver");
                 scene.t_start + n * 2.0 * std::f64::consts::PI / w.abs()
             }
             (None, None) => unreachable!("validated"),
@@ -581,10 +587,7 @@ impl Mechanism {
                     (
                         [x + a[0], y + a[1]],
                         [vx + w * b[0], vy + w * b[1]],
-                        [
-                            ax + al * b[0] - w * w * a[0],
-                            ay + al * b[1] - w * w * a[1],
-                        ],
+                        [ax + al * b[0] - w * w * a[0], ay + al * b[1] - w * w * a[1]],
                     )
                 }
             };
@@ -675,7 +678,9 @@ impl Mechanism {
             };
             // Dry contact.
             if st.delta > 0.0 {
-                ev.f_n = c.normal.force(st.delta, st.delta_dot, c.impact_velocity.get());
+                ev.f_n = c
+                    .normal
+                    .force(st.delta, st.delta_dot, c.impact_velocity.get());
                 ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
                 if let Some(fr) = &c.friction {
                     ev.f_t = fr.force(st.v_t, ev.f_n);
@@ -1088,5 +1093,61 @@ impl OdeSystem for Mechanism {
             }
         }
         EventAction::Continue
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The Schur-complement solve equals faer's LU solve of the full KKT matrix.
+    use super::*;
+    use crate::cases::{press_scene, PressJoint};
+    use faer::Mat;
+
+    #[test]
+    fn schur_complement_equals_the_full_kkt_solve() {
+        let m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        let nq = m.nq();
+        let nc = m.rows.len();
+        // A perturbed state: off the constraint manifold, in contact, moving.
+        let mut y = m.initial_state();
+        let pert = [
+            3e-5, -1.2e-4, 2e-3, 1e-4, 2e-5, -1e-3, 0.02, -0.01, 0.3, -0.05, 0.01, 0.002,
+        ];
+        for (v, p) in y.iter_mut().zip(pert) {
+            *v += p;
+        }
+        let t = 0.123;
+        let mut sc = m.scratch.borrow().clone();
+        assert!(m.evaluate(t, &y, &mut sc, false));
+        assert!(sc.clr[0].f_n > 0.0, "the test state is in contact");
+        let n = nq + nc;
+        let mut kkt = Mat::<f64>::zeros(n, n);
+        let mut rhs = Mat::<f64>::zeros(n, 1);
+        for j in 0..nq {
+            kkt[(j, j)] = 1.0 / m.minv[j];
+            rhs[(j, 0)] = sc.g[j];
+        }
+        for a in 0..nc {
+            for j in 0..nq {
+                kkt[(nq + a, j)] = sc.jac[a * nq + j];
+                kkt[(j, nq + a)] = sc.jac[a * nq + j];
+            }
+            rhs[(nq + a, 0)] = sc.rc[a];
+        }
+        use faer::linalg::solvers::Solve;
+        let sol = kkt.partial_piv_lu().solve(&rhs);
+        for j in 0..nq {
+            let d = (sol[(j, 0)] - sc.qdd[j]).abs();
+            assert!(
+                d <= 1e-9 * sol[(j, 0)].abs().max(1.0),
+                "q̈[{j}]: {} vs {}",
+                sol[(j, 0)],
+                sc.qdd[j]
+            );
+        }
+        for a in 0..nc {
+            let d = (sol[(nq + a, 0)] - sc.lam[a]).abs();
+            assert!(d <= 1e-9 * sol[(nq + a, 0)].abs().max(1.0), "λ[{a}]");
+        }
     }
 }

@@ -38,7 +38,11 @@ pub struct Roles {
 
 impl Roles {
     pub(crate) fn resolve(scene: &Scene, clr: &[Clr]) -> Roles {
-        let slider = scene.roles.slider.as_ref().and_then(|s| scene.body_index(s));
+        let slider = scene
+            .roles
+            .slider
+            .as_ref()
+            .and_then(|s| scene.body_index(s));
         let crank_driver = scene
             .roles
             .crank_driver
@@ -205,7 +209,8 @@ impl IdealSliderCrank {
         let (r, w) = (self.r, self.omega);
         let (sn, cs) = th.sin_cos();
         let s = (self.l * self.l - r * r * sn * sn).sqrt();
-        -r * w * w * cs - r * r * w * w * (2.0 * th).cos() / s
+        -r * w * w * cs
+            - r * r * w * w * (2.0 * th).cos() / s
             - r.powi(4) * w * w * sn * sn * cs * cs / (s * s * s)
     }
     /// x(t) (m).
@@ -362,7 +367,8 @@ impl Mechanism {
             }
             if c.film.is_some() {
                 // t·ė = v_T − R_J φ̇_J + R_B φ̇_B
-                let ed_t = st.v_t - c.rj * end_omega(&c.journal, sc) + c.rb * end_omega(&c.bearing, sc);
+                let ed_t =
+                    st.v_t - c.rj * end_omega(&c.journal, sc) + c.rb * end_omega(&c.bearing, sc);
                 p.film -= ev.f_r * st.delta_dot + ev.f_tf * ed_t;
             }
         }
@@ -428,14 +434,26 @@ impl Mechanism {
         // Rod pinned to the crank.
         let (rod, s_a, a_r) = scene.joints.iter().find_map(|j| match j {
             JointSpec::Revolute(r)
-                if &r.a.body == crank_name && r.b.body != crate::GROUND && &r.b.body != slider_name =>
+                if &r.a.body == crank_name
+                    && r.b.body != crate::GROUND
+                    && &r.b.body != slider_name =>
             {
-                Some((r.b.body.clone(), pt(&r.a.body, &r.a.point)?, pt(&r.b.body, &r.b.point)?))
+                Some((
+                    r.b.body.clone(),
+                    pt(&r.a.body, &r.a.point)?,
+                    pt(&r.b.body, &r.b.point)?,
+                ))
             }
             JointSpec::Revolute(r)
-                if &r.b.body == crank_name && r.a.body != crate::GROUND && &r.a.body != slider_name =>
+                if &r.b.body == crank_name
+                    && r.a.body != crate::GROUND
+                    && &r.a.body != slider_name =>
             {
-                Some((r.a.body.clone(), pt(&r.b.body, &r.b.point)?, pt(&r.a.body, &r.a.point)?))
+                Some((
+                    r.a.body.clone(),
+                    pt(&r.b.body, &r.b.point)?,
+                    pt(&r.a.body, &r.a.point)?,
+                ))
             }
             _ => None,
         })?;
@@ -448,10 +466,16 @@ impl Mechanism {
                 Some((pt(&rod, &r.b.point)?, pt(slider_name, &r.a.point)?))
             }
             JointSpec::Clearance(c) if c.journal.body == rod && &c.bearing.body == slider_name => {
-                Some((pt(&rod, &c.journal.point)?, pt(slider_name, &c.bearing.point)?))
+                Some((
+                    pt(&rod, &c.journal.point)?,
+                    pt(slider_name, &c.bearing.point)?,
+                ))
             }
             JointSpec::Clearance(c) if c.bearing.body == rod && &c.journal.body == slider_name => {
-                Some((pt(&rod, &c.bearing.point)?, pt(slider_name, &c.journal.point)?))
+                Some((
+                    pt(&rod, &c.bearing.point)?,
+                    pt(slider_name, &c.journal.point)?,
+                ))
             }
             _ => None,
         })?;

@@ -643,7 +643,9 @@ impl<'de> Deserialize<'de> for NormalSpec {
         let (tag, obj) = tagged_object::<D>(d, "law")?;
         match tag.as_str() {
             "impact" => variant::<D, _>(obj, "law").map(NormalSpec::Impact),
-            "lankarani_nikravesh" => variant::<D, _>(obj, "law").map(NormalSpec::LankaraniNikravesh),
+            "lankarani_nikravesh" => {
+                variant::<D, _>(obj, "law").map(NormalSpec::LankaraniNikravesh)
+            }
             "flores" => variant::<D, _>(obj, "law").map(NormalSpec::Flores),
             "hunt_crossley" => variant::<D, _>(obj, "law").map(NormalSpec::HuntCrossley),
             other => Err(D::Error::custom(format!(
@@ -832,16 +834,22 @@ impl Scene {
                     if r.a.body == r.b.body {
                         return Err(invalid(
                             format!("{p}.b.body"),
-                            format!("a revolute joint needs two different bodies, both are '{}'", r.a.body),
+                            format!(
+                                "a revolute joint needs two different bodies, both are '{}'",
+                                r.a.body
+                            ),
                         ));
                     }
                 }
                 JointSpec::Translational(t) => {
-                    self.check_body_point(&format!("{p}"), &t.body, &t.point)?;
+                    self.check_body_point(&p, &t.body, &t.point)?;
                     C::finite2(&format!("{p}.origin"), t.origin)?;
                     C::finite2(&format!("{p}.direction"), t.direction)?;
                     if t.direction[0] == 0.0 && t.direction[1] == 0.0 {
-                        return Err(invalid(format!("{p}.direction"), "must not be the zero vector"));
+                        return Err(invalid(
+                            format!("{p}.direction"),
+                            "must not be the zero vector",
+                        ));
                     }
                     if let Some(a) = t.angle {
                         C::finite(&format!("{p}.angle"), a)?;
@@ -861,7 +869,7 @@ impl Scene {
                         }
                         (None, None) => {
                             return Err(invalid(
-                                format!("{p}"),
+                                p.clone(),
                                 "a driver needs omega (rad/s) or rpm",
                             ))
                         }
@@ -889,7 +897,12 @@ impl Scene {
                         format!("joint '{d}' is a {} joint, not a driver", other.type_name()),
                     ))
                 }
-                None => return Err(invalid("roles.crank_driver", format!("no joint named '{d}'"))),
+                None => {
+                    return Err(invalid(
+                        "roles.crank_driver",
+                        format!("no joint named '{d}'"),
+                    ))
+                }
             }
         }
         if let Some(d) = &self.roles.clearance_joint {
@@ -898,11 +911,17 @@ impl Scene {
                 Some(other) => {
                     return Err(invalid(
                         "roles.clearance_joint",
-                        format!("joint '{d}' is a {} joint, not a clearance joint", other.type_name()),
+                        format!(
+                            "joint '{d}' is a {} joint, not a clearance joint",
+                            other.type_name()
+                        ),
                     ))
                 }
                 None => {
-                    return Err(invalid("roles.clearance_joint", format!("no joint named '{d}'")))
+                    return Err(invalid(
+                        "roles.clearance_joint",
+                        format!("no joint named '{d}'"),
+                    ))
                 }
             }
         }
@@ -936,7 +955,10 @@ impl Scene {
                 }
             }
             (Some(_), Some(_)) => {
-                return Err(invalid("revolutions", "give either t_end or revolutions, not both"))
+                return Err(invalid(
+                    "revolutions",
+                    "give either t_end or revolutions, not both",
+                ))
             }
             (None, None) => {
                 return Err(invalid(
@@ -1014,7 +1036,10 @@ impl Scene {
         if b.body == j.body {
             return Err(invalid(
                 format!("{p}.journal.body"),
-                format!("bearing and journal must be on different bodies, both are '{}'", b.body),
+                format!(
+                    "bearing and journal must be on different bodies, both are '{}'",
+                    b.body
+                ),
             ));
         }
         C::positive(&format!("{p}.bearing.radius"), b.radius, "bearing radius")?;
@@ -1038,33 +1063,41 @@ impl Scene {
                 ),
             ));
         }
-        let check_k = |path: &str, k: &Option<f64>, m: &Option<Materials>| -> Result<(), SceneError> {
-            match (k, m) {
-                (Some(k), None) => C::positive(&format!("{path}.k"), *k, "stiffness k"),
-                (None, Some(m)) => {
-                    for (side, mat) in [("bearing", m.bearing), ("journal", m.journal)] {
-                        let mp = format!("{path}.materials.{side}");
-                        C::positive(&format!("{mp}.youngs_modulus"), mat.youngs_modulus, "Young's modulus")?;
-                        C::finite(&format!("{mp}.poisson_ratio"), mat.poisson_ratio)?;
-                        if !(mat.poisson_ratio > -1.0 && mat.poisson_ratio < 0.5) {
-                            return Err(invalid(
-                                format!("{mp}.poisson_ratio"),
-                                format!("Poisson's ratio must lie in (-1, 0.5), got {}", mat.poisson_ratio),
-                            ));
+        let check_k =
+            |path: &str, k: &Option<f64>, m: &Option<Materials>| -> Result<(), SceneError> {
+                match (k, m) {
+                    (Some(k), None) => C::positive(&format!("{path}.k"), *k, "stiffness k"),
+                    (None, Some(m)) => {
+                        for (side, mat) in [("bearing", m.bearing), ("journal", m.journal)] {
+                            let mp = format!("{path}.materials.{side}");
+                            C::positive(
+                                &format!("{mp}.youngs_modulus"),
+                                mat.youngs_modulus,
+                                "Young's modulus",
+                            )?;
+                            C::finite(&format!("{mp}.poisson_ratio"), mat.poisson_ratio)?;
+                            if !(mat.poisson_ratio > -1.0 && mat.poisson_ratio < 0.5) {
+                                return Err(invalid(
+                                    format!("{mp}.poisson_ratio"),
+                                    format!(
+                                        "Poisson's ratio must lie in (-1, 0.5), got {}",
+                                        mat.poisson_ratio
+                                    ),
+                                ));
+                            }
                         }
+                        Ok(())
                     }
-                    Ok(())
+                    (Some(_), Some(_)) => Err(invalid(
+                        format!("{path}.materials"),
+                        "give either k or materials, not both",
+                    )),
+                    (None, None) => Err(invalid(
+                        path,
+                        "the normal law needs its stiffness: k (N/m^1.5) or materials",
+                    )),
                 }
-                (Some(_), Some(_)) => Err(invalid(
-                    format!("{path}.materials"),
-                    "give either k or materials, not both",
-                )),
-                (None, None) => Err(invalid(
-                    path,
-                    "the normal law needs its stiffness: k (N/m^1.5) or materials",
-                )),
-            }
-        };
+            };
         let np = format!("{p}.normal");
         match &c.normal {
             NormalSpec::Impact(s) => {
@@ -1072,14 +1105,19 @@ impl Scene {
                 C::non_negative(&format!("{np}.c_max"), s.c_max, "c_max")?;
                 C::positive(&format!("{np}.d_max"), s.d_max, "d_max")?;
             }
-            NormalSpec::LankaraniNikravesh(s) | NormalSpec::Flores(s) | NormalSpec::HuntCrossley(s) => {
+            NormalSpec::LankaraniNikravesh(s)
+            | NormalSpec::Flores(s)
+            | NormalSpec::HuntCrossley(s) => {
                 check_k(&np, &s.k, &s.materials)?;
                 let rp = format!("{np}.restitution");
                 C::finite(&rp, s.restitution)?;
                 if !(s.restitution > 0.0 && s.restitution <= 1.0) {
                     return Err(invalid(
                         rp,
-                        format!("the coefficient of restitution must lie in (0, 1], got {}", s.restitution),
+                        format!(
+                            "the coefficient of restitution must lie in (0, 1], got {}",
+                            s.restitution
+                        ),
                     ));
                 }
             }

@@ -23,7 +23,9 @@ fn tiny_clearance_and_stiff_contact_follow_the_closed_form() {
     let ideal = m.ideal_slider_crank().unwrap();
     let t_end = m.t_end();
     let half = 0.5 * t_end;
-    let times: Vec<f64> = (0..=2000).map(|i| half + (t_end - half) * i as f64 / 2000.0).collect();
+    let times: Vec<f64> = (0..=2000)
+        .map(|i| half + (t_end - half) * i as f64 / 2000.0)
+        .collect();
     let h = 1e-5;
     let t0 = std::time::Instant::now();
     let sol = run(&m, &rk4(h, false, Output::Times(times.clone())));

@@ -32,7 +32,10 @@ fn driver_lambda_balances_the_friction_moment() {
     assert!(c.contact_force > 0.0 && c.friction_force != 0.0);
     let tau = o.driver_torques[0];
     let expect = -0.009 * c.friction_force;
-    assert!((tau - expect).abs() < 1e-12 * expect.abs(), "τ = {tau}, −R_J F_T = {expect}");
+    assert!(
+        (tau - expect).abs() < 1e-12 * expect.abs(),
+        "τ = {tau}, −R_J F_T = {expect}"
+    );
     let mut dy = vec![0.0; 6];
     m.rhs(0.0, &y0, &mut dy);
     assert!(dy[5].abs() < 1e-12);

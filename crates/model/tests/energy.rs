@@ -63,7 +63,11 @@ fn conservative_double_pendulum_with_clearance_keeps_its_energy() {
             contact_steps += 1;
         }
     }
-    let onsets = sol.events.iter().filter(|e| e.index == 0 && e.rising).count();
+    let onsets = sol
+        .events
+        .iter()
+        .filter(|e| e.index == 0 && e.rising)
+        .count();
     println!(
         "h = {h:e}: {} steps, {onsets} contact onsets, {contact_steps} sampled states in contact, \
          max |E − E0| = {drift:.3e} J, max T = {t_max:.3} J, relative {:.3e}, wall {wall:.2} s",
@@ -116,7 +120,10 @@ fn damping_and_friction_never_add_energy_and_close_the_balance() {
         e0 - prev
     );
     assert!(worst_rise <= 1e-9 * scale);
-    assert!(e0 - prev > 1e-3 * scale, "damping and friction must remove energy");
+    assert!(
+        e0 - prev > 1e-3 * scale,
+        "damping and friction must remove energy"
+    );
     assert!(total_friction > 0.0);
     assert!(balance <= 1e-5 * scale);
 }

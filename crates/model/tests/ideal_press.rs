@@ -81,13 +81,21 @@ fn assembly_reaches_the_exact_initial_state() {
 #[test]
 fn slider_acceleration_at_dead_centres_from_exact_states() {
     // MODEL.md §5: ẍ(θ=0) = −rω²(1 + r/l), ẍ(θ=π) = rω²(1 − r/l); printed values at θ = 0.
-    let printed = [(120.0, -2.47022), (150.0, -3.85972), (180.0, -5.55800), (200.0, -6.86172)];
+    let printed = [
+        (120.0, -2.47022),
+        (150.0, -3.85972),
+        (180.0, -5.55800),
+        (200.0, -6.86172),
+    ];
     for (rpm, a0_printed) in printed {
         let w = omega(rpm);
         let m = ideal(rpm);
         let a0 = -R * w * w * (1.0 + R / L);
         let api = R * w * w * (1.0 - R / L);
-        assert!((a0 - a0_printed).abs() < 5e-6, "closed form {a0} vs MODEL.md {a0_printed}");
+        assert!(
+            (a0 - a0_printed).abs() < 5e-6,
+            "closed form {a0} vs MODEL.md {a0_printed}"
+        );
         let o0 = m.outputs(0.0, &exact_state(0.0, w));
         let t_pi = std::f64::consts::PI / w;
         let opi = m.outputs(t_pi, &exact_state(std::f64::consts::PI, w));
@@ -114,7 +122,9 @@ fn slider_acceleration_at_dead_centres_along_an_rk4_run() {
         let m = ideal(rpm);
         let period = 2.0 * std::f64::consts::PI / w;
         let h = period / 2000.0;
-        let times: Vec<f64> = (0..=4).map(|k| k as f64 * std::f64::consts::PI / w).collect();
+        let times: Vec<f64> = (0..=4)
+            .map(|k| k as f64 * std::f64::consts::PI / w)
+            .collect();
         let sol = run(&m, &rk4(h, false, Output::Times(times.clone())));
         let mut worst: f64 = 0.0;
         for (k, &t) in times.iter().enumerate() {
@@ -141,10 +151,14 @@ fn slider_acceleration_output_is_the_right_hand_side() {
     // Slider is the second integrated body: q̈ index 6 + 3.
     assert_eq!(o.slider_a.unwrap(), dy[9]);
     assert_eq!(o.slider_v.unwrap(), y[9]);
-    let pk = m.point_kinematics("slider", "B", 0.7 / omega(150.0), &y).unwrap();
+    let pk = m
+        .point_kinematics("slider", "B", 0.7 / omega(150.0), &y)
+        .unwrap();
     assert_eq!(pk.acc[0], dy[9]);
     // The crank tip: r ω² towards the pivot (prescribed body).
-    let pk = m.point_kinematics("crank", "A", 0.7 / omega(150.0), &y).unwrap();
+    let pk = m
+        .point_kinematics("crank", "A", 0.7 / omega(150.0), &y)
+        .unwrap();
     let w = omega(150.0);
     assert!((pk.acc[0] + R * w * w * 0.7f64.cos()).abs() < 1e-13);
     assert!((pk.acc[1] + R * w * w * 0.7f64.sin()).abs() < 1e-13);

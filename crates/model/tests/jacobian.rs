@@ -12,7 +12,11 @@ const RB: f64 = 0.010;
 const RJ: f64 = 0.009;
 const C: f64 = RB - RJ;
 
-fn journal(normal: serde_json::Value, friction: serde_json::Value, film: Option<serde_json::Value>) -> Mechanism {
+fn journal(
+    normal: serde_json::Value,
+    friction: serde_json::Value,
+    film: Option<serde_json::Value>,
+) -> Mechanism {
     let mut joint = json!({"type": "clearance", "name": "j",
         "bearing": {"body": "ground", "at": [0.0, 0.0], "radius": RB},
         "journal": {"body": "pin", "point": "c", "radius": RJ},
@@ -46,7 +50,10 @@ fn jac(m: &Mechanism, y: &[f64]) -> Mat<f64> {
 fn check(j: &Mat<f64>, expect: [[f64; 6]; 3], tol: f64) {
     let global = expect.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
     for r in 0..3 {
-        let scale = expect[r].iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-9 * global);
+        let scale = expect[r]
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()))
+            .max(1e-9 * global);
         for c in 0..6 {
             let d = (j[(r + 3, c)] - expect[r][c]).abs();
             assert!(

@@ -109,21 +109,36 @@ fn case_files_match_their_generator_and_declare_their_roles() {
     stems.sort();
     let mut catalogue = press_catalogue();
     catalogue.sort_by(|a, b| a.0.cmp(&b.0));
-    assert_eq!(stems, catalogue.iter().map(|c| c.0.clone()).collect::<Vec<_>>());
+    assert_eq!(
+        stems,
+        catalogue.iter().map(|c| c.0.clone()).collect::<Vec<_>>()
+    );
     assert_eq!(stems.len(), 18);
     for (stem, generated) in &catalogue {
         let scene = Scene::from_path(cases_dir().join(format!("{stem}.json"))).unwrap();
-        assert_eq!(&scene, generated, "{stem}.json is stale: rerun the write_press_cases example");
+        assert_eq!(
+            &scene, generated,
+            "{stem}.json is stale: rerun the write_press_cases example"
+        );
         let m = Mechanism::from_scene(&scene).unwrap();
         let roles = m.roles();
         assert!(roles.slider.is_some() && roles.crank_driver.is_some());
         assert_eq!(roles.clearance_joint.is_some(), !stem.starts_with("ideal"));
         assert_eq!(m.prescribed_bodies(), vec!["crank"]);
         assert_eq!(m.integrated_bodies(), vec!["rod", "slider"]);
-        let rpm: f64 = stem.split('_').nth(1).unwrap().trim_end_matches("rpm").parse().unwrap();
+        let rpm: f64 = stem
+            .split('_')
+            .nth(1)
+            .unwrap()
+            .trim_end_matches("rpm")
+            .parse()
+            .unwrap();
         assert!((m.t_end() - 2.0 * 60.0 / rpm).abs() < 1e-12);
         if stem.starts_with("lubricated") {
-            assert!(scene.notes.iter().any(|n| n.contains("L/D = 1")), "{stem}: L/D caveat");
+            assert!(
+                scene.notes.iter().any(|n| n.contains("L/D = 1")),
+                "{stem}: L/D caveat"
+            );
             assert_eq!(m.n_constraints(), 4);
         }
     }
@@ -143,7 +158,12 @@ fn ideal_and_dry_cases_run_to_the_end_with_rk4() {
         if stem == "dry_150rpm_c0.1" {
             // MODEL.md §9: the soft contact penetrates deeper than the clearance (|e|/c > 2)
             // and the contact force exceeds 30 kN.
-            assert!(s.eps_max > 2.0 && s.f_n_max > 3e4, "ε_max {} F_N {}", s.eps_max, s.f_n_max);
+            assert!(
+                s.eps_max > 2.0 && s.f_n_max > 3e4,
+                "ε_max {} F_N {}",
+                s.eps_max,
+                s.f_n_max
+            );
         }
     }
 }

@@ -39,10 +39,16 @@ fn json_syntax_error_names_line_and_column() {
             message: "EOF while parsing a list".into()
         }
     );
-    assert_eq!(e.to_string(), "JSON syntax error at line 3, column 0: EOF while parsing a list");
+    assert_eq!(
+        e.to_string(),
+        "JSON syntax error at line 3, column 0: EOF while parsing a list"
+    );
     // A number too large for f64 (the only way JSON can spell a non-finite number).
     let e = Scene::from_json_str("{\"bodies\": [], \"t_end\": 1e999}").unwrap_err();
-    assert_eq!(e.to_string(), "JSON syntax error at line 1, column 29: number out of range");
+    assert_eq!(
+        e.to_string(),
+        "JSON syntax error at line 1, column 29: number out of range"
+    );
 }
 
 #[test]
@@ -51,13 +57,19 @@ fn unknown_fields_are_rejected_with_their_path() {
     v["gravityy"] = json!(1);
     let (p, m) = schema(&v);
     assert_eq!(p, "gravityy");
-    assert!(m.starts_with("unknown field `gravityy`, expected one of"), "{m}");
+    assert!(
+        m.starts_with("unknown field `gravityy`, expected one of"),
+        "{m}"
+    );
 
     let mut v = dry_press_value();
     v["joints"][4]["bearing"]["radiuss"] = json!(1);
     let (p, m) = schema(&v);
     assert_eq!(p, "joints[4].bearing.radiuss");
-    assert!(m.starts_with("unknown field `radiuss`, expected one of `body`, `point`, `at`, `radius`"), "{m}");
+    assert!(
+        m.starts_with("unknown field `radiuss`, expected one of `body`, `point`, `at`, `radius`"),
+        "{m}"
+    );
 
     let mut v = dry_press_value();
     v["joints"][4]["normal"]["kk"] = json!(1);
@@ -86,7 +98,10 @@ fn unknown_fields_are_rejected_with_their_path() {
     v["joints"][4]["normal"]["c_max"] = json!("x");
     let (p, m) = schema(&v);
     assert_eq!(p, "joints[4].normal.c_max");
-    assert!(m.starts_with("invalid type: string \"x\", expected f64"), "{m}");
+    assert!(
+        m.starts_with("invalid type: string \"x\", expected f64"),
+        "{m}"
+    );
 }
 
 #[test]
@@ -117,17 +132,26 @@ fn a_joint_naming_a_missing_body_or_point() {
     );
     let mut v = dry_press_value();
     v["roles"]["slider"] = json!("carriage");
-    assert_eq!(err(&v).to_string(), "roles.slider: no body named 'carriage'");
+    assert_eq!(
+        err(&v).to_string(),
+        "roles.slider: no body named 'carriage'"
+    );
 }
 
 #[test]
 fn mass_and_inertia_must_be_positive() {
     let mut v = dry_press_value();
     v["bodies"][1]["mass"] = json!(0.0);
-    assert_eq!(err(&v).to_string(), "bodies[1].mass: mass must be > 0, got 0");
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[1].mass: mass must be > 0, got 0"
+    );
     let mut v = dry_press_value();
     v["bodies"][2]["inertia"] = json!(-1.0);
-    assert_eq!(err(&v).to_string(), "bodies[2].inertia: inertia must be > 0, got -1");
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[2].inertia: inertia must be > 0, got -1"
+    );
 }
 
 #[test]
@@ -136,7 +160,10 @@ fn radii_and_clearance() {
     v["joints"][4]["bearing"]["radius"] = json!(0.0);
     assert_eq!(
         invalid(&v),
-        ("joints[4].bearing.radius".into(), "bearing radius must be > 0, got 0".into())
+        (
+            "joints[4].bearing.radius".into(),
+            "bearing radius must be > 0, got 0".into()
+        )
     );
     let mut v = dry_press_value();
     v["joints"][4]["journal"]["radius"] = json!(0.05);
@@ -177,7 +204,9 @@ fn non_finite_numbers_are_rejected() {
         "gravity[1]: must be a finite number, got NaN"
     );
     let mut scene = Scene::from_json_str(&dry_press_value().to_string()).unwrap();
-    scene.bodies[0].points.insert("X".into(), [f64::INFINITY, 0.0]);
+    scene.bodies[0]
+        .points
+        .insert("X".into(), [f64::INFINITY, 0.0]);
     assert_eq!(
         Mechanism::from_scene(&scene).unwrap_err().to_string(),
         "bodies[0].points.X[0]: must be a finite number, got inf"
@@ -232,10 +261,16 @@ fn an_assembly_that_cannot_close_names_the_equation_and_residual() {
 fn other_documented_checks() {
     let mut v = dry_press_value();
     v["t_end"] = json!(1.0);
-    assert_eq!(err(&v).to_string(), "revolutions: give either t_end or revolutions, not both");
+    assert_eq!(
+        err(&v).to_string(),
+        "revolutions: give either t_end or revolutions, not both"
+    );
     let mut v = dry_press_value();
     v["joints"][1]["omega"] = json!(1.0);
-    assert_eq!(err(&v).to_string(), "joints[1].rpm: give either omega (rad/s) or rpm, not both");
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[1].rpm: give either omega (rad/s) or rpm, not both"
+    );
     let mut v = dry_press_value();
     v["joints"][4]["normal"] = json!({"law": "flores", "k": 1e9, "restitution": 0.0});
     assert_eq!(
@@ -244,7 +279,10 @@ fn other_documented_checks() {
     );
     let mut v = dry_press_value();
     v["bodies"][1]["name"] = json!("ground");
-    assert_eq!(err(&v).to_string(), "bodies[1].name: \"ground\" is reserved for the fixed frame");
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[1].name: \"ground\" is reserved for the fixed frame"
+    );
     let mut v = dry_press_value();
     v["roles"]["crank_driver"] = json!("slide");
     assert_eq!(
@@ -258,11 +296,15 @@ fn output_lookups_name_the_unknown_body_or_point() {
     let m = build(&dry_press_value()).unwrap();
     let y = m.initial_state();
     assert_eq!(
-        m.point_kinematics("wheel", "A", 0.0, &y).unwrap_err().to_string(),
+        m.point_kinematics("wheel", "A", 0.0, &y)
+            .unwrap_err()
+            .to_string(),
         "unknown body 'wheel'"
     );
     assert_eq!(
-        m.point_kinematics("rod", "Q", 0.0, &y).unwrap_err().to_string(),
+        m.point_kinematics("rod", "Q", 0.0, &y)
+            .unwrap_err()
+            .to_string(),
         "unknown point 'Q' on body 'rod'"
     );
 }

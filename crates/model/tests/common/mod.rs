@@ -3,7 +3,7 @@
 
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::{Mechanism, Scene, SceneError};
-use lash_solver::{solve, Method, Output, SolverOptions, Solution};
+use lash_solver::{solve, Method, Output, Solution, SolverOptions};
 
 /// The dry press at 150 rpm, c = 0.1 mm, as a JSON value to mutate.
 pub fn dry_press_value() -> serde_json::Value {
