@@ -38,6 +38,12 @@ pub const K_CONTACT: f64 = 2.34e10;
 pub const BEARING_RADIUS: f64 = 0.05;
 
 /// Which joint joins the rod and the slider.
+///
+/// ```text
+/// Ideal       Φ = r_rod^B − r_slider^B = 0              (closed form of MODEL.md §5)
+/// Dry         IMPACT contact + Coulomb friction         (MODEL.md §3)
+/// Lubricated  long-bearing Gümbel film + dry contact    (MODEL.md §4)
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PressJoint {
     /// Ideal revolute joint (no clearance).

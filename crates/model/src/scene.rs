@@ -868,10 +868,7 @@ impl Scene {
                             ))
                         }
                         (None, None) => {
-                            return Err(invalid(
-                                p.clone(),
-                                "a driver needs omega (rad/s) or rpm",
-                            ))
+                            return Err(invalid(p.clone(), "a driver needs omega (rad/s) or rpm"))
                         }
                     }
                 }
