@@ -1,0 +1,1153 @@
+//! The mechanism: a validated scene turned into the index-1 ODE of MODEL.md §1.
+//!
+//! ```text
+//! y = (q, q̇),  q = (x_i, y_i, φ_i) of every integrated body (scene order)
+//!
+//! [ M    Φ_qᵀ ] [ q̈ ]   [ g                 ]        M = diag(m_i, m_i, I_i)
+//! [ Φ_q  0    ] [ λ  ] = [ γ − 2αΦ̇ − β²Φ    ]        Φ̈ = Φ_q q̈ − γ
+//!
+//! solved by the range-space (Schur complement) reduction, exactly equivalent for M > 0 and
+//! Φ_q of full row rank (checked at the initial state):
+//!   S = Φ_q M⁻¹ Φ_qᵀ  (SPD),   S λ = Φ_q M⁻¹ g − (γ − 2αΦ̇ − β²Φ)   (Cholesky),
+//!   q̈ = M⁻¹ (g − Φ_qᵀ λ)
+//! ```
+//! A body whose motion is prescribed (a rotational driver plus a revolute joint to the ground
+//! or to another prescribed body: the press's crank) is not integrated; its pose, velocity and
+//! acceleration are closed-form functions of t, and the joints to it are rheonomic constraints
+//! on the other body. The clearance joints add forces to g (MODEL.md §2–§4); absent features
+//! (gravity, friction, film) run no code.
+//!
+//! Sources: MODEL.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
+//! Baumgarte 1972), Peng et al. 2025 §3.
+
+use std::cell::{Cell, RefCell};
+use std::collections::BTreeMap;
+
+use faer::MatMut;
+use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
+
+use crate::geometry::{ClearanceInput, ClearanceState};
+use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw};
+use crate::outputs::Roles;
+use crate::scene::{
+    Attachment, ClearanceEnd, FrictionSpec, JointSpec, NormalSpec, Scene, SceneError, GROUND,
+};
+
+// ---------------------------------------------------------------------------------------------
+// Small planar helpers
+// ---------------------------------------------------------------------------------------------
+
+/// A(φ) s with (c, s) = (cos φ, sin φ).
+#[inline]
+pub(crate) fn rot(cs: [f64; 2], v: [f64; 2]) -> [f64; 2] {
+    [cs[0] * v[0] - cs[1] * v[1], cs[1] * v[0] + cs[0] * v[1]]
+}
+
+/// k × v = (−v_y, v_x).
+#[inline]
+pub(crate) fn perp(v: [f64; 2]) -> [f64; 2] {
+    [-v[1], v[0]]
+}
+
+#[inline]
+pub(crate) fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+#[inline]
+pub(crate) fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+// ---------------------------------------------------------------------------------------------
+// Internal model
+// ---------------------------------------------------------------------------------------------
+
+/// How a body moves: integrated (index into q) or prescribed (index into the prescriptions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Owner {
+    Int(usize),
+    Pres(usize),
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct BodyInfo {
+    pub name: String,
+    pub mass: f64,
+    pub inertia: f64,
+    pub points: BTreeMap<String, [f64; 2]>,
+    pub owner: Owner,
+}
+
+/// A prescribed body: φ = θ₀ + ω t, and its point `s_own` pinned to a ground location or to a
+/// point of an earlier prescribed body.
+#[derive(Clone, Debug)]
+pub(crate) struct Prescription {
+    pub body: usize,
+    pub theta0: f64,
+    pub omega: f64,
+    pub s_own: [f64; 2],
+    /// Parent body and its local point; None: the ground at `ground_at`.
+    pub parent: Option<(usize, [f64; 2])>,
+    pub ground_at: [f64; 2],
+    pub driver_joint: usize,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum TermKind {
+    /// w · r^P, r^P = r + A(φ) s
+    Point { s: [f64; 2], w: [f64; 2] },
+    /// c · φ
+    Angle { c: f64 },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Term {
+    pub body: usize,
+    pub kind: TermKind,
+}
+
+/// One scalar constraint equation Φ = konst + rate·t + Σ terms.
+#[derive(Clone, Debug)]
+pub(crate) struct Row {
+    pub terms: [Term; 2],
+    pub n_terms: usize,
+    pub konst: f64,
+    pub rate: f64,
+    /// Scene joint index.
+    pub joint: usize,
+    /// Which equation of the joint ("x", "y", "across the line", ...).
+    pub label: &'static str,
+}
+
+/// One side of a clearance joint: a body point (local s) or a ground location (global s).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct End {
+    pub body: Option<usize>,
+    pub s: [f64; 2],
+}
+
+#[derive(Debug)]
+pub(crate) struct Clr {
+    pub joint: usize,
+    pub name: String,
+    pub bearing: End,
+    pub journal: End,
+    pub rb: f64,
+    pub rj: f64,
+    pub c: f64,
+    pub normal: NormalLaw,
+    pub friction: Option<FrictionLaw>,
+    pub film: Option<Film>,
+    pub e0: [f64; 2],
+    /// δ̇⁻ stored at the last contact onset (event hook).
+    pub impact_velocity: Cell<f64>,
+}
+
+/// One evaluated constraint row.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RowEval {
+    pub phi: f64,
+    pub phid: f64,
+    pub gamma: f64,
+    /// ∂Φ/∂(x, y, φ) of the body of each term.
+    pub jrows: [[f64; 3]; 2],
+}
+
+/// What the event functions are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EventKind {
+    /// δ of clearance joint k.
+    Contact(usize),
+    /// ε − ε_cap of clearance joint k.
+    EpsCap(usize),
+}
+
+/// Per-joint results of one evaluation.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ClrEval {
+    pub st: ClearanceState,
+    pub f_n: f64,
+    pub f_t: f64,
+    pub f_r: f64,
+    pub f_tf: f64,
+    pub elastic: f64,
+}
+
+impl Default for ClrEval {
+    fn default() -> Self {
+        ClrEval {
+            st: ClearanceState {
+                e: [0.0; 2],
+                e_norm: 0.0,
+                n: [1.0, 0.0],
+                t: [0.0, 1.0],
+                delta: 0.0,
+                delta_dot: 0.0,
+                v_t: 0.0,
+                eps: 0.0,
+                eps_dot: 0.0,
+                omega: 0.0,
+            },
+            f_n: 0.0,
+            f_t: 0.0,
+            f_r: 0.0,
+            f_tf: 0.0,
+            elastic: 0.0,
+        }
+    }
+}
+
+/// Buffers of one evaluation (no allocation in `rhs`).
+#[derive(Clone, Debug)]
+pub(crate) struct Scratch {
+    pub pose: Vec<[f64; 3]>,
+    pub vel: Vec<[f64; 3]>,
+    pub acc: Vec<[f64; 3]>,
+    pub cs: Vec<[f64; 2]>,
+    /// Applied generalized forces on integrated coordinates.
+    pub g: Vec<f64>,
+    /// Applied forces on every body (filled in full evaluations, for Newton–Euler and outputs).
+    pub gb: Vec<[f64; 3]>,
+    pub jac: Vec<f64>,
+    pub phi: Vec<f64>,
+    pub phid: Vec<f64>,
+    pub rc: Vec<f64>,
+    pub smat: Vec<f64>,
+    pub lam: Vec<f64>,
+    pub qdd: Vec<f64>,
+    pub clr: Vec<ClrEval>,
+    /// Jacobian blocks of every row with respect to each of its terms' bodies (full mode).
+    pub term_jac: Vec<[[f64; 3]; 2]>,
+}
+
+/// A planar mechanism as an ODE: build it with [`Mechanism::from_scene`], integrate it with
+/// `lash_solver::solve` from [`Mechanism::initial_state`], read it with
+/// [`Mechanism::outputs`].
+///
+/// ```text
+/// y' = f(t, y),  y = (q, q̇)  (MODEL.md §1);  events δ_k(q) and ε_k − ε_cap (MODEL.md §7)
+/// ```
+#[derive(Debug)]
+pub struct Mechanism {
+    pub(crate) scene: Scene,
+    pub(crate) bodies: Vec<BodyInfo>,
+    /// Scene index of integrated body i.
+    pub(crate) int_bodies: Vec<usize>,
+    pub(crate) pres: Vec<Prescription>,
+    pub(crate) rows: Vec<Row>,
+    pub(crate) clr: Vec<Clr>,
+    pub(crate) events: Vec<EventKind>,
+    pub(crate) minv: Vec<f64>,
+    pub(crate) gravity: Option<[f64; 2]>,
+    pub(crate) alpha: f64,
+    pub(crate) beta: f64,
+    pub(crate) t_start: f64,
+    pub(crate) t_end: f64,
+    pub(crate) y0: Vec<f64>,
+    pub(crate) roles: Roles,
+    pub(crate) scratch: RefCell<Scratch>,
+}
+
+impl Mechanism {
+    /// Validates the scene, finds the prescribed bodies, builds the constraint equations,
+    /// checks their rank and assembles the initial state (Newton on positions, then the
+    /// velocity constraints; clearance joints held at their initial eccentricity, ė = 0).
+    pub fn from_scene(scene: &Scene) -> Result<Mechanism, SceneError> {
+        scene.validate()?;
+        let nb = scene.bodies.len();
+        // Drivers and ground/prescribed pins: which bodies are prescribed.
+        let mut owner: Vec<Option<Owner>> = vec![None; nb];
+        let mut pres: Vec<Prescription> = Vec::new();
+        let mut used = vec![false; scene.joints.len()];
+        loop {
+            let mut changed = false;
+            for (dj, joint) in scene.joints.iter().enumerate() {
+                let JointSpec::Driver(d) = joint else {
+                    continue;
+                };
+                if used[dj] {
+                    continue;
+                }
+                let k = scene.body_index(&d.body).expect("validated");
+                if owner[k].is_some() {
+                    continue;
+                }
+                // A revolute joint from k to the ground or to a prescribed body.
+                let found = scene.joints.iter().enumerate().find_map(|(pj, pjoint)| {
+                    let JointSpec::Revolute(r) = pjoint else {
+                        return None;
+                    };
+                    if used[pj] {
+                        return None;
+                    }
+                    let (own, other) = if r.a.body == d.body {
+                        (&r.a, &r.b)
+                    } else if r.b.body == d.body {
+                        (&r.b, &r.a)
+                    } else {
+                        return None;
+                    };
+                    let s_own = point_of(scene, own);
+                    if other.body == GROUND {
+                        Some((pj, s_own, None, other.at.expect("validated")))
+                    } else {
+                        let ko = scene.body_index(&other.body).expect("validated");
+                        match owner[ko] {
+                            Some(Owner::Pres(_)) => {
+                                Some((pj, s_own, Some((ko, point_of(scene, other))), [0.0; 2]))
+                            }
+                            _ => None,
+                        }
+                    }
+                });
+                if let Some((pj, s_own, parent, ground_at)) = found {
+                    used[dj] = true;
+                    used[pj] = true;
+                    owner[k] = Some(Owner::Pres(pres.len()));
+                    pres.push(Prescription {
+                        body: k,
+                        theta0: d.theta0,
+                        omega: d.omega_rad_s(),
+                        s_own,
+                        parent,
+                        ground_at,
+                        driver_joint: dj,
+                    });
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        let mut int_bodies = Vec::new();
+        for k in 0..nb {
+            if owner[k].is_none() {
+                owner[k] = Some(Owner::Int(int_bodies.len()));
+                int_bodies.push(k);
+            }
+        }
+        let bodies: Vec<BodyInfo> = scene
+            .bodies
+            .iter()
+            .zip(&owner)
+            .map(|(b, o)| BodyInfo {
+                name: b.name.clone(),
+                mass: b.mass,
+                inertia: b.inertia,
+                points: b.points.clone(),
+                owner: o.expect("assigned"),
+            })
+            .collect();
+
+        // Constraint equations of the remaining joints.
+        let mut rows = Vec::new();
+        let mut clr = Vec::new();
+        for (ji, joint) in scene.joints.iter().enumerate() {
+            if used[ji] {
+                continue;
+            }
+            let first = rows.len();
+            match joint {
+                JointSpec::Revolute(r) => {
+                    for (axis, label) in [(0usize, "x"), (1, "y")] {
+                        let mut w = [0.0; 2];
+                        w[axis] = 1.0;
+                        let mut row = Row::new(ji, label);
+                        row.add_attachment(scene, &r.a, w);
+                        row.add_attachment(scene, &r.b, [-w[0], -w[1]]);
+                        rows.push(row);
+                    }
+                }
+                JointSpec::Translational(t) => {
+                    let k = scene.body_index(&t.body).expect("validated");
+                    let s = scene.bodies[k].points[&t.point];
+                    let len = t.direction[0].hypot(t.direction[1]);
+                    let u = [t.direction[0] / len, t.direction[1] / len];
+                    let n = perp(u);
+                    let mut r1 = Row::new(ji, "across the line");
+                    r1.push(Term {
+                        body: k,
+                        kind: TermKind::Point { s, w: n },
+                    });
+                    r1.konst = -dot(n, t.origin);
+                    rows.push(r1);
+                    let mut r2 = Row::new(ji, "rotation");
+                    r2.push(Term {
+                        body: k,
+                        kind: TermKind::Angle { c: 1.0 },
+                    });
+                    r2.konst = -t.angle.unwrap_or(scene.bodies[k].angle);
+                    rows.push(r2);
+                }
+                JointSpec::Driver(d) => {
+                    let k = scene.body_index(&d.body).expect("validated");
+                    let mut row = Row::new(ji, "angle");
+                    row.push(Term {
+                        body: k,
+                        kind: TermKind::Angle { c: 1.0 },
+                    });
+                    row.konst = -d.theta0;
+                    row.rate = -d.omega_rad_s();
+                    rows.push(row);
+                }
+                JointSpec::Clearance(c) => {
+                    clr.push(build_clearance(scene, ji, c));
+                }
+            }
+            // A joint acting only on the ground and prescribed bodies constrains nothing that
+            // moves freely: it repeats or contradicts the prescription.
+            let only_prescribed = rows[first..].iter().all(|r| {
+                r.terms[..r.n_terms]
+                    .iter()
+                    .all(|t| matches!(bodies[t.body].owner, Owner::Pres(_)))
+            });
+            if rows.len() > first && only_prescribed {
+                return Err(SceneError::Redundant {
+                    path: format!("joints[{ji}]"),
+                    reason: format!(
+                        "{joint} acts only on the ground and on bodies whose motion is already \
+                         prescribed by drivers and pins"
+                    ),
+                });
+            }
+        }
+
+        let mut events = Vec::new();
+        for k in 0..clr.len() {
+            events.push(EventKind::Contact(k));
+        }
+        for (k, c) in clr.iter().enumerate() {
+            if c.film.is_some() {
+                events.push(EventKind::EpsCap(k));
+            }
+        }
+        let mut minv = Vec::with_capacity(3 * int_bodies.len());
+        for &k in &int_bodies {
+            let b = &scene.bodies[k];
+            minv.extend_from_slice(&[1.0 / b.mass, 1.0 / b.mass, 1.0 / b.inertia]);
+        }
+        let gravity = if scene.gravity != [0.0, 0.0] {
+            Some(scene.gravity)
+        } else {
+            None
+        };
+        let nq = 3 * int_bodies.len();
+        let m = rows.len();
+        let scratch = Scratch {
+            pose: vec![[0.0; 3]; nb],
+            vel: vec![[0.0; 3]; nb],
+            acc: vec![[0.0; 3]; nb],
+            cs: vec![[1.0, 0.0]; nb],
+            g: vec![0.0; nq],
+            gb: vec![[0.0; 3]; nb],
+            jac: vec![0.0; m * nq],
+            phi: vec![0.0; m],
+            phid: vec![0.0; m],
+            rc: vec![0.0; m],
+            smat: vec![0.0; m * m],
+            lam: vec![0.0; m],
+            qdd: vec![0.0; nq],
+            clr: vec![ClrEval::default(); clr.len()],
+            term_jac: vec![[[0.0; 3]; 2]; m],
+        };
+        let roles = Roles::resolve(scene, &clr);
+        let mut mech = Mechanism {
+            scene: scene.clone(),
+            bodies,
+            int_bodies,
+            pres,
+            rows,
+            clr,
+            events,
+            minv,
+            gravity,
+            alpha: scene.baumgarte.alpha,
+            beta: scene.baumgarte.beta,
+            t_start: scene.t_start,
+            t_end: 0.0,
+            y0: Vec::new(),
+            roles,
+            scratch: RefCell::new(scratch),
+        };
+        mech.t_end = match (scene.t_end, scene.revolutions) {
+            (Some(te), _) => te,
+            (None, Some(n)) => {
+                let w = mech
+                    .crank_speed()
+                    .expect("validated: revolutions need a crank driver");
+                scene.t_start + n * 2.0 * std::f64::consts::PI / w.abs()
+            }
+            (None, None) => unreachable!("validated"),
+        };
+        mech.y0 = crate::assembly::assemble(&mech)?;
+        Ok(mech)
+    }
+
+    /// y0 after assembly: (q, q̇) of the integrated bodies.
+    pub fn initial_state(&self) -> Vec<f64> {
+        self.y0.clone()
+    }
+
+    /// Start time (s).
+    pub fn t_start(&self) -> f64 {
+        self.t_start
+    }
+
+    /// End time (s): `t_end`, or t_start + revolutions · 2π/|ω| of the crank driver.
+    pub fn t_end(&self) -> f64 {
+        self.t_end
+    }
+
+    /// The scene this mechanism was built from.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Resolved roles.
+    pub fn roles(&self) -> &Roles {
+        &self.roles
+    }
+
+    /// ω (rad/s) of the `crank_driver` role, if declared.
+    pub fn crank_speed(&self) -> Option<f64> {
+        let j = self.roles.crank_driver?;
+        match &self.scene.joints[j] {
+            JointSpec::Driver(d) => Some(d.omega_rad_s()),
+            _ => None,
+        }
+    }
+
+    /// Names of the integrated bodies, in the order of q.
+    pub fn integrated_bodies(&self) -> Vec<&str> {
+        self.int_bodies
+            .iter()
+            .map(|&k| self.bodies[k].name.as_str())
+            .collect()
+    }
+
+    /// Names of the prescribed (not integrated) bodies.
+    pub fn prescribed_bodies(&self) -> Vec<&str> {
+        self.pres
+            .iter()
+            .map(|p| self.bodies[p.body].name.as_str())
+            .collect()
+    }
+
+    /// Number of constraint equations in the KKT system.
+    pub fn n_constraints(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Names of the clearance joints, in the order of [`crate::Outputs::clearance`].
+    pub fn clearance_names(&self) -> Vec<&str> {
+        self.clr.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// The stored impact velocity δ̇⁻ of every clearance joint (m/s; 0 before any onset).
+    pub fn impact_velocities(&self) -> Vec<f64> {
+        self.clr.iter().map(|c| c.impact_velocity.get()).collect()
+    }
+
+    /// Number of integrated coordinates (n_q = dim/2).
+    pub(crate) fn nq(&self) -> usize {
+        3 * self.int_bodies.len()
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Evaluation core
+    // -----------------------------------------------------------------------------------------
+
+    /// Poses and velocities of every body at (t, y); accelerations of prescribed bodies.
+    pub(crate) fn kinematics(&self, t: f64, y: &[f64], sc: &mut Scratch) {
+        let nq = self.nq();
+        for (i, &k) in self.int_bodies.iter().enumerate() {
+            let q = &y[3 * i..3 * i + 3];
+            let v = &y[nq + 3 * i..nq + 3 * i + 3];
+            sc.pose[k] = [q[0], q[1], q[2]];
+            sc.vel[k] = [v[0], v[1], v[2]];
+            let (s, c) = q[2].sin_cos();
+            sc.cs[k] = [c, s];
+        }
+        for p in &self.pres {
+            let phi = p.theta0 + p.omega * t;
+            let (s, c) = phi.sin_cos();
+            let cs = [c, s];
+            let as_ = rot(cs, p.s_own);
+            let bs = perp(as_);
+            let (pp, vp, ap) = match p.parent {
+                None => (p.ground_at, [0.0; 2], [0.0; 2]),
+                Some((kp, sp)) => {
+                    let a = rot(sc.cs[kp], sp);
+                    let b = perp(a);
+                    let [x, y, _] = sc.pose[kp];
+                    let [vx, vy, w] = sc.vel[kp];
+                    let [ax, ay, al] = sc.acc[kp];
+                    (
+                        [x + a[0], y + a[1]],
+                        [vx + w * b[0], vy + w * b[1]],
+                        [ax + al * b[0] - w * w * a[0], ay + al * b[1] - w * w * a[1]],
+                    )
+                }
+            };
+            let w = p.omega;
+            sc.cs[p.body] = cs;
+            sc.pose[p.body] = [pp[0] - as_[0], pp[1] - as_[1], phi];
+            sc.vel[p.body] = [vp[0] - w * bs[0], vp[1] - w * bs[1], w];
+            sc.acc[p.body] = [ap[0] + w * w * as_[0], ap[1] + w * w * as_[1], 0.0];
+        }
+    }
+
+    /// Global position and velocity of a clearance end, and the angular velocity of its body.
+    #[inline]
+    fn end_point(&self, e: &End, sc: &Scratch) -> ([f64; 2], [f64; 2], f64) {
+        match e.body {
+            None => (e.s, [0.0; 2], 0.0),
+            Some(k) => {
+                let a = rot(sc.cs[k], e.s);
+                let [x, y, _] = sc.pose[k];
+                let [vx, vy, w] = sc.vel[k];
+                ([x + a[0], y + a[1]], [vx - w * a[1], vy + w * a[0]], w)
+            }
+        }
+    }
+
+    /// Clearance kinematics of joint k (after `kinematics`).
+    #[inline]
+    pub(crate) fn clearance_state(&self, k: usize, sc: &Scratch) -> ClearanceState {
+        let c = &self.clr[k];
+        let (r_b, v_b, w_b) = self.end_point(&c.bearing, sc);
+        let (r_j, v_j, w_j) = self.end_point(&c.journal, sc);
+        ClearanceState::compute(&ClearanceInput {
+            r_j,
+            r_b,
+            v_j,
+            v_b,
+            phi_dot_j: w_j,
+            phi_dot_b: w_b,
+            radius_j: c.rj,
+            radius_b: c.rb,
+        })
+    }
+
+    /// Adds force f at global point (r_body + A s + arm_extra) to body k.
+    #[inline]
+    fn apply(&self, k: usize, arm: [f64; 2], f: [f64; 2], sc: &mut Scratch, full: bool) {
+        let mz = cross(arm, f);
+        match self.bodies[k].owner {
+            Owner::Int(i) => {
+                sc.g[3 * i] += f[0];
+                sc.g[3 * i + 1] += f[1];
+                sc.g[3 * i + 2] += mz;
+            }
+            Owner::Pres(_) => {}
+        }
+        if full {
+            sc.gb[k][0] += f[0];
+            sc.gb[k][1] += f[1];
+            sc.gb[k][2] += mz;
+        }
+    }
+
+    /// Applied forces: gravity and the clearance joints (MODEL.md §3–§4).
+    pub(crate) fn applied_forces(&self, sc: &mut Scratch, full: bool) {
+        sc.g.iter_mut().for_each(|v| *v = 0.0);
+        if full {
+            sc.gb.iter_mut().for_each(|v| *v = [0.0; 3]);
+        }
+        if let Some(gv) = self.gravity {
+            for (i, &k) in self.int_bodies.iter().enumerate() {
+                let m = self.bodies[k].mass;
+                sc.g[3 * i] += m * gv[0];
+                sc.g[3 * i + 1] += m * gv[1];
+            }
+            if full {
+                for (k, b) in self.bodies.iter().enumerate() {
+                    sc.gb[k][0] += b.mass * gv[0];
+                    sc.gb[k][1] += b.mass * gv[1];
+                }
+            }
+        }
+        for k in 0..self.clr.len() {
+            let st = self.clearance_state(k, sc);
+            let c = &self.clr[k];
+            let mut ev = ClrEval {
+                st,
+                ..ClrEval::default()
+            };
+            // Dry contact.
+            if st.delta > 0.0 {
+                ev.f_n = c
+                    .normal
+                    .force(st.delta, st.delta_dot, c.impact_velocity.get());
+                ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
+                if let Some(fr) = &c.friction {
+                    ev.f_t = fr.force(st.v_t, ev.f_n);
+                }
+                let f_j = [
+                    -ev.f_n * st.n[0] + ev.f_t * st.t[0],
+                    -ev.f_n * st.n[1] + ev.f_t * st.t[1],
+                ];
+                if let Some(kj) = c.journal.body {
+                    let a = rot(sc.cs[kj], c.journal.s);
+                    let arm = [a[0] + c.rj * st.n[0], a[1] + c.rj * st.n[1]];
+                    self.apply(kj, arm, f_j, sc, full);
+                }
+                if let Some(kb) = c.bearing.body {
+                    let a = rot(sc.cs[kb], c.bearing.s);
+                    let arm = [a[0] + c.rb * st.n[0], a[1] + c.rb * st.n[1]];
+                    self.apply(kb, arm, [-f_j[0], -f_j[1]], sc, full);
+                }
+            }
+            // Oil film.
+            if let Some(film) = &c.film {
+                let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
+                ev.f_r = fr;
+                ev.f_tf = ft;
+                let f_j = [fr * st.n[0] + ft * st.t[0], fr * st.n[1] + ft * st.t[1]];
+                if let Some(kj) = c.journal.body {
+                    let arm = rot(sc.cs[kj], c.journal.s);
+                    self.apply(kj, arm, f_j, sc, full);
+                }
+                if let Some(kb) = c.bearing.body {
+                    let arm = rot(sc.cs[kb], c.bearing.s);
+                    self.apply(kb, arm, [-f_j[0], -f_j[1]], sc, full);
+                }
+            }
+            sc.clr[k] = ev;
+        }
+    }
+
+    /// Value Φ, rate Φ̇, γ (Φ̈ = Φ_q q̈ − γ, prescribed accelerations folded in) and the
+    /// Jacobian block of each term of one constraint row (after `kinematics`).
+    #[inline]
+    pub(crate) fn eval_row(&self, row: &Row, t: f64, sc: &Scratch) -> RowEval {
+        let mut out = RowEval {
+            phi: row.konst + row.rate * t,
+            phid: row.rate,
+            gamma: 0.0,
+            jrows: [[0.0; 3]; 2],
+        };
+        for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+            let k = term.body;
+            let [x, y, _] = sc.pose[k];
+            let [vx, vy, w] = sc.vel[k];
+            let owner = self.bodies[k].owner;
+            out.jrows[ti] = match term.kind {
+                TermKind::Point { s, w: wv } => {
+                    let a = rot(sc.cs[k], s);
+                    let b = perp(a);
+                    out.phi += wv[0] * (x + a[0]) + wv[1] * (y + a[1]);
+                    let jphi = dot(wv, b);
+                    out.phid += wv[0] * vx + wv[1] * vy + jphi * w;
+                    match owner {
+                        Owner::Int(_) => out.gamma += w * w * dot(wv, a),
+                        Owner::Pres(_) => {
+                            let [ax, ay, al] = sc.acc[k];
+                            out.gamma -= wv[0] * (ax + al * b[0] - w * w * a[0])
+                                + wv[1] * (ay + al * b[1] - w * w * a[1]);
+                        }
+                    }
+                    [wv[0], wv[1], jphi]
+                }
+                TermKind::Angle { c } => {
+                    out.phi += c * sc.pose[k][2];
+                    out.phid += c * w;
+                    if let Owner::Pres(_) = owner {
+                        out.gamma -= c * sc.acc[k][2];
+                    }
+                    [0.0, 0.0, c]
+                }
+            };
+        }
+        out
+    }
+
+    /// Constraint values, Jacobian (integrated columns), Φ̇ and the Baumgarte right-hand side.
+    /// In full mode also the Jacobian blocks of every term (for reactions on any body).
+    pub(crate) fn constraint_rows(&self, t: f64, sc: &mut Scratch, full: bool) {
+        let nq = self.nq();
+        sc.jac.iter_mut().for_each(|v| *v = 0.0);
+        let (a2, b2) = (2.0 * self.alpha, self.beta * self.beta);
+        for (r, row) in self.rows.iter().enumerate() {
+            let ev = self.eval_row(row, t, sc);
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                if let Owner::Int(i) = self.bodies[term.body].owner {
+                    let base = r * nq + 3 * i;
+                    sc.jac[base] += ev.jrows[ti][0];
+                    sc.jac[base + 1] += ev.jrows[ti][1];
+                    sc.jac[base + 2] += ev.jrows[ti][2];
+                }
+            }
+            if full {
+                sc.term_jac[r] = ev.jrows;
+            }
+            sc.phi[r] = ev.phi;
+            sc.phid[r] = ev.phid;
+            sc.rc[r] = ev.gamma - a2 * ev.phid - b2 * ev.phi;
+        }
+    }
+
+    /// Solves the KKT system by its Schur complement; false if S is not positive definite.
+    pub(crate) fn solve_kkt(&self, sc: &mut Scratch) -> bool {
+        let nq = self.nq();
+        let m = self.rows.len();
+        let Scratch {
+            jac,
+            smat,
+            lam,
+            qdd,
+            g,
+            rc,
+            ..
+        } = sc;
+        let minv = &self.minv;
+        if m == 0 {
+            for j in 0..nq {
+                qdd[j] = minv[j] * g[j];
+            }
+            return true;
+        }
+        // S = J M⁻¹ Jᵀ (lower triangle), b = J M⁻¹ g − rc.
+        for a in 0..m {
+            let ja = &jac[a * nq..(a + 1) * nq];
+            let mut ba = 0.0;
+            for j in 0..nq {
+                ba += ja[j] * minv[j] * g[j];
+            }
+            lam[a] = ba - rc[a];
+            for b in 0..=a {
+                let jb = &jac[b * nq..(b + 1) * nq];
+                let mut s = 0.0;
+                for j in 0..nq {
+                    s += ja[j] * minv[j] * jb[j];
+                }
+                smat[a * m + b] = s;
+            }
+        }
+        // Cholesky S = L Lᵀ in place (lower).
+        for j in 0..m {
+            let mut d = smat[j * m + j];
+            for k in 0..j {
+                d -= smat[j * m + k] * smat[j * m + k];
+            }
+            if !(d > 0.0) {
+                return false;
+            }
+            let d = d.sqrt();
+            smat[j * m + j] = d;
+            for i in j + 1..m {
+                let mut s = smat[i * m + j];
+                for k in 0..j {
+                    s -= smat[i * m + k] * smat[j * m + k];
+                }
+                smat[i * m + j] = s / d;
+            }
+        }
+        // Forward and back substitution.
+        for i in 0..m {
+            let mut s = lam[i];
+            for k in 0..i {
+                s -= smat[i * m + k] * lam[k];
+            }
+            lam[i] = s / smat[i * m + i];
+        }
+        for i in (0..m).rev() {
+            let mut s = lam[i];
+            for k in i + 1..m {
+                s -= smat[k * m + i] * lam[k];
+            }
+            lam[i] = s / smat[i * m + i];
+        }
+        // q̈ = M⁻¹ (g − Jᵀ λ).
+        for j in 0..nq {
+            let mut s = g[j];
+            for a in 0..m {
+                s -= jac[a * nq + j] * lam[a];
+            }
+            qdd[j] = minv[j] * s;
+        }
+        true
+    }
+
+    /// One full evaluation at (t, y) into the scratch; false if the KKT matrix is singular.
+    /// After it, `acc` holds every body's acceleration.
+    pub(crate) fn evaluate(&self, t: f64, y: &[f64], sc: &mut Scratch, full: bool) -> bool {
+        self.kinematics(t, y, sc);
+        self.applied_forces(sc, full);
+        self.constraint_rows(t, sc, full);
+        let ok = self.solve_kkt(sc);
+        for (i, &k) in self.int_bodies.iter().enumerate() {
+            sc.acc[k] = [sc.qdd[3 * i], sc.qdd[3 * i + 1], sc.qdd[3 * i + 2]];
+        }
+        ok
+    }
+
+    /// Event functions at (t, y) (after `kinematics`).
+    fn event_values(&self, sc: &Scratch, g: &mut [f64]) {
+        for (i, ev) in self.events.iter().enumerate() {
+            g[i] = match *ev {
+                EventKind::Contact(k) => self.clearance_state(k, sc).delta,
+                EventKind::EpsCap(k) => {
+                    let cap = self.clr[k].film.as_ref().map_or(1.0, |f| f.eps_cap);
+                    self.clearance_state(k, sc).eps - cap
+                }
+            };
+        }
+    }
+
+    /// Which event function index `i` is: ("contact" | "eps_cap", clearance joint name).
+    pub fn event_name(&self, i: usize) -> Option<(&'static str, &str)> {
+        self.events.get(i).map(|e| match *e {
+            EventKind::Contact(k) => ("contact", self.clr[k].name.as_str()),
+            EventKind::EpsCap(k) => ("eps_cap", self.clr[k].name.as_str()),
+        })
+    }
+
+    /// Sets the stored impact velocity δ̇⁻ of clearance joint `k` (m/s), as the contact-onset
+    /// event does. For tests and for restarting a run from a saved state.
+    pub fn set_impact_velocity(&self, k: usize, v: f64) {
+        if let Some(c) = self.clr.get(k) {
+            c.impact_velocity.set(v);
+        }
+    }
+}
+
+impl Row {
+    pub(crate) fn new(joint: usize, label: &'static str) -> Row {
+        Row {
+            terms: [Term {
+                body: 0,
+                kind: TermKind::Angle { c: 0.0 },
+            }; 2],
+            n_terms: 0,
+            konst: 0.0,
+            rate: 0.0,
+            joint,
+            label,
+        }
+    }
+
+    pub(crate) fn push(&mut self, t: Term) {
+        self.terms[self.n_terms] = t;
+        self.n_terms += 1;
+    }
+
+    /// Adds w · r^P of an attachment (folds a ground location into the constant).
+    fn add_attachment(&mut self, scene: &Scene, a: &Attachment, w: [f64; 2]) {
+        if a.body == GROUND {
+            self.konst += dot(w, a.at.expect("validated"));
+        } else {
+            let k = scene.body_index(&a.body).expect("validated");
+            self.push(Term {
+                body: k,
+                kind: TermKind::Point {
+                    s: point_of(scene, a),
+                    w,
+                },
+            });
+        }
+    }
+}
+
+fn point_of(scene: &Scene, a: &Attachment) -> [f64; 2] {
+    if a.body == GROUND {
+        return a.at.expect("validated");
+    }
+    let k = scene.body_index(&a.body).expect("validated");
+    scene.bodies[k].points[a.point.as_ref().expect("validated")]
+}
+
+fn end_of(scene: &Scene, e: &ClearanceEnd) -> End {
+    if e.body == GROUND {
+        End {
+            body: None,
+            s: e.at.expect("validated"),
+        }
+    } else {
+        let k = scene.body_index(&e.body).expect("validated");
+        End {
+            body: Some(k),
+            s: scene.bodies[k].points[e.point.as_ref().expect("validated")],
+        }
+    }
+}
+
+fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::ClearanceSpec) -> Clr {
+    let rb = c.bearing.radius;
+    let rj = c.journal.radius;
+    let stiffness = |k: Option<f64>, m: Option<crate::scene::Materials>| match (k, m) {
+        (Some(k), _) => k,
+        (None, Some(m)) => hertz_stiffness(
+            rb,
+            rj,
+            m.bearing.youngs_modulus,
+            m.bearing.poisson_ratio,
+            m.journal.youngs_modulus,
+            m.journal.poisson_ratio,
+        ),
+        (None, None) => unreachable!("validated"),
+    };
+    let normal = match &c.normal {
+        NormalSpec::Impact(s) => NormalLaw::Impact {
+            k: stiffness(s.k, s.materials),
+            c_max: s.c_max,
+            d_max: s.d_max,
+        },
+        NormalSpec::LankaraniNikravesh(s) => NormalLaw::LankaraniNikravesh {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+        NormalSpec::Flores(s) => NormalLaw::Flores {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+        NormalSpec::HuntCrossley(s) => NormalLaw::HuntCrossley {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+    };
+    let friction = match &c.friction {
+        FrictionSpec::None => None,
+        FrictionSpec::Coulomb(f) if f.mu == 0.0 => None,
+        FrictionSpec::Coulomb(f) => Some(FrictionLaw::Coulomb {
+            mu: f.mu,
+            v0: f.v0,
+            v1: f.v1,
+        }),
+    };
+    let film = c.film.as_ref().map(|f| Film {
+        model: f.model,
+        viscosity: f.viscosity,
+        length: f.length,
+        radius: rj,
+        clearance: rb - rj,
+        eps_cap: f.eps_cap,
+    });
+    Clr {
+        joint: ji,
+        name: c.name.clone(),
+        bearing: end_of(scene, &c.bearing),
+        journal: end_of(scene, &c.journal),
+        rb,
+        rj,
+        c: rb - rj,
+        normal,
+        friction,
+        film,
+        e0: c.initial_eccentricity,
+        impact_velocity: Cell::new(0.0),
+    }
+}
+
+impl OdeSystem for Mechanism {
+    fn dim(&self) -> usize {
+        2 * self.nq()
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        let nq = self.nq();
+        let mut sc = self.scratch.borrow_mut();
+        let ok = self.evaluate(t, y, &mut sc, false);
+        dy[..nq].copy_from_slice(&y[nq..2 * nq]);
+        if ok {
+            dy[nq..].copy_from_slice(&sc.qdd);
+        } else {
+            dy[nq..].iter_mut().for_each(|v| *v = f64::NAN);
+        }
+    }
+
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+
+    fn jacobian(&self, t: f64, y: &[f64], jac: MatMut<'_, f64>) {
+        crate::jacobian::jacobian(self, t, y, jac);
+    }
+
+    fn n_events(&self) -> usize {
+        self.events.len()
+    }
+
+    fn event_spec(&self, _i: usize) -> EventSpec {
+        EventSpec {
+            direction: Direction::Either,
+            action: EventAction::Continue,
+        }
+    }
+
+    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        let mut sc = self.scratch.borrow_mut();
+        self.kinematics(t, y, &mut sc);
+        self.event_values(&sc, g);
+    }
+
+    fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {
+        if let Some(EventKind::Contact(k)) = self.events.get(hit.index).copied() {
+            if hit.rising {
+                let mut sc = self.scratch.borrow_mut();
+                self.kinematics(hit.t, y, &mut sc);
+                let st = self.clearance_state(k, &sc);
+                self.clr[k].impact_velocity.set(st.delta_dot);
+            }
+        }
+        EventAction::Continue
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The Schur-complement solve equals faer's LU solve of the full KKT matrix.
+    use super::*;
+    use crate::cases::{press_scene, PressJoint};
+    use faer::Mat;
+
+    #[test]
+    fn schur_complement_equals_the_full_kkt_solve() {
+        let m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        let nq = m.nq();
+        let nc = m.rows.len();
+        // A perturbed state: off the constraint manifold, in contact, moving.
+        let mut y = m.initial_state();
+        let pert = [
+            3e-5, -1.2e-4, 2e-3, 1e-4, 2e-5, -1e-3, 0.02, -0.01, 0.3, -0.05, 0.01, 0.002,
+        ];
+        for (v, p) in y.iter_mut().zip(pert) {
+            *v += p;
+        }
+        let t = 0.123;
+        let mut sc = m.scratch.borrow().clone();
+        assert!(m.evaluate(t, &y, &mut sc, false));
+        assert!(sc.clr[0].f_n > 0.0, "the test state is in contact");
+        let n = nq + nc;
+        let mut kkt = Mat::<f64>::zeros(n, n);
+        let mut rhs = Mat::<f64>::zeros(n, 1);
+        for j in 0..nq {
+            kkt[(j, j)] = 1.0 / m.minv[j];
+            rhs[(j, 0)] = sc.g[j];
+        }
+        for a in 0..nc {
+            for j in 0..nq {
+                kkt[(nq + a, j)] = sc.jac[a * nq + j];
+                kkt[(j, nq + a)] = sc.jac[a * nq + j];
+            }
+            rhs[(nq + a, 0)] = sc.rc[a];
+        }
+        use faer::linalg::solvers::Solve;
+        let sol = kkt.partial_piv_lu().solve(&rhs);
+        for j in 0..nq {
+            let d = (sol[(j, 0)] - sc.qdd[j]).abs();
+            assert!(
+                d <= 1e-9 * sol[(j, 0)].abs().max(1.0),
+                "q̈[{j}]: {} vs {}",
+                sol[(j, 0)],
+                sc.qdd[j]
+            );
+        }
+        for a in 0..nc {
+            let d = (sol[(nq + a, 0)] - sc.lam[a]).abs();
+            assert!(d <= 1e-9 * sol[(nq + a, 0)].abs().max(1.0), "λ[{a}]");
+        }
+    }
+}

@@ -1,0 +1,524 @@
+//! Outputs by name: body points, the press quantities of INTERFACES.md, clearance-joint forces,
+//! constraint violation, driver torques and the energy terms.
+//!
+//! ```text
+//! driver torque τ_d = −λ_d                                  (driver on an integrated body)
+//!              τ_d from  J_pᵀ λ_p = g_p + f_c,p − M_p a_p    (prescribed body p, Newton–Euler:
+//!                        λ_p = (pin reaction, driver λ); f_c,p = −Σ J_r,pᵀ λ_r of the other
+//!                        joints on p; g_p gravity and clearance forces on p)
+//! T = Σ ½ m |ṙ|² + ½ I φ̇²     V = −Σ m g·r + Σ 2/5 K δ^{5/2}     (all bodies, prescribed too)
+//! P_driver = Σ τ_d φ̇_d        D_contact = (F_N − K δ^{3/2}) δ̇     D_friction = −F_T v_T
+//! D_film = −(F_r δ̇ + F_t t·ė)
+//! d/dt (T + V) = P_driver − D_contact − D_friction − D_film  (+ work of the Baumgarte terms)
+//! ```
+//! Source: MODEL.md §1–§5, INTERFACES.md (summary.json `energy`, trajectory.csv).
+
+use crate::mechanism::{cross, perp, rot, Clr, End, Mechanism, Scratch};
+use crate::scene::{JointSpec, Scene, SceneError};
+
+/// The parts that the press metrics need, resolved to indices (INTERFACES.md, "Scene roles").
+///
+/// ```text
+/// slider → body index,  crank_driver → joint index,  clearance_joint → joint index and its
+/// position among the clearance joints (the index into `Outputs::clearance`)
+/// ```
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Roles {
+    /// Scene index of the slider body.
+    pub slider: Option<usize>,
+    /// Scene index of the crank driver joint.
+    pub crank_driver: Option<usize>,
+    /// Scene index of the clearance joint.
+    pub clearance_joint: Option<usize>,
+    /// Index of the role's clearance joint in [`Outputs::clearance`].
+    pub clearance_index: Option<usize>,
+    /// Scene index of the body turned by the crank driver.
+    pub crank_body: Option<usize>,
+}
+
+impl Roles {
+    pub(crate) fn resolve(scene: &Scene, clr: &[Clr]) -> Roles {
+        let slider = scene
+            .roles
+            .slider
+            .as_ref()
+            .and_then(|s| scene.body_index(s));
+        let crank_driver = scene
+            .roles
+            .crank_driver
+            .as_ref()
+            .and_then(|s| scene.joint_index(s));
+        let crank_body = crank_driver.and_then(|j| match &scene.joints[j] {
+            JointSpec::Driver(d) => scene.body_index(&d.body),
+            _ => None,
+        });
+        let clearance_joint = scene
+            .roles
+            .clearance_joint
+            .as_ref()
+            .and_then(|s| scene.joint_index(s));
+        let clearance_index = clearance_joint.and_then(|j| clr.iter().position(|c| c.joint == j));
+        Roles {
+            slider,
+            crank_driver,
+            clearance_joint,
+            clearance_index,
+            crank_body,
+        }
+    }
+}
+
+/// Position, velocity and acceleration of a body point (global frame).
+///
+/// ```text
+/// r^P = r + A s',  ṙ^P = ṙ + φ̇ k×(A s'),  r̈^P = r̈ + φ̈ k×(A s') − φ̇² A s'
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointKinematics {
+    /// Position (m).
+    pub pos: [f64; 2],
+    /// Velocity (m/s).
+    pub vel: [f64; 2],
+    /// Acceleration (m/s²).
+    pub acc: [f64; 2],
+}
+
+/// One clearance joint at one instant (MODEL.md §2–§4).
+///
+/// ```text
+/// e/c, ε = |e|/c, δ = |e| − c, F_N, F_T (contact), film (F_r, F_t) and |film|
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClearanceOutput {
+    /// Joint name.
+    pub name: String,
+    /// e_x / c.
+    pub ex_over_c: f64,
+    /// e_y / c.
+    pub ey_over_c: f64,
+    /// ε = |e| / c.
+    pub eps: f64,
+    /// Penetration δ = |e| − c (m; negative when apart).
+    pub delta: f64,
+    /// Normal contact force F_N ≥ 0 (N).
+    pub contact_force: f64,
+    /// Friction force F_T along t (N, signed).
+    pub friction_force: f64,
+    /// Film force magnitude sqrt(F_r² + F_t²) (N; 0 when dry).
+    pub film_force: f64,
+    /// Film force along n (N, signed).
+    pub film_fr: f64,
+    /// Film force along t (N, signed).
+    pub film_ft: f64,
+}
+
+/// Everything one evaluation at (t, y) reports (trajectory.csv columns and more).
+///
+/// ```text
+/// crank angle φ_crank; slider x, ẋ, ẍ (centre of mass, global x); clearance joints;
+/// ‖Φ(q, t)‖₂; driver torques; T; V = −Σ m g·r + Σ 2/5 K δ^{5/2}
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outputs {
+    /// Angle φ (rad) of the body turned by the `crank_driver` role (not wrapped).
+    pub crank_angle: Option<f64>,
+    /// x of the `slider` role's centre of mass (m).
+    pub slider_x: Option<f64>,
+    /// ẋ of the slider (m/s).
+    pub slider_v: Option<f64>,
+    /// ẍ of the slider (m/s²), from the right-hand side at (t, y).
+    pub slider_a: Option<f64>,
+    /// Every clearance joint, in scene order.
+    pub clearance: Vec<ClearanceOutput>,
+    /// Euclidean norm of the position constraints Φ(q, t) of the KKT system.
+    pub constraint_violation: f64,
+    /// Torque (N·m, counter-clockwise on the driven body) of every driver, in scene order.
+    pub driver_torques: Vec<f64>,
+    /// Kinetic energy of all bodies (J).
+    pub kinetic_energy: f64,
+    /// Gravity potential of all bodies plus the elastic contact potential (J).
+    pub potential_energy: f64,
+}
+
+/// Power terms at one instant (W); integrate them over time for the energy balance.
+///
+/// ```text
+/// driver           P = Σ τ_d φ̇_d                       (work done on the mechanism)
+/// contact_damping  D = Σ (F_N − K δ^{3/2}) δ̇            (≥ 0)
+/// friction         D = −Σ F_T v_T                       (≥ 0)
+/// film             D = −Σ (F_r δ̇ + F_t t·ė)             (dissipated by the film)
+/// balance: ∫P − ΔT − ΔV − ∫(D_contact + D_friction + D_film) = 0 up to the Baumgarte work
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct PowerTerms {
+    /// Driver power input (W).
+    pub driver: f64,
+    /// Power dissipated by contact damping (W).
+    pub contact_damping: f64,
+    /// Power dissipated by friction (W).
+    pub friction: f64,
+    /// Power dissipated by the oil film (W).
+    pub film: f64,
+}
+
+/// The ideal slider-crank of MODEL.md §5, with r, l, ω and the crank angle derived from the
+/// scene's geometry.
+///
+/// ```text
+/// θ(t) = θ_driver(t) + offset,  S = sqrt(l² − r² sin²θ)
+/// x = r cos θ + S                 (distance of the rod–slider pin from the crank pivot along
+///                                  the slide)
+/// ẋ = −r ω sin θ (1 + r cos θ / S)
+/// ẍ = −r ω² cos θ − r² ω² cos 2θ / S − r⁴ ω² sin²θ cos²θ / S³
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IdealSliderCrank {
+    /// Crank radius r (m): pivot to crank pin.
+    pub r: f64,
+    /// Rod length l (m): crank pin to slider pin.
+    pub l: f64,
+    /// Crank speed ω (rad/s).
+    pub omega: f64,
+    /// θ at t = 0 (rad), measured from the slide direction.
+    pub theta0: f64,
+    /// θ − φ_crank (rad): the geometric crank angle minus the crank body's angle.
+    pub offset: f64,
+}
+
+impl IdealSliderCrank {
+    /// θ(t) = θ₀ + ω t.
+    pub fn theta(&self, t: f64) -> f64 {
+        self.theta0 + self.omega * t
+    }
+    /// θ of a crank body angle φ (see [`Outputs::crank_angle`]).
+    pub fn theta_of_crank_angle(&self, phi: f64) -> f64 {
+        phi + self.offset
+    }
+    /// x(θ) (m).
+    pub fn x_at(&self, th: f64) -> f64 {
+        let s = (self.l * self.l - self.r * self.r * th.sin().powi(2)).sqrt();
+        self.r * th.cos() + s
+    }
+    /// ẋ(θ) (m/s).
+    pub fn v_at(&self, th: f64) -> f64 {
+        let s = (self.l * self.l - self.r * self.r * th.sin().powi(2)).sqrt();
+        -self.r * self.omega * th.sin() * (1.0 + self.r * th.cos() / s)
+    }
+    /// ẍ(θ) (m/s²).
+    pub fn a_at(&self, th: f64) -> f64 {
+        let (r, w) = (self.r, self.omega);
+        let (sn, cs) = th.sin_cos();
+        let s = (self.l * self.l - r * r * sn * sn).sqrt();
+        -r * w * w * cs
+            - r * r * w * w * (2.0 * th).cos() / s
+            - r.powi(4) * w * w * sn * sn * cs * cs / (s * s * s)
+    }
+    /// x(t) (m).
+    pub fn x(&self, t: f64) -> f64 {
+        self.x_at(self.theta(t))
+    }
+    /// ẋ(t) (m/s).
+    pub fn v(&self, t: f64) -> f64 {
+        self.v_at(self.theta(t))
+    }
+    /// ẍ(t) (m/s²).
+    pub fn a(&self, t: f64) -> f64 {
+        self.a_at(self.theta(t))
+    }
+}
+
+/// Everything of one full evaluation.
+struct Full {
+    sc: Scratch,
+    ok: bool,
+    /// Driver torques in scene order of the driver joints: (joint index, τ).
+    torques: Vec<(usize, f64)>,
+}
+
+fn end_omega(e: &End, sc: &Scratch) -> f64 {
+    e.body.map_or(0.0, |b| sc.vel[b][2])
+}
+
+impl Mechanism {
+    fn full(&self, t: f64, y: &[f64]) -> Full {
+        let mut sc = self.scratch.borrow().clone();
+        let ok = self.evaluate(t, y, &mut sc, true);
+        let nb = self.bodies.len();
+        // Constraint forces −Σ J_r,kᵀ λ_r on every body.
+        let mut cf = vec![[0.0f64; 3]; nb];
+        for (r, row) in self.rows.iter().enumerate() {
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                let j = sc.term_jac[r][ti];
+                for c in 0..3 {
+                    cf[term.body][c] -= j[c] * sc.lam[r];
+                }
+            }
+        }
+        let mut torques: Vec<(usize, f64)> = Vec::new();
+        for (r, row) in self.rows.iter().enumerate() {
+            if matches!(self.scene.joints[row.joint], JointSpec::Driver(_)) {
+                torques.push((row.joint, -sc.lam[r]));
+            }
+        }
+        // Newton–Euler of the prescribed bodies, children before parents.
+        for p in self.pres.iter().rev() {
+            let k = p.body;
+            let b = &self.bodies[k];
+            let m = [b.mass, b.mass, b.inertia];
+            let mut res = [0.0; 3];
+            for c in 0..3 {
+                res[c] = sc.gb[k][c] + cf[k][c] - m[c] * sc.acc[k][c];
+            }
+            let bs = perp(rot(sc.cs[k], p.s_own));
+            let lam_pin = [res[0], res[1]];
+            let lam_d = res[2] - (bs[0] * lam_pin[0] + bs[1] * lam_pin[1]);
+            torques.push((p.driver_joint, -lam_d));
+            if let Some((kp, sp)) = p.parent {
+                let a = rot(sc.cs[kp], sp);
+                cf[kp][0] += lam_pin[0];
+                cf[kp][1] += lam_pin[1];
+                cf[kp][2] += cross(a, lam_pin);
+            }
+        }
+        torques.sort_by_key(|x| x.0);
+        Full { sc, ok, torques }
+    }
+
+    /// One evaluation of every output at (t, y). Non-finite values (a singular KKT matrix)
+    /// come out as NaN.
+    pub fn outputs(&self, t: f64, y: &[f64]) -> Outputs {
+        let f = self.full(t, y);
+        let sc = &f.sc;
+        let nan_if = |v: f64| if f.ok { v } else { f64::NAN };
+        let crank_angle = self.roles.crank_body.map(|k| sc.pose[k][2]);
+        let (slider_x, slider_v, slider_a) = match self.roles.slider {
+            Some(k) => (
+                Some(sc.pose[k][0]),
+                Some(sc.vel[k][0]),
+                Some(nan_if(sc.acc[k][0])),
+            ),
+            None => (None, None, None),
+        };
+        let clearance = self
+            .clr
+            .iter()
+            .zip(&sc.clr)
+            .map(|(c, ev)| ClearanceOutput {
+                name: c.name.clone(),
+                ex_over_c: ev.st.e[0] / c.c,
+                ey_over_c: ev.st.e[1] / c.c,
+                eps: ev.st.eps,
+                delta: ev.st.delta,
+                contact_force: ev.f_n,
+                friction_force: ev.f_t,
+                film_force: ev.f_r.hypot(ev.f_tf),
+                film_fr: ev.f_r,
+                film_ft: ev.f_tf,
+            })
+            .collect();
+        let constraint_violation = sc.phi.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let driver_torques = f.torques.iter().map(|x| nan_if(x.1)).collect();
+        let mut kinetic = 0.0;
+        let mut potential = 0.0;
+        for (k, b) in self.bodies.iter().enumerate() {
+            let [vx, vy, w] = sc.vel[k];
+            kinetic += 0.5 * b.mass * (vx * vx + vy * vy) + 0.5 * b.inertia * w * w;
+            if let Some(g) = self.gravity {
+                potential -= b.mass * (g[0] * sc.pose[k][0] + g[1] * sc.pose[k][1]);
+            }
+        }
+        for (c, ev) in self.clr.iter().zip(&sc.clr) {
+            potential += c.normal.potential(ev.st.delta);
+        }
+        Outputs {
+            crank_angle,
+            slider_x,
+            slider_v,
+            slider_a,
+            clearance,
+            constraint_violation,
+            driver_torques,
+            kinetic_energy: kinetic,
+            potential_energy: potential,
+        }
+    }
+
+    /// Power terms at (t, y): driver input and the dissipation of contact damping, friction and
+    /// film (W). The caller integrates them along the trajectory (no quadrature components are
+    /// added to the state, so the state stays (q, q̇) for every method).
+    pub fn power(&self, t: f64, y: &[f64]) -> PowerTerms {
+        let f = self.full(t, y);
+        let sc = &f.sc;
+        let mut p = PowerTerms::default();
+        for &(j, tau) in &f.torques {
+            if let JointSpec::Driver(d) = &self.scene.joints[j] {
+                let k = self.scene.body_index(&d.body).expect("validated");
+                p.driver += tau * sc.vel[k][2];
+            }
+        }
+        if !f.ok {
+            p.driver = f64::NAN;
+        }
+        for (c, ev) in self.clr.iter().zip(&sc.clr) {
+            let st = &ev.st;
+            if st.delta > 0.0 {
+                p.contact_damping += (ev.f_n - ev.elastic) * st.delta_dot;
+                p.friction -= ev.f_t * st.v_t;
+            }
+            if c.film.is_some() {
+                // t·ė = v_T − R_J φ̇_J + R_B φ̇_B
+                let ed_t =
+                    st.v_t - c.rj * end_omega(&c.journal, sc) + c.rb * end_omega(&c.bearing, sc);
+                p.film -= ev.f_r * st.delta_dot + ev.f_tf * ed_t;
+            }
+        }
+        p
+    }
+
+    /// Position, velocity and acceleration of the named point of the named body at (t, y).
+    pub fn point_kinematics(
+        &self,
+        body: &str,
+        point: &str,
+        t: f64,
+        y: &[f64],
+    ) -> Result<PointKinematics, SceneError> {
+        let k = self
+            .scene
+            .body_index(body)
+            .ok_or_else(|| SceneError::Unknown(format!("body '{body}'")))?;
+        let s = *self.bodies[k]
+            .points
+            .get(point)
+            .ok_or_else(|| SceneError::Unknown(format!("point '{point}' on body '{body}'")))?;
+        let mut sc = self.scratch.borrow_mut();
+        let ok = self.evaluate(t, y, &mut sc, false);
+        let a = rot(sc.cs[k], s);
+        let b = perp(a);
+        let [x, yy, _] = sc.pose[k];
+        let [vx, vy, w] = sc.vel[k];
+        let [ax, ay, al] = sc.acc[k];
+        let acc = [ax + al * b[0] - w * w * a[0], ay + al * b[1] - w * w * a[1]];
+        Ok(PointKinematics {
+            pos: [x + a[0], yy + a[1]],
+            vel: [vx + w * b[0], vy + w * b[1]],
+            acc: if ok { acc } else { [f64::NAN; 2] },
+        })
+    }
+
+    /// The closed-form ideal slider-crank of MODEL.md §5, when the roles are declared and the
+    /// geometry is an in-line slider-crank: the crank (driven body) pinned to the ground at O,
+    /// a rod pinned to the crank and joined (revolute or clearance joint) to the slider, and
+    /// the slider on a translational joint whose line passes through O, on the +x branch.
+    pub fn ideal_slider_crank(&self) -> Option<IdealSliderCrank> {
+        let scene = &self.scene;
+        let crank = self.roles.crank_body?;
+        let slider = self.roles.slider?;
+        let omega = self.crank_speed()?;
+        let crank_name = &scene.bodies[crank].name;
+        let slider_name = &scene.bodies[slider].name;
+        let pt = |body: &str, point: &Option<String>| -> Option<[f64; 2]> {
+            let k = scene.body_index(body)?;
+            scene.bodies[k].points.get(point.as_ref()?).copied()
+        };
+        // Crank pivot on the ground.
+        let (s_o, ground_o) = scene.joints.iter().find_map(|j| match j {
+            JointSpec::Revolute(r) if &r.a.body == crank_name && r.b.body == crate::GROUND => {
+                Some((pt(&r.a.body, &r.a.point)?, r.b.at?))
+            }
+            JointSpec::Revolute(r) if &r.b.body == crank_name && r.a.body == crate::GROUND => {
+                Some((pt(&r.b.body, &r.b.point)?, r.a.at?))
+            }
+            _ => None,
+        })?;
+        // Rod pinned to the crank.
+        let (rod, s_a, a_r) = scene.joints.iter().find_map(|j| match j {
+            JointSpec::Revolute(r)
+                if &r.a.body == crank_name
+                    && r.b.body != crate::GROUND
+                    && &r.b.body != slider_name =>
+            {
+                Some((
+                    r.b.body.clone(),
+                    pt(&r.a.body, &r.a.point)?,
+                    pt(&r.b.body, &r.b.point)?,
+                ))
+            }
+            JointSpec::Revolute(r)
+                if &r.b.body == crank_name
+                    && r.a.body != crate::GROUND
+                    && &r.a.body != slider_name =>
+            {
+                Some((
+                    r.a.body.clone(),
+                    pt(&r.b.body, &r.b.point)?,
+                    pt(&r.a.body, &r.a.point)?,
+                ))
+            }
+            _ => None,
+        })?;
+        // Rod joined to the slider.
+        let (b_r, p_s) = scene.joints.iter().find_map(|j| match j {
+            JointSpec::Revolute(r) if r.a.body == rod && &r.b.body == slider_name => {
+                Some((pt(&rod, &r.a.point)?, pt(slider_name, &r.b.point)?))
+            }
+            JointSpec::Revolute(r) if r.b.body == rod && &r.a.body == slider_name => {
+                Some((pt(&rod, &r.b.point)?, pt(slider_name, &r.a.point)?))
+            }
+            JointSpec::Clearance(c) if c.journal.body == rod && &c.bearing.body == slider_name => {
+                Some((
+                    pt(&rod, &c.journal.point)?,
+                    pt(slider_name, &c.bearing.point)?,
+                ))
+            }
+            JointSpec::Clearance(c) if c.bearing.body == rod && &c.journal.body == slider_name => {
+                Some((
+                    pt(&rod, &c.bearing.point)?,
+                    pt(slider_name, &c.journal.point)?,
+                ))
+            }
+            _ => None,
+        })?;
+        // The slide.
+        let (origin, dir) = scene.joints.iter().find_map(|j| match j {
+            JointSpec::Translational(t) if &t.body == slider_name => Some((t.origin, t.direction)),
+            _ => None,
+        })?;
+        let len = dir[0].hypot(dir[1]);
+        let u = [dir[0] / len, dir[1] / len];
+        let d = [s_a[0] - s_o[0], s_a[1] - s_o[1]];
+        let r = d[0].hypot(d[1]);
+        let l = (b_r[0] - a_r[0]).hypot(b_r[1] - a_r[1]);
+        if !(r > 0.0 && l > r) {
+            return None;
+        }
+        let off_line = cross(u, [ground_o[0] - origin[0], ground_o[1] - origin[1]]);
+        if off_line.abs() > 1e-9 * l {
+            return None;
+        }
+        let angle_u = u[1].atan2(u[0]);
+        let offset = d[1].atan2(d[0]) - angle_u;
+        let JointSpec::Driver(drv) = &scene.joints[self.roles.crank_driver?] else {
+            return None;
+        };
+        let ideal = IdealSliderCrank {
+            r,
+            l,
+            omega,
+            theta0: drv.theta0 + offset,
+            offset,
+        };
+        // The slider pin must be on the +S branch at the initial state.
+        let t0 = self.t_start;
+        let mut sc = self.scratch.borrow_mut();
+        self.kinematics(t0, &self.y0, &mut sc);
+        let ps = rot(sc.cs[slider], p_s);
+        let pin = [sc.pose[slider][0] + ps[0], sc.pose[slider][1] + ps[1]];
+        let along = u[0] * (pin[0] - ground_o[0]) + u[1] * (pin[1] - ground_o[1]);
+        let theta = ideal.theta_of_crank_angle(sc.pose[crank][2]);
+        if (along - ideal.x_at(theta)).abs() > 1e-3 * l {
+            return None;
+        }
+        Some(ideal)
+    }
+}

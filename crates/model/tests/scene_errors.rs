@@ -1,0 +1,310 @@
+//! Every class of scene error gives its documented message: the JSON path and the reason
+//! (docs/scene-format.md, "Errors").
+mod common;
+use common::*;
+use lash_model::{Mechanism, Scene, SceneError};
+use serde_json::json;
+
+fn err(v: &serde_json::Value) -> SceneError {
+    build(v).expect_err("the scene must be rejected")
+}
+
+fn invalid(v: &serde_json::Value) -> (String, String) {
+    match err(v) {
+        SceneError::Invalid { path, reason } => (path, reason),
+        e => panic!("expected an Invalid error, got {e:?}"),
+    }
+}
+
+fn schema(v: &serde_json::Value) -> (String, String) {
+    match err(v) {
+        SceneError::Schema { path, message } => (path, message),
+        e => panic!("expected a Schema error, got {e:?}"),
+    }
+}
+
+#[test]
+fn the_unmodified_press_is_accepted() {
+    build(&dry_press_value()).expect("the dry press is valid");
+}
+
+#[test]
+fn json_syntax_error_names_line_and_column() {
+    let e = Scene::from_json_str("{\n  \"bodies\": [\n").unwrap_err();
+    assert_eq!(
+        e,
+        SceneError::Syntax {
+            line: 3,
+            column: 0,
+            message: "EOF while parsing a list".into()
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "JSON syntax error at line 3, column 0: EOF while parsing a list"
+    );
+    // A number too large for f64 (the only way JSON can spell a non-finite number).
+    let e = Scene::from_json_str("{\"bodies\": [], \"t_end\": 1e999}").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "JSON syntax error at line 1, column 29: number out of range"
+    );
+}
+
+#[test]
+fn unknown_fields_are_rejected_with_their_path() {
+    let mut v = dry_press_value();
+    v["gravityy"] = json!(1);
+    let (p, m) = schema(&v);
+    assert_eq!(p, "gravityy");
+    assert!(
+        m.starts_with("unknown field `gravityy`, expected one of"),
+        "{m}"
+    );
+
+    let mut v = dry_press_value();
+    v["joints"][4]["bearing"]["radiuss"] = json!(1);
+    let (p, m) = schema(&v);
+    assert_eq!(p, "joints[4].bearing.radiuss");
+    assert!(
+        m.starts_with("unknown field `radiuss`, expected one of `body`, `point`, `at`, `radius`"),
+        "{m}"
+    );
+
+    let mut v = dry_press_value();
+    v["joints"][4]["normal"]["kk"] = json!(1);
+    let (p, m) = schema(&v);
+    assert_eq!(p, "joints[4].normal.kk");
+    assert!(m.starts_with("unknown field `kk`"), "{m}");
+
+    let mut v = dry_press_value();
+    v["bodies"][1]["pointz"] = json!(1);
+    let (p, _) = schema(&v);
+    assert_eq!(p, "bodies[1].pointz");
+
+    let mut v = dry_press_value();
+    v["joints"][4]["type"] = json!("clearence");
+    let (p, m) = schema(&v);
+    assert_eq!(p, "joints[4].type");
+    assert!(m.starts_with("unknown joint type `clearence`"), "{m}");
+
+    let mut v = dry_press_value();
+    v["joints"][4]["friction"]["law"] = json!("viscous");
+    let (p, m) = schema(&v);
+    assert_eq!(p, "joints[4].friction.law");
+    assert!(m.starts_with("unknown friction law `viscous`"), "{m}");
+
+    let mut v = dry_press_value();
+    v["joints"][4]["normal"]["c_max"] = json!("x");
+    let (p, m) = schema(&v);
+    assert_eq!(p, "joints[4].normal.c_max");
+    assert!(
+        m.starts_with("invalid type: string \"x\", expected f64"),
+        "{m}"
+    );
+}
+
+#[test]
+fn a_joint_naming_a_missing_body_or_point() {
+    let mut v = dry_press_value();
+    v["joints"][2]["b"]["body"] = json!("rood");
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[2].b.body: no body named 'rood'"
+    );
+    let mut v = dry_press_value();
+    v["joints"][2]["b"]["point"] = json!("C");
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[2].b.point: body 'rod' has no point named 'C'"
+    );
+    let mut v = dry_press_value();
+    v["joints"][4]["journal"]["body"] = json!("conrod");
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[4].journal.body: no body named 'conrod'"
+    );
+    let mut v = dry_press_value();
+    v["joints"][3]["point"] = json!("Z");
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[3].point: body 'slider' has no point named 'Z'"
+    );
+    let mut v = dry_press_value();
+    v["roles"]["slider"] = json!("carriage");
+    assert_eq!(
+        err(&v).to_string(),
+        "roles.slider: no body named 'carriage'"
+    );
+}
+
+#[test]
+fn mass_and_inertia_must_be_positive() {
+    let mut v = dry_press_value();
+    v["bodies"][1]["mass"] = json!(0.0);
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[1].mass: mass must be > 0, got 0"
+    );
+    let mut v = dry_press_value();
+    v["bodies"][2]["inertia"] = json!(-1.0);
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[2].inertia: inertia must be > 0, got -1"
+    );
+}
+
+#[test]
+fn radii_and_clearance() {
+    let mut v = dry_press_value();
+    v["joints"][4]["bearing"]["radius"] = json!(0.0);
+    assert_eq!(
+        invalid(&v),
+        (
+            "joints[4].bearing.radius".into(),
+            "bearing radius must be > 0, got 0".into()
+        )
+    );
+    let mut v = dry_press_value();
+    v["joints"][4]["journal"]["radius"] = json!(0.05);
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[4].journal.radius: clearance R_B − R_J = 0 m must be > 0 (bearing radius 0.05, journal radius 0.05)"
+    );
+    let mut v = dry_press_value();
+    v["joints"][4]["journal"]["radius"] = json!(-0.01);
+    let (p, r) = invalid(&v);
+    assert_eq!(p, "joints[4].journal.radius");
+    assert!(r.starts_with("clearance R_B − R_J = 0.060000000000000005 m must be smaller than the bearing radius 0.05 m"), "{r}");
+}
+
+#[test]
+fn viscosity_must_not_be_negative() {
+    let mut v = dry_press_value();
+    v["joints"][4]["film"] = json!({"viscosity": -0.4, "length": 0.1});
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[4].film.viscosity: viscosity must be >= 0, got -0.4"
+    );
+    let mut v = dry_press_value();
+    v["joints"][4]["film"] = json!({"viscosity": 0.4, "length": 0.1, "eps_cap": 1.0});
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[4].film.eps_cap: eps_cap must lie in (0, 1), got 1"
+    );
+}
+
+#[test]
+fn non_finite_numbers_are_rejected() {
+    // JSON cannot spell NaN or infinity; scenes built in code can.
+    let mut scene = Scene::from_json_str(&dry_press_value().to_string()).unwrap();
+    scene.gravity[1] = f64::NAN;
+    assert_eq!(
+        Mechanism::from_scene(&scene).unwrap_err().to_string(),
+        "gravity[1]: must be a finite number, got NaN"
+    );
+    let mut scene = Scene::from_json_str(&dry_press_value().to_string()).unwrap();
+    scene.bodies[0]
+        .points
+        .insert("X".into(), [f64::INFINITY, 0.0]);
+    assert_eq!(
+        Mechanism::from_scene(&scene).unwrap_err().to_string(),
+        "bodies[0].points.X[0]: must be a finite number, got inf"
+    );
+}
+
+#[test]
+fn redundant_constraints_are_named() {
+    // A second slide on the slider repeats the first.
+    let mut v = dry_press_value();
+    let mut slide = v["joints"][3].clone();
+    slide["name"] = json!("slide2");
+    v["joints"].as_array_mut().unwrap().push(slide);
+    match err(&v) {
+        SceneError::Redundant { path, reason } => {
+            assert_eq!(path, "joints[5]");
+            assert!(
+                reason.starts_with("equation 'across the line' of translational joint 'slide2' depends on the equations before it"),
+                "{reason}"
+            );
+        }
+        e => panic!("expected Redundant, got {e:?}"),
+    }
+    // A second driver on the prescribed crank.
+    let mut v = dry_press_value();
+    let mut drv = v["joints"][1].clone();
+    drv["name"] = json!("second_driver");
+    v["joints"].as_array_mut().unwrap().push(drv);
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[5]: redundant or contradictory constraints: driver joint 'second_driver' acts only on the ground and on bodies whose motion is already prescribed by drivers and pins"
+    );
+}
+
+#[test]
+fn an_assembly_that_cannot_close_names_the_equation_and_residual() {
+    // The slide 1 m above the crank pivot: a rod of 0.35 m cannot reach it.
+    let mut v = dry_press_value();
+    v["joints"][3]["origin"] = json!([0.0, 1.0]);
+    match err(&v) {
+        SceneError::Assembly { path, reason } => {
+            assert!(path.starts_with("joints["), "{path}");
+            assert!(reason.starts_with("positions: equation '"), "{reason}");
+            assert!(reason.contains("has residual"), "{reason}");
+            assert!(reason.ends_with("after 50 Newton iterations"), "{reason}");
+        }
+        e => panic!("expected Assembly, got {e:?}"),
+    }
+}
+
+#[test]
+fn other_documented_checks() {
+    let mut v = dry_press_value();
+    v["t_end"] = json!(1.0);
+    assert_eq!(
+        err(&v).to_string(),
+        "revolutions: give either t_end or revolutions, not both"
+    );
+    let mut v = dry_press_value();
+    v["joints"][1]["omega"] = json!(1.0);
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[1].rpm: give either omega (rad/s) or rpm, not both"
+    );
+    let mut v = dry_press_value();
+    v["joints"][4]["normal"] = json!({"law": "flores", "k": 1e9, "restitution": 0.0});
+    assert_eq!(
+        err(&v).to_string(),
+        "joints[4].normal.restitution: the coefficient of restitution must lie in (0, 1], got 0"
+    );
+    let mut v = dry_press_value();
+    v["bodies"][1]["name"] = json!("ground");
+    assert_eq!(
+        err(&v).to_string(),
+        "bodies[1].name: \"ground\" is reserved for the fixed frame"
+    );
+    let mut v = dry_press_value();
+    v["roles"]["crank_driver"] = json!("slide");
+    assert_eq!(
+        err(&v).to_string(),
+        "roles.crank_driver: joint 'slide' is a translational joint, not a driver"
+    );
+}
+
+#[test]
+fn output_lookups_name_the_unknown_body_or_point() {
+    let m = build(&dry_press_value()).unwrap();
+    let y = m.initial_state();
+    assert_eq!(
+        m.point_kinematics("wheel", "A", 0.0, &y)
+            .unwrap_err()
+            .to_string(),
+        "unknown body 'wheel'"
+    );
+    assert_eq!(
+        m.point_kinematics("rod", "Q", 0.0, &y)
+            .unwrap_err()
+            .to_string(),
+        "unknown point 'Q' on body 'rod'"
+    );
+}
