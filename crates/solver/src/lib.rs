@@ -20,11 +20,14 @@
 pub mod controller;
 pub mod error;
 pub mod integrator;
+pub mod jacobian;
 pub mod options;
 pub mod rk4;
+pub mod rosenbrock;
 pub mod stats;
 pub mod stepper;
 pub mod system;
+pub mod testset;
 
 pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
 pub use error::SolveError;

@@ -167,6 +167,11 @@ pub struct SolverOptions {
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
+    /// Whether adaptive methods control their step size. Default true. When false, an adaptive
+    /// one-step method takes `h0` (then required) on every step, shortening only the step that
+    /// lands on the stop time, and ignores its error estimate (for convergence-order studies).
+    /// diffsol's methods cannot run with a fixed step and reject false.
+    pub adaptive: bool,
 }
 
 impl Default for SolverOptions {
@@ -188,6 +193,7 @@ impl Default for SolverOptions {
             event_samples: 0,
             max_wall_time: None,
             divergence_bound: 1e100,
+            adaptive: true,
         }
     }
 }
@@ -276,6 +282,14 @@ impl SolverOptions {
         if let Output::Times(ts) = &self.output {
             if ts.windows(2).any(|w| !(w[1] >= w[0])) || ts.iter().any(|t| !t.is_finite()) {
                 return bad("output times must be finite and non-decreasing".into());
+            }
+        }
+        if !self.adaptive && !self.method.is_fixed_step() {
+            if self.method.is_diffsol() {
+                return bad(format!("method {} cannot run non-adaptive", self.method));
+            }
+            if self.h0.is_none() {
+                return bad("adaptive = false needs h0, the fixed step".into());
             }
         }
         if self.controller.is_some() && (self.method.is_fixed_step() || self.method.is_diffsol()) {
