@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 
 pub mod controller;
+pub mod diffsol_backend;
 pub mod error;
 pub mod integrator;
 pub mod jacobian;

@@ -46,6 +46,9 @@ pub fn make_stepper<'a, S: OdeSystem + ?Sized>(
 ) -> Result<Box<dyn Stepper + 'a>, SolveError> {
     match opts.method {
         Method::Rk4 => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, opts)?)),
+        Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => Ok(Box::new(
+            crate::diffsol_backend::DiffsolStepper::new(sys, t0, y0, opts)?,
+        )),
         Method::Rodas5p => Ok(Box::new(crate::rosenbrock::Rodas5p::new(
             sys, t0, y0, opts,
         )?)),

@@ -38,7 +38,7 @@ impl OdeSystem for Ball {
         g[0] = y[0];
     }
     fn on_event(&self, _hit: &EventHit, y: &mut [f64]) -> EventAction {
-        y[1] = -self.e * y[1];
+        y[1] *= -self.e;
         EventAction::Continue
     }
 }

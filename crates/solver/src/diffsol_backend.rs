@@ -1,0 +1,652 @@
+//! diffsol's stiff methods (BDF, TR-BDF2, ESDIRK3(4)) behind the [`Stepper`] trait.
+//!
+//! ```text
+//! BDF (variable order 1–5, NDF form):  Σ_{j=0..k} α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1})
+//!   diffsol's `Bdf`, after Byrne & Hindmarsh (1975) and Shampine & Reichelt's ode15s (1997)
+//! TR-BDF2 (ESDIRK, order 2(3)): Bank et al. (1985); Hosea & Shampine (1996)
+//! ESDIRK3(4) (order 3(4)):      Jørgensen, Kristensen & Thomsen (2018), arXiv:1803.01613
+//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense, nalgebra LU)
+//! ```
+//!
+//! Backend: diffsol 0.18 with its nalgebra matrices and LU (faster than faer for the small
+//! systems of this project). The system reaches diffsol as a custom `OdeEquations` type whose
+//! right-hand side operator supplies
+//! - the Jacobian-vector product `J v` (diffsol's required interface): the system's dense
+//!   Jacobian times v when it has one, a forward difference of f along v otherwise;
+//! - the dense Jacobian itself (`jacobian_inplace`), so that diffsol does not assemble it
+//!   column by column from n products: the system's Jacobian, or the forward-difference
+//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations).
+//!
+//! What our driver relies on, and how it is met:
+//! - `step(t_stop)` never passes `t_stop`: it is given to diffsol as its stop time
+//!   (`set_stop_time`), and a step that diffsol reports as having reached it ends exactly on it.
+//! - `interpolate` is diffsol's dense output (BDF: the interpolating polynomial of its
+//!   difference table; SDIRK: the continuous extension of the tableau).
+//! - Events are located by [`crate::Integrator`] on that dense output; diffsol's root finding
+//!   is not used.
+//! - `restart(t, y)` builds a new diffsol solver from a fresh state (t, y, f(t, y), h): no
+//!   history survives, BDF starts again at order 1, the Jacobian is re-evaluated. The first
+//!   trial step is the last accepted one (capped by h_max), or Hairer's estimate (diffsol's
+//!   `set_step_size`) at the very start.
+//! - diffsol has no maximum step. Our `h_max` is enforced with stop times: when it is finite
+//!   each step gets the stop time min(t_stop, t + h_max), so no step is longer than h_max
+//!   (at the cost of a step-size rescale when the stop is reached).
+//! - `h_min` (floor max(h_min, 16 ε |t|)) is diffsol's minimum step, updated before each step.
+//! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget).
+//! - diffsol's controllers are its own; `controller` and `limits` do not apply (options
+//!   validation rejects a controller for these methods) and `adaptive = false` is rejected.
+//!
+//! Errors: diffsol's step-size and error-test failures become `StepSizeTooSmall`, Newton and
+//! linear-solver failures `NewtonFailure`, each with the time and state of the last accepted
+//! step; a non-finite state after a step becomes `NonFiniteState`. No diffsol error panics.
+//!
+//! Statistics (diffsol → [`Stats`]): `number_of_steps` → accepted, error-test failures →
+//! rejected_error, Newton convergence failures → rejected_newton, Newton iterations →
+//! newton_iters, linear-solver setups (factorisations of I − hγJ) → lu_factorizations;
+//! rhs_evals and jac_evals are counted by our operator (finite-difference columns included).
+//! Counters of solvers replaced at restarts are carried over.
+
+use std::cell::RefCell;
+use std::ptr::NonNull;
+
+use diffsol::ode_solver::state::StateCommon;
+use diffsol::{
+    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraLU, NalgebraMat, NalgebraVec,
+    NonLinearOp, NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
+    OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk,
+    Tableau, UnitCallable, Vector, VectorCommon,
+};
+use faer::MatMut;
+
+use crate::error::SolveError;
+use crate::jacobian::JacobianEvaluator;
+use crate::options::{Method, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::Stepper;
+use crate::system::OdeSystem;
+
+type Vd = NalgebraVec<f64>;
+type Md = NalgebraMat<f64>;
+type Cx = NalgebraContext;
+type Lu = NalgebraLU<f64>;
+
+/// Scratch of [`SysRhs`]: f(t, y), f(t, y + εv) and y + εv for finite differences; the dense
+/// J for products.
+type Work = (Vec<f64>, Vec<f64>, Vec<f64>, faer::Mat<f64>);
+
+/// The right-hand side operator handed to diffsol.
+struct SysRhs<'a, S: OdeSystem + ?Sized> {
+    sys: &'a S,
+    n: usize,
+    ctx: Cx,
+    jac_eval: RefCell<JacobianEvaluator>,
+    work: RefCell<Work>,
+    /// rhs_evals and jac_evals of this operator.
+    counts: RefCell<Stats>,
+}
+
+impl<S: OdeSystem + ?Sized> SysRhs<'_, S> {
+    fn eval(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.sys.rhs(t, y, out);
+        self.counts.borrow_mut().rhs_evals += 1;
+    }
+
+    /// Dense Jacobian at (t, x) into `jac` (column-major n × n).
+    fn dense_jacobian(&self, t: f64, x: &[f64], jac: MatMut<'_, f64>) {
+        let mut work = self.work.borrow_mut();
+        let mut counts = self.counts.borrow_mut();
+        let f0 = &mut work.0;
+        if !self.sys.has_jacobian() {
+            self.sys.rhs(t, x, f0);
+            counts.rhs_evals += 1;
+        }
+        self.jac_eval
+            .borrow_mut()
+            .jacobian(self.sys, t, x, f0, jac, &mut counts);
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Op for SysRhs<'_, S> {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.n
+    }
+    fn nout(&self) -> usize {
+        self.n
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl<S: OdeSystem + ?Sized> NonLinearOp for SysRhs<'_, S> {
+    fn call_inplace(&self, x: &Vd, t: f64, y: &mut Vd) {
+        self.eval(t, x.inner().as_slice(), y.inner_mut().as_mut_slice());
+    }
+}
+
+impl<S: OdeSystem + ?Sized> NonLinearOpJacobian for SysRhs<'_, S> {
+    fn jac_mul_inplace(&self, x: &Vd, t: f64, v: &Vd, y: &mut Vd) {
+        let (xs, vs) = (x.inner().as_slice(), v.inner().as_slice());
+        let n = self.n;
+        let out = y.inner_mut().as_mut_slice();
+        if self.sys.has_jacobian() {
+            let mut jac = std::mem::replace(&mut self.work.borrow_mut().3, faer::Mat::zeros(0, 0));
+            if jac.nrows() != n {
+                jac = faer::Mat::zeros(n, n);
+            }
+            self.dense_jacobian(t, xs, jac.as_mut());
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = (0..n).map(|j| jac[(i, j)] * vs[j]).sum();
+            }
+            self.work.borrow_mut().3 = jac;
+        } else {
+            // Directional forward difference: J v ≈ (f(x + εv) − f(x)) / ε with
+            // ε = √eps · max(‖x‖∞, 1) / ‖v‖∞.
+            let vmax = vs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if vmax == 0.0 {
+                out.fill(0.0);
+                return;
+            }
+            let xmax = xs.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            let eps = f64::EPSILON.sqrt() * xmax / vmax;
+            let mut work = self.work.borrow_mut();
+            let (f0, f1, xp, _) = &mut *work;
+            for i in 0..n {
+                xp[i] = xs[i] + eps * vs[i];
+            }
+            self.eval(t, xs, f0);
+            self.eval(t, xp, f1);
+            for i in 0..n {
+                out[i] = (f1[i] - f0[i]) / eps;
+            }
+        }
+    }
+
+    fn jacobian_inplace(&self, x: &Vd, t: f64, y: &mut Md) {
+        let n = self.n;
+        let data = y.inner_mut().as_mut_slice();
+        self.dense_jacobian(
+            t,
+            x.inner().as_slice(),
+            MatMut::from_column_major_slice_mut(data, n, n),
+        );
+    }
+}
+
+/// The initial-value operator (diffsol requires one; our states are built directly).
+struct SysInit {
+    y0: Vec<f64>,
+    ctx: Cx,
+}
+
+impl Op for SysInit {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.y0.len()
+    }
+    fn nout(&self) -> usize {
+        self.y0.len()
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl diffsol::ConstantOp for SysInit {
+    fn call_inplace(&self, _t: f64, y: &mut Vd) {
+        y.inner_mut().as_mut_slice().copy_from_slice(&self.y0);
+    }
+}
+
+/// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots.
+struct SysEqn<'a, S: OdeSystem + ?Sized> {
+    rhs: SysRhs<'a, S>,
+    init: SysInit,
+    unit: UnitCallable<Md>,
+}
+
+impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.rhs.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.rhs.n
+    }
+    fn nout(&self) -> usize {
+        self.rhs.n
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl<'b, 'a, S: OdeSystem + ?Sized> OdeEquationsRef<'b> for SysEqn<'a, S> {
+    type Rhs = &'b SysRhs<'a, S>;
+    type Mass = &'b UnitCallable<Md>;
+    type Root = &'b UnitCallable<Md>;
+    type Init = &'b SysInit;
+    type Out = &'b UnitCallable<Md>;
+    type Reset = &'b UnitCallable<Md>;
+}
+
+impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
+    fn rhs(&self) -> &SysRhs<'a, S> {
+        &self.rhs
+    }
+    fn mass(&self) -> Option<&UnitCallable<Md>> {
+        let _ = &self.unit;
+        None
+    }
+    fn init(&self) -> &SysInit {
+        &self.init
+    }
+    fn set_params(&mut self, _p: &Vd) {}
+    fn get_params(&self, _p: &mut Vd) {}
+}
+
+type Problem<'a, S> = OdeSolverProblem<SysEqn<'a, S>>;
+
+enum Solver<'a, S: OdeSystem + ?Sized> {
+    Bdf(Box<Bdf<'a, SysEqn<'a, S>, Lu>>),
+    Sdirk(Box<Sdirk<'a, SysEqn<'a, S>, Lu>>),
+}
+
+macro_rules! with_solver {
+    ($solver:expr, $s:ident => $body:expr) => {
+        match $solver {
+            Solver::Bdf($s) => $body,
+            Solver::Sdirk($s) => $body,
+        }
+    };
+}
+
+/// One of diffsol's stiff methods driven step by step.
+///
+/// ```text
+/// BDF:      Σ α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1}),  orders 1–5
+/// TR-BDF2:  ESDIRK, order 2(3);   ESDIRK34: order 3(4)
+/// ```
+/// diffsol 0.18 (M. Robinson), nalgebra backend; see the module documentation for how our
+/// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
+pub struct DiffsolStepper<'a, S: OdeSystem + ?Sized> {
+    /// The live solver. It borrows `*problem`; it is dropped before `problem` is freed
+    /// (see `Drop`). Always `Some` outside `restart` and `drop`.
+    solver: Option<Solver<'a, S>>,
+    /// The problem, owned (allocated by `Box`, freed in `Drop`).
+    problem: NonNull<Problem<'a, S>>,
+    method: Method,
+    opts: SolverOptions,
+    t: f64,
+    t_prev: f64,
+    y: Vec<f64>,
+    /// The stop time currently set in diffsol.
+    tstop: Option<f64>,
+    h_last: Option<f64>,
+    /// Solver counters of replaced solvers (restarts).
+    base: Stats,
+    stats: Stats,
+    buf: RefCell<Vd>,
+}
+
+fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
+    use diffsol::error::OdeSolverError as E;
+    match &e {
+        DiffsolError::OdeSolverError(E::StepSizeTooSmall { .. })
+        | DiffsolError::OdeSolverError(E::TooManyErrorTestFailures { .. }) => {
+            SolveError::StepSizeTooSmall {
+                t,
+                h,
+                y: y.to_vec(),
+            }
+        }
+        _ => SolveError::NewtonFailure {
+            t,
+            y: y.to_vec(),
+            reason: format!("diffsol: {e}"),
+        },
+    }
+}
+
+impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
+    /// Builds diffsol's `method` (bdf, trbdf2 or esdirk34) at (t0, y0). Options must be
+    /// validated.
+    pub fn new(sys: &'a S, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
+        let method = opts.method;
+        if !method.is_diffsol() {
+            return Err(SolveError::InvalidOptions(format!(
+                "{method} is not one of diffsol's methods"
+            )));
+        }
+        if !opts.adaptive {
+            return Err(SolveError::InvalidOptions(format!(
+                "method {method} cannot run non-adaptive"
+            )));
+        }
+        let n = y0.len();
+        if n != sys.dim() {
+            return Err(SolveError::InvalidOptions(format!(
+                "y0 has {n} entries, the system {}",
+                sys.dim()
+            )));
+        }
+        let ctx = Cx::default();
+        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        let eqn = SysEqn {
+            rhs: SysRhs {
+                sys,
+                n,
+                ctx,
+                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
+                work: RefCell::new((
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    faer::Mat::zeros(n, n),
+                )),
+                counts: RefCell::new(Stats::default()),
+            },
+            init: SysInit {
+                y0: y0.to_vec(),
+                ctx,
+            },
+            unit: UnitCallable::new(n, ctx),
+        };
+        let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
+        let mut problem = OdeBuilder::<Md>::new()
+            .rtol(opts.rtol)
+            .atol(atol)
+            .t0(t0)
+            .build_from_eqn(eqn)
+            .map_err(|e| SolveError::InvalidOptions(format!("diffsol: {e}")))?;
+        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
+        let problem = NonNull::from(Box::leak(Box::new(problem)));
+        let mut st = DiffsolStepper {
+            solver: None,
+            problem,
+            method,
+            opts: opts.clone(),
+            t: t0,
+            t_prev: t0,
+            y: y0.to_vec(),
+            tstop: None,
+            h_last: None,
+            base: Stats::default(),
+            stats: Stats::default(),
+            buf: RefCell::new(Vd::zeros(n, ctx)),
+        };
+        st.start(t0, y0, opts.h0)?;
+        Ok(st)
+    }
+
+    /// The owned problem with the lifetime the solvers need.
+    ///
+    /// # Safety
+    /// The reference must not outlive `self`: it may only be stored in `self.solver`, which
+    /// `Drop` clears before it frees the problem. The problem is never moved or mutated while
+    /// a solver exists.
+    unsafe fn problem_ref(&self) -> &'a Problem<'a, S> {
+        // SAFETY: `problem` comes from `Box::leak` in `new` and is freed only in `Drop`.
+        unsafe { &*self.problem.as_ptr() }
+    }
+
+    /// Builds a fresh diffsol solver at (t, y) with first trial step `h` (or an estimate).
+    fn start(&mut self, t: f64, y: &[f64], h: Option<f64>) -> Result<(), SolveError> {
+        // Drop the old solver (its counters are already in `base`) before building anew.
+        self.solver = None;
+        // SAFETY: the reference is stored only in `self.solver` (see `problem_ref`).
+        let problem = unsafe { self.problem_ref() };
+        let ctx = *problem.context();
+        let n = y.len();
+        let yv = Vd::from_slice(y, ctx);
+        let mut dy = Vd::zeros(n, ctx);
+        problem.eqn.rhs.call_inplace(&yv, t, &mut dy);
+        if !dy.inner().as_slice().iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
+        }
+        let empty = || Vd::zeros(0, ctx);
+        let common = StateCommon {
+            y: yv,
+            dy,
+            g: empty(),
+            dg: empty(),
+            s: empty(),
+            ds: empty(),
+            sg: empty(),
+            dsg: empty(),
+            t,
+            h: 1.0,
+        };
+        let order = match self.method {
+            Method::Bdf => 1,
+            Method::Trbdf2 => Tableau::<f64>::tr_bdf2().order(),
+            _ => Tableau::<f64>::esdirk34().order(),
+        };
+        let err = |e: DiffsolError| map_err(e, t, 0.0, y);
+        let solver = match self.method {
+            Method::Bdf => {
+                let mut state = BdfState::<Vd>::new_from_common(common);
+                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Solver::Bdf(Box::new(
+                    Bdf::new(problem, state, Lu::default()).map_err(err)?,
+                ))
+            }
+            m => {
+                let tableau = if m == Method::Trbdf2 {
+                    Tableau::<f64>::tr_bdf2()
+                } else {
+                    Tableau::<f64>::esdirk34()
+                };
+                let mut state = RkState::<Vd>::new_from_common(common);
+                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Solver::Sdirk(Box::new(
+                    Sdirk::new(problem, state, tableau, Lu::default()).map_err(err)?,
+                ))
+            }
+        };
+        self.solver = Some(solver);
+        self.tstop = None;
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        Ok(())
+    }
+
+    fn initial_h<St: OdeSolverState<Vd>>(
+        state: &mut St,
+        h: Option<f64>,
+        problem: &Problem<'a, S>,
+        order: usize,
+        opts: &SolverOptions,
+    ) {
+        match h {
+            Some(h) => *state.as_mut().h = h,
+            None => {
+                state
+                    .as_mut()
+                    .set_step_size(1.0, &problem.atol, problem.rtol, &problem.eqn, order)
+            }
+        }
+        let hs = state.as_mut();
+        *hs.h = hs.h.min(opts.h_max);
+    }
+
+    /// Refreshes the counters from the live solver.
+    fn update_stats(&mut self) {
+        // SAFETY: a short-lived shared borrow of the problem, which outlives `self`'s methods.
+        let counts = unsafe { self.problem_ref() }
+            .eqn
+            .rhs
+            .counts
+            .borrow()
+            .clone();
+        let Some(solver) = self.solver.as_ref() else {
+            return;
+        };
+        let d = with_solver!(solver, s => s.get_statistics().clone());
+        let b = &self.base;
+        let st = &mut self.stats;
+        st.accepted = b.accepted + d.number_of_steps;
+        st.rejected_error = b.rejected_error + d.number_of_error_test_failures;
+        st.rejected_newton = b.rejected_newton + d.number_of_nonlinear_solver_fails;
+        st.steps = st.accepted + st.rejected_error + st.rejected_newton;
+        st.newton_iters = b.newton_iters + d.number_of_nonlinear_solver_iterations;
+        st.lu_factorizations = b.lu_factorizations + d.number_of_linear_solver_setups;
+        st.rhs_evals = counts.rhs_evals;
+        st.jac_evals = counts.jac_evals;
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Drop for DiffsolStepper<'_, S> {
+    fn drop(&mut self) {
+        // The solver borrows the problem: drop it first.
+        self.solver = None;
+        // SAFETY: `problem` was created by `Box::leak` in `new`, is freed only here, and no
+        // reference to it survives (the solver is gone).
+        unsafe { drop(Box::from_raw(self.problem.as_ptr())) };
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
+    fn method(&self) -> Method {
+        self.method
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        if self.stats.steps >= self.opts.max_steps {
+            return Err(SolveError::TooManySteps {
+                t: self.t,
+                steps: self.stats.steps,
+                y: self.y.clone(),
+            });
+        }
+        if !(t_stop > self.t) {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: t_stop - self.t,
+                y: self.y.clone(),
+            });
+        }
+        let want = if self.opts.h_max.is_finite() {
+            match self.tstop {
+                Some(ts) if ts <= t_stop => ts,
+                _ => t_stop.min(self.t + self.opts.h_max),
+            }
+        } else {
+            t_stop
+        };
+        let (t, y) = (self.t, &self.y);
+        let floor = self
+            .opts
+            .h_min
+            .max(16.0 * f64::EPSILON * t.abs())
+            .max(f64::MIN_POSITIVE);
+        let solver = self
+            .solver
+            .as_mut()
+            .expect("solver present outside restart");
+        let h_now = with_solver!(&*solver, s => s.state().h);
+        if self.tstop != Some(want) {
+            with_solver!(&mut *solver, s => s.set_stop_time(want))
+                .map_err(|e| map_err(e, t, h_now, y))?;
+            self.tstop = Some(want);
+        }
+        with_solver!(&mut *solver, s => {
+            *s.config_mut().as_base_mut().minimum_timestep = floor;
+        });
+        let result = with_solver!(&mut *solver, s => s.step());
+        let (t_new, h_state) = with_solver!(&*solver, s => (s.state().t, s.state().h));
+        let reached = match result {
+            Ok(OdeSolverStopReason::TstopReached) => true,
+            Ok(_) => false,
+            Err(e) => {
+                self.update_stats();
+                return Err(map_err(e, t, h_state, &self.y));
+            }
+        };
+        let t_new = if reached {
+            self.tstop = None;
+            want
+        } else {
+            t_new
+        };
+        let solver = self.solver.as_ref().expect("solver present");
+        let y_new = with_solver!(solver, s => s.state().y.inner().as_slice().to_vec());
+        if !y_new.iter().all(|v| v.is_finite()) {
+            self.update_stats();
+            return Err(SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            });
+        }
+        self.t_prev = self.t;
+        self.t = t_new;
+        self.y = y_new;
+        let h = self.t - self.t_prev;
+        self.h_last = Some(h);
+        self.update_stats();
+        self.stats.record_step_size(h);
+        Ok(())
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        if t >= self.t || self.t == self.t_prev {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        let Some(solver) = self.solver.as_ref() else {
+            out.copy_from_slice(&self.y);
+            return;
+        };
+        let mut buf = self.buf.borrow_mut();
+        // diffsol's own end time may differ from ours by rounding when a stop time was hit.
+        let t_end = with_solver!(solver, s => s.state().t);
+        let tq = t.max(self.t_prev).min(t_end);
+        match with_solver!(solver, s => s.interpolate_inplace(tq, &mut buf)) {
+            Ok(()) => out.copy_from_slice(buf.inner().as_slice()),
+            // Unreachable for t in [t_prev, t]; the end state is the safe answer.
+            Err(_) => out.copy_from_slice(&self.y),
+        }
+    }
+
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.update_stats();
+        self.base = self.stats.clone();
+        let h = self.h_last.map(|h| h.min(self.opts.h_max));
+        self.start(t, y, h)?;
+        self.update_stats();
+        Ok(())
+    }
+
+    fn stats(&self) -> &Stats {
+        &self.stats
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+}
