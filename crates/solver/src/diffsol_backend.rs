@@ -29,16 +29,22 @@
 //!   trial step is the last accepted one (capped by h_max), or Hairer's estimate (diffsol's
 //!   `set_step_size`) at the very start.
 //! - diffsol has no maximum step. Our `h_max` is enforced with stop times: when it is finite
-//!   each step gets the stop time min(t_stop, t + h_max), so no step is longer than h_max
-//!   (at the cost of a step-size rescale when the stop is reached).
+//!   each step gets the stop time t + h_max (t_stop itself when it is at most
+//!   h_max·(1 + 10⁻¹⁰) away, so that no sliver is left), so no step is longer than
+//!   h_max·(1 + 10⁻¹⁰), at the cost of a step-size rescale whenever a stop is reached.
+//! - A stop time closer than diffsol's round-off (100 ε (|t| + |h|)) cannot be stepped to by
+//!   diffsol; such a sliver (an event just before t_end) is bridged by one explicit Euler
+//!   step and a restart.
 //! - `h_min` (floor max(h_min, 16 ε |t|)) is diffsol's minimum step, updated before each step.
 //! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget).
 //! - diffsol's controllers are its own; `controller` and `limits` do not apply (options
 //!   validation rejects a controller for these methods) and `adaptive = false` is rejected.
 //!
-//! Errors: diffsol's step-size and error-test failures become `StepSizeTooSmall`, Newton and
-//! linear-solver failures `NewtonFailure`, each with the time and state of the last accepted
-//! step; a non-finite state after a step becomes `NonFiniteState`. No diffsol error panics.
+//! Errors: diffsol's step-size and error-test failures become `StepSizeTooSmall` (or
+//! `NewtonFailure` when Newton convergence failures, not error-test failures, drove the step
+//! size down in the failing step), its Newton and linear-solver failures `NewtonFailure`,
+//! each with the time and state of the last accepted step; a non-finite state after a step
+//! becomes `NonFiniteState`. No diffsol error panics.
 //!
 //! Statistics (diffsol → [`Stats`]): `number_of_steps` → accepted, error-test failures →
 //! rejected_error, Newton convergence failures → rejected_newton, Newton iterations →
@@ -299,6 +305,9 @@ pub struct DiffsolStepper<'a, S: OdeSystem + ?Sized> {
     /// The stop time currently set in diffsol.
     tstop: Option<f64>,
     h_last: Option<f64>,
+    /// The state before an explicit Euler sliver step (see `sliver_step`), while the last
+    /// step is one.
+    sliver: Option<Vec<f64>>,
     /// Solver counters of replaced solvers (restarts).
     base: Stats,
     stats: Stats,
@@ -387,12 +396,21 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
             y: y0.to_vec(),
             tstop: None,
             h_last: None,
+            sliver: None,
             base: Stats::default(),
             stats: Stats::default(),
             buf: RefCell::new(Vd::zeros(n, ctx)),
         };
         st.start(t0, y0, opts.h0)?;
         Ok(st)
+    }
+
+    /// Current order of the method: BDF's variable order (1 right after a start or restart),
+    /// the tableau's order for the SDIRK methods.
+    pub fn order(&self) -> usize {
+        self.solver
+            .as_ref()
+            .map_or(0, |solver| with_solver!(solver, s => s.order()))
     }
 
     /// The owned problem with the lifetime the solvers need.
@@ -408,8 +426,6 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
 
     /// Builds a fresh diffsol solver at (t, y) with first trial step `h` (or an estimate).
     fn start(&mut self, t: f64, y: &[f64], h: Option<f64>) -> Result<(), SolveError> {
-        // Drop the old solver (its counters are already in `base`) before building anew.
-        self.solver = None;
         // SAFETY: the reference is stored only in `self.solver` (see `problem_ref`).
         let problem = unsafe { self.problem_ref() };
         let ctx = *problem.context();
@@ -478,13 +494,48 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
         match h {
             Some(h) => *state.as_mut().h = h,
             None => {
+                // Hairer's estimate, raised to h_min (the estimate is a heuristic; a step
+                // below h_min must come from a rejection to count as a failure).
                 state
                     .as_mut()
-                    .set_step_size(1.0, &problem.atol, problem.rtol, &problem.eqn, order)
+                    .set_step_size(1.0, &problem.atol, problem.rtol, &problem.eqn, order);
+                let hs = state.as_mut();
+                *hs.h = hs.h.max(opts.h_min);
             }
         }
         let hs = state.as_mut();
         *hs.h = hs.h.min(opts.h_max);
+    }
+
+    /// Bridges a stop time closer than diffsol's round-off with one explicit Euler step
+    /// y + (t_stop − t) f(t, y) (its error, O((t_stop − t)²), is below round-off) and restarts
+    /// the solver there. The dense output over the sliver is linear.
+    fn sliver_step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        let n = self.y.len();
+        let mut f = vec![0.0; n];
+        // SAFETY: a short-lived shared borrow of the problem, which outlives this call.
+        unsafe { self.problem_ref() }
+            .eqn
+            .rhs
+            .eval(self.t, &self.y, &mut f);
+        let dt = t_stop - self.t;
+        let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
+        if !y_new.iter().all(|v| v.is_finite()) {
+            self.update_stats();
+            return Err(SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            });
+        }
+        let (t_old, y_old, h_last) = (self.t, self.y.clone(), self.h_last);
+        self.restart(t_stop, &y_new)?;
+        self.h_last = h_last;
+        self.t_prev = t_old;
+        self.sliver = Some(y_old);
+        self.base.accepted += 1;
+        self.update_stats();
+        self.stats.record_step_size(dt);
+        Ok(())
     }
 
     /// Refreshes the counters from the live solver.
@@ -552,10 +603,28 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
                 y: self.y.clone(),
             });
         }
-        let want = if self.opts.h_max.is_finite() {
+        self.sliver = None;
+        let Some(solver) = self.solver.as_mut() else {
+            return Err(SolveError::NewtonFailure {
+                t: self.t,
+                y: self.y.clone(),
+                reason: "diffsol solver missing after a failed restart".into(),
+            });
+        };
+        let h_now = with_solver!(&*solver, s => s.state().h);
+        let remaining = t_stop - self.t;
+        // diffsol treats a stop time within 100 ε (|t| + |h|) of its time as reached and
+        // cannot step to it: such a sliver is bridged by one explicit Euler step.
+        if remaining <= 200.0 * f64::EPSILON * (self.t.abs() + h_now.abs()) {
+            return self.sliver_step(t_stop);
+        }
+        let h_max = self.opts.h_max;
+        let want = if h_max.is_finite() {
             match self.tstop {
                 Some(ts) if ts <= t_stop => ts,
-                _ => t_stop.min(self.t + self.opts.h_max),
+                // Land on t_stop rather than leave a sliver below 10⁻¹⁰ h_max.
+                _ if remaining <= h_max * (1.0 + 1e-10) => t_stop,
+                _ => self.t + h_max,
             }
         } else {
             t_stop
@@ -566,11 +635,6 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
             .h_min
             .max(16.0 * f64::EPSILON * t.abs())
             .max(f64::MIN_POSITIVE);
-        let solver = self
-            .solver
-            .as_mut()
-            .expect("solver present outside restart");
-        let h_now = with_solver!(&*solver, s => s.state().h);
         if self.tstop != Some(want) {
             with_solver!(&mut *solver, s => s.set_stop_time(want))
                 .map_err(|e| map_err(e, t, h_now, y))?;
@@ -579,14 +643,40 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
         with_solver!(&mut *solver, s => {
             *s.config_mut().as_base_mut().minimum_timestep = floor;
         });
+        let before = with_solver!(&*solver, s => s.get_statistics().clone());
         let result = with_solver!(&mut *solver, s => s.step());
         let (t_new, h_state) = with_solver!(&*solver, s => (s.state().t, s.state().h));
         let reached = match result {
             Ok(OdeSolverStopReason::TstopReached) => true,
             Ok(_) => false,
             Err(e) => {
+                let after = with_solver!(&*solver, s => s.get_statistics().clone());
+                let newton = after.number_of_nonlinear_solver_fails
+                    - before.number_of_nonlinear_solver_fails;
+                let error_test =
+                    after.number_of_error_test_failures - before.number_of_error_test_failures;
                 self.update_stats();
-                return Err(map_err(e, t, h_state, &self.y));
+                // A step-size failure means the trial step fell below the floor; BDF keeps
+                // it in its state, the SDIRK methods only their starting step.
+                let h_fail = h_state.min(floor);
+                // diffsol shrinks the step after Newton failures too: when they are what
+                // drove the step size down, say so.
+                return Err(match map_err(e, t, h_fail, &self.y) {
+                    SolveError::StepSizeTooSmall { t, h, y }
+                        if newton > 0 && newton >= error_test =>
+                    {
+                        SolveError::NewtonFailure {
+                            t,
+                            y,
+                            reason: format!(
+                                "diffsol: {newton} Newton convergence failures and \
+                                 {error_test} error-test failures drove the step size \
+                                 below {floor:e} (h = {h:e})"
+                            ),
+                        }
+                    }
+                    e => e,
+                });
             }
         };
         let t_new = if reached {
@@ -619,6 +709,14 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
             out.copy_from_slice(&self.y);
             return;
         }
+        if let Some(y0) = &self.sliver {
+            // The Euler sliver: linear.
+            let th = ((t - self.t_prev) / (self.t - self.t_prev)).max(0.0);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = y0[i] + th * (self.y[i] - y0[i]);
+            }
+            return;
+        }
         let Some(solver) = self.solver.as_ref() else {
             out.copy_from_slice(&self.y);
             return;
@@ -635,6 +733,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
     }
 
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.sliver = None;
         self.update_stats();
         self.base = self.stats.clone();
         let h = self.h_last.map(|h| h.min(self.opts.h_max));

@@ -14,6 +14,11 @@
 //! - [`Stats`] counts the work; [`SolveError`] says why a run failed, with time and state.
 //!
 //! Methods: the paper's fixed-step RK4 ([`rk4`]).
+//!
+//! Stiff methods: our Rosenbrock method Rodas5P ([`rosenbrock`]) and diffsol's BDF, TR-BDF2 and
+//! ESDIRK3(4) ([`diffsol_backend`]), with dense Jacobians from the system or by finite
+//! differences ([`jacobian`]); stiff problems of the IVP Test Set with reference solutions
+//! ([`testset`]).
 
 #![warn(missing_docs)]
 

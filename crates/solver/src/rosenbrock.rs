@@ -482,7 +482,9 @@ impl<Sy: OdeSystem + ?Sized> Stepper for Rodas5p<'_, Sy> {
                 self.sys, self.t, &self.y, &self.f0, P_HAT, &self.opts, t_stop,
             );
             self.stats.rhs_evals += 1;
-            h
+            // Hairer's estimate is a heuristic: raise it to h_min (only a rejection below
+            // h_min is a failure).
+            h.max(self.opts.h_min)
         };
         h = h.min(self.opts.h_max);
         let mut last = Failure::None;
@@ -494,8 +496,9 @@ impl<Sy: OdeSystem + ?Sized> Stepper for Rodas5p<'_, Sy> {
                     y: self.y.clone(),
                 });
             }
-            // Land exactly on t_stop when the step would reach it within a few ulps.
-            let lands = self.t + h >= t_stop - 4.0 * f64::EPSILON * t_stop.abs();
+            // Land exactly on t_stop when the step would reach it or leave a sliver below
+            // 10⁻¹⁰ h (the rule of the RK4 stepper).
+            let lands = remaining <= h * (1.0 + 1e-10);
             let h_try = if lands { remaining } else { h };
             let floor = self.opts.h_min.max(16.0 * f64::EPSILON * self.t.abs());
             if !lands && h_try < floor || !(h_try > 0.0) {
