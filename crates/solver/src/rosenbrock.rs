@@ -33,8 +33,10 @@
 //! W), `NonFiniteState` (non-finite stages) or `StepSizeTooSmall`. A one-step method has no
 //! history: `restart` resets the controller and starts again from the last accepted step size.
 
-use faer::linalg::solvers::{PartialPivLu, Solve};
-use faer::{Mat, MatMut};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
 
 use crate::controller::StepSizeControl;
 use crate::controller::{ControllerKind, StepLimits};
@@ -236,6 +238,58 @@ pub const H: [[f64; S]; 3] = [
 /// Order of the embedded error estimate (the controller's p̂).
 const P_HAT: usize = 4;
 
+/// Dense LU factors with partial pivoting (faer), kept between steps: P W = L U in place,
+/// with preallocated permutation and scratch buffers (no allocation per step).
+struct DenseLu {
+    lu: Mat<f64>,
+    fwd: Vec<usize>,
+    bwd: Vec<usize>,
+    mem: MemBuffer,
+}
+
+impl DenseLu {
+    fn new(n: usize) -> Self {
+        let req = factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq));
+        DenseLu {
+            lu: Mat::zeros(n, n),
+            fwd: vec![0; n],
+            bwd: vec![0; n],
+            mem: MemBuffer::new(req),
+        }
+    }
+
+    /// Factors the matrix held in `self.lu`; false when a pivot is zero or not finite.
+    fn factor(&mut self) -> bool {
+        factor::lu_in_place(
+            self.lu.as_mut(),
+            &mut self.fwd,
+            &mut self.bwd,
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        (0..self.lu.nrows()).all(|i| {
+            let p = self.lu[(i, i)];
+            p != 0.0 && p.is_finite()
+        })
+    }
+
+    /// Solves W x = b in place (b in `x`).
+    fn solve(&mut self, x: &mut [f64]) {
+        let n = x.len();
+        let perm = PermRef::new_checked(&self.fwd, &self.bwd, n);
+        solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            MatMut::from_column_major_slice_mut(x, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+    }
+}
+
 /// Why the last attempt was rejected (decides the error when h underflows).
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Failure {
@@ -271,7 +325,7 @@ pub struct Rodas5p<'a, Sy: OdeSystem + ?Sized> {
     f0: Vec<f64>,
     dfdt: Vec<f64>,
     jac: Mat<f64>,
-    w: Mat<f64>,
+    w: DenseLu,
     jac_eval: JacobianEvaluator,
     k: Vec<Vec<f64>>,
     dense: [Vec<f64>; 3],
@@ -311,7 +365,7 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
             jac: Mat::zeros(n, n),
-            w: Mat::zeros(n, n),
+            w: DenseLu::new(n),
             jac_eval: JacobianEvaluator::new(scale),
             k: vec![vec![0.0; n]; S],
             dense: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
@@ -365,20 +419,13 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
         let diag = 1.0 / (h * GAMMA);
         for j in 0..n {
             for i in 0..n {
-                self.w[(i, j)] = -self.jac[(i, j)];
+                self.w.lu[(i, j)] = -self.jac[(i, j)];
             }
-            self.w[(j, j)] += diag;
+            self.w.lu[(j, j)] += diag;
         }
-        let lu = PartialPivLu::new(self.w.as_ref());
         self.stats.lu_factorizations += 1;
-        {
-            let u = lu.U();
-            if (0..n).any(|i| {
-                let p = u[(i, i)];
-                p == 0.0 || !p.is_finite()
-            }) {
-                return Err(Failure::Singular);
-            }
+        if !self.w.factor() {
+            return Err(Failure::Singular);
         }
         let (sys, t) = (self.sys, self.t);
         for i in 0..S {
@@ -409,7 +456,7 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
                 }
                 ki[l] = v;
             }
-            lu.solve_in_place(MatMut::from_column_major_slice_mut(ki.as_mut_slice(), n, 1));
+            self.w.solve(ki);
             if !ki.iter().all(|v| v.is_finite()) {
                 return Err(Failure::NonFinite);
             }

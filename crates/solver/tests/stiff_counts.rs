@@ -6,7 +6,7 @@
 mod stiff_problems;
 
 use lash_solver::*;
-use stiff_problems::{opts, StiffLinear};
+use stiff_problems::{opts, ProtheroRobinson, StiffLinear};
 
 fn stats(method: Method) -> Stats {
     let o = SolverOptions {
@@ -42,6 +42,22 @@ fn rodas5p_counts() {
     assert_eq!(s.jac_evals, s.accepted);
     assert_eq!(s.lu_factorizations, s.steps);
     assert_eq!(counts(&s), PINNED_RODAS5P, "{s:?}");
+}
+
+/// Without Jacobian and time-dependent: per step also n RHS for the finite-difference
+/// Jacobian and 1 for ∂f/∂t (Prothero–Robinson, n = 1).
+#[test]
+fn rodas5p_counts_with_finite_differences() {
+    let s = solve(
+        &ProtheroRobinson,
+        (0.0, 10.0),
+        &[1.0],
+        &opts(Method::Rodas5p, 1e-6, 1e-9),
+    )
+    .unwrap()
+    .stats;
+    assert_eq!(s.rhs_evals, 7 * s.steps + s.accepted * (1 + 1 + 1) + 1);
+    assert_eq!(s.jac_evals, s.accepted);
 }
 
 #[test]
