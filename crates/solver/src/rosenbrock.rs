@@ -20,10 +20,17 @@
 //! output matrix H). The test `tableau_is_consistent` checks their redundant data (c_i and d_i
 //! recomputed from a and C) and the order conditions up to order 4.
 //!
+//! Derivatives: J is the system's Jacobian, or forward differences with increments floored
+//! at atol_i/rtol ([`crate::jacobian`]). f_t is a forward difference in t, skipped (f_t = 0)
+//! when [`OdeSystem::is_autonomous`] says so; the order of the method needs the exact J
+//! (a Rosenbrock method is not a W-method), so difference errors (~10⁻⁸ relative) show up
+//! only below that level. W is factored in place by faer's LU with partial pivoting.
+//!
 //! Cost per step: one Jacobian (analytic, or n RHS evaluations by differences), one RHS for
 //! f(t_n, y_n), one for ∂f/∂t by differences unless the system is autonomous; per attempt one
 //! LU factorisation of W, 7 RHS evaluations and 8 triangular solves. A rejected attempt reuses
-//! J, f(t_n, y_n) and f_t (they belong to the step's start).
+//! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
+//! h0 on every step, the error estimate ignored.
 //!
 //! Step size: only through [`StepSizeControl`] (default controller Gustafsson's predictive
 //! one, any [`crate::ControllerKind`] accepted), with error order p̂ = 4. A singular W (a zero
