@@ -224,7 +224,6 @@ impl diffsol::ConstantOp for SysInit {
 struct SysEqn<'a, S: OdeSystem + ?Sized> {
     rhs: SysRhs<'a, S>,
     init: SysInit,
-    unit: UnitCallable<Md>,
 }
 
 impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
@@ -260,7 +259,6 @@ impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
         &self.rhs
     }
     fn mass(&self) -> Option<&UnitCallable<Md>> {
-        let _ = &self.unit;
         None
     }
     fn init(&self) -> &SysInit {
@@ -378,7 +376,6 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
                 y0: y0.to_vec(),
                 ctx,
             },
-            unit: UnitCallable::new(n, ctx),
         };
         let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
         let mut problem = OdeBuilder::<Md>::new()
