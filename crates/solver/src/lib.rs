@@ -15,18 +15,27 @@
 //!
 //! Methods: the paper's fixed-step RK4 ([`rk4`]); the explicit embedded pairs Bogacki–Shampine
 //! 3(2), Dormand–Prince 5(4), Tsitouras 5(4) and DOP853 ([`erk`]).
+//!
+//! Stiff methods: our Rosenbrock method Rodas5P ([`rosenbrock`]) and diffsol's BDF, TR-BDF2 and
+//! ESDIRK3(4) ([`diffsol_backend`]), with dense Jacobians from the system or by finite
+//! differences ([`jacobian`]); stiff problems of the IVP Test Set with reference solutions
+//! ([`testset`]).
 
 #![warn(missing_docs)]
 
 pub mod controller;
+pub mod diffsol_backend;
 pub mod erk;
 pub mod error;
 pub mod integrator;
+pub mod jacobian;
 pub mod options;
 pub mod rk4;
+pub mod rosenbrock;
 pub mod stats;
 pub mod stepper;
 pub mod system;
+pub mod testset;
 
 pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
 pub use error::SolveError;

@@ -49,9 +49,12 @@ pub fn make_stepper<'a, S: OdeSystem + ?Sized>(
         Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
             Ok(Box::new(crate::erk::ErkStepper::new(sys, t0, y0, opts)?))
         }
-        m => Err(SolveError::InvalidOptions(format!(
-            "method {m} is not built yet"
-        ))),
+        Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => Ok(Box::new(
+            crate::diffsol_backend::DiffsolStepper::new(sys, t0, y0, opts)?,
+        )),
+        Method::Rodas5p => Ok(Box::new(crate::rosenbrock::Rodas5p::new(
+            sys, t0, y0, opts,
+        )?)),
     }
 }
 

@@ -93,6 +93,13 @@ pub trait OdeSystem {
     /// [`OdeSystem::has_jacobian`] returns true.
     fn jacobian(&self, _t: f64, _y: &[f64], _jac: MatMut<'_, f64>) {}
 
+    /// Whether f does not depend on t (∂f/∂t = 0). Default false. Rosenbrock methods need
+    /// ∂f/∂t; for a system that says it is autonomous they skip its finite-difference estimate
+    /// (one RHS evaluation per step).
+    fn is_autonomous(&self) -> bool {
+        false
+    }
+
     /// Number m of event functions.
     fn n_events(&self) -> usize {
         0

@@ -1,0 +1,842 @@
+//! diffsol's stiff methods (BDF, TR-BDF2, ESDIRK3(4)) behind the [`Stepper`] trait.
+//!
+//! ```text
+//! BDF (variable order 1–5, NDF form):  Σ_{j=0..k} α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1})
+//!   diffsol's `Bdf`, after Byrne & Hindmarsh (1975) and Shampine & Reichelt's ode15s (1997)
+//! TR-BDF2 (ESDIRK, order 2(3)): Bank et al. (1985); Hosea & Shampine (1996)
+//! ESDIRK3(4) (order 3(4)):      Jørgensen, Kristensen & Thomsen (2018), arXiv:1803.01613
+//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense, nalgebra LU)
+//! ```
+//!
+//! Backend: diffsol 0.18 with its nalgebra matrices and LU (faster than faer for the small
+//! systems of this project). The system reaches diffsol as a custom `OdeEquations` type whose
+//! right-hand side operator supplies
+//! - the Jacobian-vector product `J v` (diffsol's required interface): the system's dense
+//!   Jacobian times v when it has one, a forward difference of f along v otherwise;
+//! - the dense Jacobian itself (`jacobian_inplace`), so that diffsol does not assemble it
+//!   column by column from n products: the system's Jacobian, or the forward-difference
+//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations).
+//!
+//! What our driver relies on, and how it is met:
+//! - `step(t_stop)` never passes `t_stop`: it is given to diffsol as its stop time
+//!   (`set_stop_time`), and a step that diffsol reports as having reached it ends exactly on it.
+//! - `interpolate` is diffsol's dense output (BDF: the interpolating polynomial of its
+//!   difference table; SDIRK: the continuous extension of the tableau).
+//! - Events are located by [`crate::Integrator`] on that dense output; diffsol's root finding
+//!   is not used.
+//! - `restart(t, y)` builds a new diffsol solver from a fresh state (t, y, f(t, y), h): no
+//!   history survives, BDF starts again at order 1, the Jacobian is re-evaluated. The first
+//!   trial step is the last accepted one (capped by h_max), or Hairer's estimate (diffsol's
+//!   `set_step_size`) at the very start. States are built from diffsol's `StateCommon`, so a
+//!   BDF difference table is never inherited: the known pitfall of a solver built from a
+//!   state taken after `state_mut_back` (stale history unless `as_mut()` is called first)
+//!   cannot arise.
+//! - diffsol has no maximum step. Our `h_max` is enforced with stop times: when it is finite
+//!   each step gets the stop time t + h_max (t_stop itself when it is at most
+//!   h_max·(1 + 10⁻¹⁰) away, so that no sliver is left), so no step is longer than
+//!   h_max·(1 + 10⁻¹⁰), at the cost of a step-size rescale whenever a stop is reached.
+//! - A stop time closer than diffsol's round-off (100 ε (|t| + |h|)) cannot be stepped to by
+//!   diffsol; such a sliver (an event just before t_end) is bridged by one explicit Euler
+//!   step and a restart.
+//! - `h_min` (floor max(h_min, 16 ε |t|)) is diffsol's minimum step, updated before each step.
+//! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget).
+//! - diffsol's controllers are its own; `controller` and `limits` do not apply (options
+//!   validation rejects a controller for these methods) and `adaptive = false` is rejected.
+//!
+//! Errors: diffsol's step-size and error-test failures become `StepSizeTooSmall` (or
+//! `NewtonFailure` when Newton convergence failures, not error-test failures, drove the step
+//! size down in the failing step), its Newton and linear-solver failures `NewtonFailure`,
+//! each with the time and state of the last accepted step; a non-finite state after a step
+//! becomes `NonFiniteState`. No diffsol error panics.
+//!
+//! Statistics (diffsol → [`Stats`]): `number_of_steps` → accepted, error-test failures →
+//! rejected_error, Newton convergence failures → rejected_newton, Newton iterations →
+//! newton_iters, linear-solver setups (factorisations of I − hγJ) → lu_factorizations;
+//! rhs_evals and jac_evals are counted by our operator (finite-difference columns included).
+//! Counters of solvers replaced at restarts are carried over.
+
+use std::cell::RefCell;
+use std::ptr::NonNull;
+
+use diffsol::ode_solver::state::StateCommon;
+use diffsol::{
+    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraLU, NalgebraMat, NalgebraVec,
+    NonLinearOp, NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
+    OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk,
+    Tableau, UnitCallable, Vector, VectorCommon,
+};
+use faer::MatMut;
+
+use crate::error::SolveError;
+use crate::jacobian::JacobianEvaluator;
+use crate::options::{Method, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::Stepper;
+use crate::system::OdeSystem;
+
+type Vd = NalgebraVec<f64>;
+type Md = NalgebraMat<f64>;
+type Cx = NalgebraContext;
+type Lu = NalgebraLU<f64>;
+
+/// Scratch of [`SysRhs`]: f(t, y), f(t, y + εv) and y + εv for finite differences; the dense
+/// J for products.
+type Work = (Vec<f64>, Vec<f64>, Vec<f64>, faer::Mat<f64>);
+
+/// The right-hand side operator handed to diffsol.
+struct SysRhs<'a, S: OdeSystem + ?Sized> {
+    sys: &'a S,
+    n: usize,
+    ctx: Cx,
+    jac_eval: RefCell<JacobianEvaluator>,
+    work: RefCell<Work>,
+    /// rhs_evals and jac_evals of this operator.
+    counts: RefCell<Stats>,
+}
+
+impl<S: OdeSystem + ?Sized> SysRhs<'_, S> {
+    fn eval(&self, t: f64, y: &[f64], out: &mut [f64]) {
+        self.sys.rhs(t, y, out);
+        self.counts.borrow_mut().rhs_evals += 1;
+    }
+
+    /// Dense Jacobian at (t, x) into `jac` (column-major n × n).
+    fn dense_jacobian(&self, t: f64, x: &[f64], jac: MatMut<'_, f64>) {
+        let mut work = self.work.borrow_mut();
+        let mut counts = self.counts.borrow_mut();
+        let f0 = &mut work.0;
+        if !self.sys.has_jacobian() {
+            self.sys.rhs(t, x, f0);
+            counts.rhs_evals += 1;
+        }
+        self.jac_eval
+            .borrow_mut()
+            .jacobian(self.sys, t, x, f0, jac, &mut counts);
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Op for SysRhs<'_, S> {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.n
+    }
+    fn nout(&self) -> usize {
+        self.n
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl<S: OdeSystem + ?Sized> NonLinearOp for SysRhs<'_, S> {
+    fn call_inplace(&self, x: &Vd, t: f64, y: &mut Vd) {
+        self.eval(t, x.inner().as_slice(), y.inner_mut().as_mut_slice());
+    }
+}
+
+impl<S: OdeSystem + ?Sized> NonLinearOpJacobian for SysRhs<'_, S> {
+    fn jac_mul_inplace(&self, x: &Vd, t: f64, v: &Vd, y: &mut Vd) {
+        let (xs, vs) = (x.inner().as_slice(), v.inner().as_slice());
+        let n = self.n;
+        let out = y.inner_mut().as_mut_slice();
+        if self.sys.has_jacobian() {
+            let mut jac = std::mem::replace(&mut self.work.borrow_mut().3, faer::Mat::zeros(0, 0));
+            if jac.nrows() != n {
+                jac = faer::Mat::zeros(n, n);
+            }
+            self.dense_jacobian(t, xs, jac.as_mut());
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = (0..n).map(|j| jac[(i, j)] * vs[j]).sum();
+            }
+            self.work.borrow_mut().3 = jac;
+        } else {
+            // Directional forward difference: J v ≈ (f(x + εv) − f(x)) / ε with
+            // ε = √eps · max(‖x‖∞, 1) / ‖v‖∞.
+            let vmax = vs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if vmax == 0.0 {
+                out.fill(0.0);
+                return;
+            }
+            let xmax = xs.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            let eps = f64::EPSILON.sqrt() * xmax / vmax;
+            let mut work = self.work.borrow_mut();
+            let (f0, f1, xp, _) = &mut *work;
+            for i in 0..n {
+                xp[i] = xs[i] + eps * vs[i];
+            }
+            self.eval(t, xs, f0);
+            self.eval(t, xp, f1);
+            for i in 0..n {
+                out[i] = (f1[i] - f0[i]) / eps;
+            }
+        }
+    }
+
+    fn jacobian_inplace(&self, x: &Vd, t: f64, y: &mut Md) {
+        let n = self.n;
+        let data = y.inner_mut().as_mut_slice();
+        self.dense_jacobian(
+            t,
+            x.inner().as_slice(),
+            MatMut::from_column_major_slice_mut(data, n, n),
+        );
+    }
+}
+
+/// The initial-value operator (diffsol requires one; our states are built directly).
+struct SysInit {
+    y0: Vec<f64>,
+    ctx: Cx,
+}
+
+impl Op for SysInit {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.y0.len()
+    }
+    fn nout(&self) -> usize {
+        self.y0.len()
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl diffsol::ConstantOp for SysInit {
+    fn call_inplace(&self, _t: f64, y: &mut Vd) {
+        y.inner_mut().as_mut_slice().copy_from_slice(&self.y0);
+    }
+}
+
+/// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots.
+struct SysEqn<'a, S: OdeSystem + ?Sized> {
+    rhs: SysRhs<'a, S>,
+    init: SysInit,
+}
+
+impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
+    type T = f64;
+    type V = Vd;
+    type M = Md;
+    type C = Cx;
+    fn context(&self) -> &Cx {
+        &self.rhs.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.rhs.n
+    }
+    fn nout(&self) -> usize {
+        self.rhs.n
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl<'b, 'a, S: OdeSystem + ?Sized> OdeEquationsRef<'b> for SysEqn<'a, S> {
+    type Rhs = &'b SysRhs<'a, S>;
+    type Mass = &'b UnitCallable<Md>;
+    type Root = &'b UnitCallable<Md>;
+    type Init = &'b SysInit;
+    type Out = &'b UnitCallable<Md>;
+    type Reset = &'b UnitCallable<Md>;
+}
+
+impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
+    fn rhs(&self) -> &SysRhs<'a, S> {
+        &self.rhs
+    }
+    fn mass(&self) -> Option<&UnitCallable<Md>> {
+        None
+    }
+    fn init(&self) -> &SysInit {
+        &self.init
+    }
+    fn set_params(&mut self, _p: &Vd) {}
+    fn get_params(&self, _p: &mut Vd) {}
+}
+
+type Problem<'a, S> = OdeSolverProblem<SysEqn<'a, S>>;
+
+enum Solver<'a, S: OdeSystem + ?Sized> {
+    Bdf(Box<Bdf<'a, SysEqn<'a, S>, Lu>>),
+    Sdirk(Box<Sdirk<'a, SysEqn<'a, S>, Lu>>),
+}
+
+macro_rules! with_solver {
+    ($solver:expr, $s:ident => $body:expr) => {
+        match $solver {
+            Solver::Bdf($s) => $body,
+            Solver::Sdirk($s) => $body,
+        }
+    };
+}
+
+/// One of diffsol's stiff methods driven step by step.
+///
+/// ```text
+/// BDF:      Σ α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1}),  orders 1–5
+/// TR-BDF2:  ESDIRK, order 2(3);   ESDIRK34: order 3(4)
+/// ```
+/// diffsol 0.18 (M. Robinson), nalgebra backend; see the module documentation for how our
+/// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
+pub struct DiffsolStepper<'a, S: OdeSystem + ?Sized> {
+    /// The live solver. It borrows `*problem`; it is dropped before `problem` is freed
+    /// (see `Drop`). Always `Some` outside `restart` and `drop`.
+    solver: Option<Solver<'a, S>>,
+    /// The problem, owned (allocated by `Box`, freed in `Drop`).
+    problem: NonNull<Problem<'a, S>>,
+    method: Method,
+    opts: SolverOptions,
+    t: f64,
+    t_prev: f64,
+    y: Vec<f64>,
+    /// The stop time currently set in diffsol.
+    tstop: Option<f64>,
+    h_last: Option<f64>,
+    /// The state before an explicit Euler sliver step (see `sliver_step`), while the last
+    /// step is one.
+    sliver: Option<Vec<f64>>,
+    /// Solver counters of replaced solvers (restarts).
+    base: Stats,
+    stats: Stats,
+    buf: RefCell<Vd>,
+}
+
+fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
+    use diffsol::error::OdeSolverError as E;
+    match &e {
+        DiffsolError::OdeSolverError(E::StepSizeTooSmall { .. })
+        | DiffsolError::OdeSolverError(E::TooManyErrorTestFailures { .. }) => {
+            SolveError::StepSizeTooSmall {
+                t,
+                h,
+                y: y.to_vec(),
+            }
+        }
+        _ => SolveError::NewtonFailure {
+            t,
+            y: y.to_vec(),
+            reason: format!("diffsol: {e}"),
+        },
+    }
+}
+
+impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
+    /// Builds diffsol's `method` (bdf, trbdf2 or esdirk34) at (t0, y0). Options must be
+    /// validated.
+    pub fn new(sys: &'a S, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
+        let method = opts.method;
+        if !method.is_diffsol() {
+            return Err(SolveError::InvalidOptions(format!(
+                "{method} is not one of diffsol's methods"
+            )));
+        }
+        if !opts.adaptive {
+            return Err(SolveError::InvalidOptions(format!(
+                "method {method} cannot run non-adaptive"
+            )));
+        }
+        let n = y0.len();
+        if n != sys.dim() {
+            return Err(SolveError::InvalidOptions(format!(
+                "y0 has {n} entries, the system {}",
+                sys.dim()
+            )));
+        }
+        let ctx = Cx::default();
+        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        let eqn = SysEqn {
+            rhs: SysRhs {
+                sys,
+                n,
+                ctx,
+                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
+                work: RefCell::new((
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    faer::Mat::zeros(n, n),
+                )),
+                counts: RefCell::new(Stats::default()),
+            },
+            init: SysInit {
+                y0: y0.to_vec(),
+                ctx,
+            },
+        };
+        let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
+        let mut problem = OdeBuilder::<Md>::new()
+            .rtol(opts.rtol)
+            .atol(atol)
+            .t0(t0)
+            .build_from_eqn(eqn)
+            .map_err(|e| SolveError::InvalidOptions(format!("diffsol: {e}")))?;
+        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
+        let problem = NonNull::from(Box::leak(Box::new(problem)));
+        let mut st = DiffsolStepper {
+            solver: None,
+            problem,
+            method,
+            opts: opts.clone(),
+            t: t0,
+            t_prev: t0,
+            y: y0.to_vec(),
+            tstop: None,
+            h_last: None,
+            sliver: None,
+            base: Stats::default(),
+            stats: Stats::default(),
+            buf: RefCell::new(Vd::zeros(n, ctx)),
+        };
+        st.start(t0, y0, opts.h0)?;
+        Ok(st)
+    }
+
+    /// Current order of the method: BDF's variable order (1 right after a start or restart),
+    /// the tableau's order for the SDIRK methods.
+    pub fn order(&self) -> usize {
+        self.solver
+            .as_ref()
+            .map_or(0, |solver| with_solver!(solver, s => s.order()))
+    }
+
+    /// The owned problem with the lifetime the solvers need.
+    ///
+    /// # Safety
+    /// The reference must not outlive `self`: it may only be stored in `self.solver`, which
+    /// `Drop` clears before it frees the problem. The problem is never moved or mutated while
+    /// a solver exists.
+    unsafe fn problem_ref(&self) -> &'a Problem<'a, S> {
+        // SAFETY: `problem` comes from `Box::leak` in `new` and is freed only in `Drop`.
+        unsafe { &*self.problem.as_ptr() }
+    }
+
+    /// Builds a fresh diffsol solver at (t, y) with first trial step `h` (or an estimate).
+    fn start(&mut self, t: f64, y: &[f64], h: Option<f64>) -> Result<(), SolveError> {
+        // SAFETY: the reference is stored only in `self.solver` (see `problem_ref`).
+        let problem = unsafe { self.problem_ref() };
+        let ctx = *problem.context();
+        let n = y.len();
+        let yv = Vd::from_slice(y, ctx);
+        let mut dy = Vd::zeros(n, ctx);
+        problem.eqn.rhs.call_inplace(&yv, t, &mut dy);
+        if !dy.inner().as_slice().iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
+        }
+        let empty = || Vd::zeros(0, ctx);
+        let common = StateCommon {
+            y: yv,
+            dy,
+            g: empty(),
+            dg: empty(),
+            s: empty(),
+            ds: empty(),
+            sg: empty(),
+            dsg: empty(),
+            t,
+            h: 1.0,
+        };
+        let order = match self.method {
+            Method::Bdf => 1,
+            Method::Trbdf2 => Tableau::<f64>::tr_bdf2().order(),
+            _ => Tableau::<f64>::esdirk34().order(),
+        };
+        let err = |e: DiffsolError| map_err(e, t, 0.0, y);
+        let solver = match self.method {
+            Method::Bdf => {
+                let mut state = BdfState::<Vd>::new_from_common(common);
+                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Solver::Bdf(Box::new(
+                    Bdf::new(problem, state, Lu::default()).map_err(err)?,
+                ))
+            }
+            m => {
+                let tableau = if m == Method::Trbdf2 {
+                    Tableau::<f64>::tr_bdf2()
+                } else {
+                    Tableau::<f64>::esdirk34()
+                };
+                let mut state = RkState::<Vd>::new_from_common(common);
+                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Solver::Sdirk(Box::new(
+                    Sdirk::new(problem, state, tableau, Lu::default()).map_err(err)?,
+                ))
+            }
+        };
+        self.solver = Some(solver);
+        self.tstop = None;
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        Ok(())
+    }
+
+    fn initial_h<St: OdeSolverState<Vd>>(
+        state: &mut St,
+        h: Option<f64>,
+        problem: &Problem<'a, S>,
+        order: usize,
+        opts: &SolverOptions,
+    ) {
+        match h {
+            Some(h) => *state.as_mut().h = h,
+            None => {
+                // Hairer's estimate, raised to h_min (the estimate is a heuristic; a step
+                // below h_min must come from a rejection to count as a failure).
+                state
+                    .as_mut()
+                    .set_step_size(1.0, &problem.atol, problem.rtol, &problem.eqn, order);
+                let hs = state.as_mut();
+                *hs.h = hs.h.max(opts.h_min);
+            }
+        }
+        let hs = state.as_mut();
+        *hs.h = hs.h.min(opts.h_max);
+    }
+
+    /// Bridges a stop time closer than diffsol's round-off with one explicit Euler step
+    /// y + (t_stop − t) f(t, y) (its error, O((t_stop − t)²), is below round-off) and restarts
+    /// the solver there. The dense output over the sliver is linear.
+    fn sliver_step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        let n = self.y.len();
+        let mut f = vec![0.0; n];
+        // SAFETY: a short-lived shared borrow of the problem, which outlives this call.
+        unsafe { self.problem_ref() }
+            .eqn
+            .rhs
+            .eval(self.t, &self.y, &mut f);
+        let dt = t_stop - self.t;
+        let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
+        if !y_new.iter().all(|v| v.is_finite()) {
+            self.update_stats();
+            return Err(SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            });
+        }
+        let (t_old, y_old, h_last) = (self.t, self.y.clone(), self.h_last);
+        self.restart(t_stop, &y_new)?;
+        self.h_last = h_last;
+        self.t_prev = t_old;
+        self.sliver = Some(y_old);
+        self.base.accepted += 1;
+        self.update_stats();
+        self.stats.record_step_size(dt);
+        Ok(())
+    }
+
+    /// Refreshes the counters from the live solver.
+    fn update_stats(&mut self) {
+        // SAFETY: a short-lived shared borrow of the problem, which outlives `self`'s methods.
+        let counts = unsafe { self.problem_ref() }
+            .eqn
+            .rhs
+            .counts
+            .borrow()
+            .clone();
+        let Some(solver) = self.solver.as_ref() else {
+            return;
+        };
+        let d = with_solver!(solver, s => s.get_statistics().clone());
+        let b = &self.base;
+        let st = &mut self.stats;
+        st.accepted = b.accepted + d.number_of_steps;
+        st.rejected_error = b.rejected_error + d.number_of_error_test_failures;
+        st.rejected_newton = b.rejected_newton + d.number_of_nonlinear_solver_fails;
+        st.steps = st.accepted + st.rejected_error + st.rejected_newton;
+        st.newton_iters = b.newton_iters + d.number_of_nonlinear_solver_iterations;
+        st.lu_factorizations = b.lu_factorizations + d.number_of_linear_solver_setups;
+        st.rhs_evals = counts.rhs_evals;
+        st.jac_evals = counts.jac_evals;
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Drop for DiffsolStepper<'_, S> {
+    fn drop(&mut self) {
+        // The solver borrows the problem: drop it first.
+        self.solver = None;
+        // SAFETY: `problem` was created by `Box::leak` in `new`, is freed only here, and no
+        // reference to it survives (the solver is gone).
+        unsafe { drop(Box::from_raw(self.problem.as_ptr())) };
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
+    fn method(&self) -> Method {
+        self.method
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        if self.stats.steps >= self.opts.max_steps {
+            return Err(SolveError::TooManySteps {
+                t: self.t,
+                steps: self.stats.steps,
+                y: self.y.clone(),
+            });
+        }
+        if !(t_stop > self.t) {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: t_stop - self.t,
+                y: self.y.clone(),
+            });
+        }
+        self.sliver = None;
+        let Some(solver) = self.solver.as_mut() else {
+            return Err(SolveError::NewtonFailure {
+                t: self.t,
+                y: self.y.clone(),
+                reason: "diffsol solver missing after a failed restart".into(),
+            });
+        };
+        let h_now = with_solver!(&*solver, s => s.state().h);
+        let remaining = t_stop - self.t;
+        // diffsol treats a stop time within 100 ε (|t| + |h|) of its time as reached and
+        // cannot step to it: such a sliver is bridged by one explicit Euler step.
+        if remaining <= 200.0 * f64::EPSILON * (self.t.abs() + h_now.abs()) {
+            return self.sliver_step(t_stop);
+        }
+        let h_max = self.opts.h_max;
+        let want = if h_max.is_finite() {
+            match self.tstop {
+                Some(ts) if ts <= t_stop => ts,
+                // Land on t_stop rather than leave a sliver below 10⁻¹⁰ h_max.
+                _ if remaining <= h_max * (1.0 + 1e-10) => t_stop,
+                _ => self.t + h_max,
+            }
+        } else {
+            t_stop
+        };
+        let (t, y) = (self.t, &self.y);
+        let floor = self
+            .opts
+            .h_min
+            .max(16.0 * f64::EPSILON * t.abs())
+            .max(f64::MIN_POSITIVE);
+        if self.tstop != Some(want) {
+            with_solver!(&mut *solver, s => s.set_stop_time(want))
+                .map_err(|e| map_err(e, t, h_now, y))?;
+            self.tstop = Some(want);
+        }
+        with_solver!(&mut *solver, s => {
+            *s.config_mut().as_base_mut().minimum_timestep = floor;
+        });
+        let before = with_solver!(&*solver, s => s.get_statistics().clone());
+        let result = with_solver!(&mut *solver, s => s.step());
+        let (t_new, h_state) = with_solver!(&*solver, s => (s.state().t, s.state().h));
+        let reached = match result {
+            Ok(OdeSolverStopReason::TstopReached) => true,
+            Ok(_) => false,
+            Err(e) => {
+                let after = with_solver!(&*solver, s => s.get_statistics().clone());
+                let newton = after.number_of_nonlinear_solver_fails
+                    - before.number_of_nonlinear_solver_fails;
+                let error_test =
+                    after.number_of_error_test_failures - before.number_of_error_test_failures;
+                self.update_stats();
+                // A step-size failure means the trial step fell below the floor; BDF keeps
+                // it in its state, the SDIRK methods only their starting step.
+                let h_fail = h_state.min(floor);
+                // diffsol shrinks the step after Newton failures too: when they are what
+                // drove the step size down, say so.
+                return Err(match map_err(e, t, h_fail, &self.y) {
+                    SolveError::StepSizeTooSmall { t, h, y }
+                        if newton > 0 && newton >= error_test =>
+                    {
+                        SolveError::NewtonFailure {
+                            t,
+                            y,
+                            reason: format!(
+                                "diffsol: {newton} Newton convergence failures and \
+                                 {error_test} error-test failures drove the step size \
+                                 below {floor:e} (h = {h:e})"
+                            ),
+                        }
+                    }
+                    e => e,
+                });
+            }
+        };
+        let t_new = if reached {
+            self.tstop = None;
+            want
+        } else {
+            t_new
+        };
+        let solver = self.solver.as_ref().expect("solver present");
+        let y_new = with_solver!(solver, s => s.state().y.inner().as_slice().to_vec());
+        if !y_new.iter().all(|v| v.is_finite()) {
+            self.update_stats();
+            return Err(SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            });
+        }
+        self.t_prev = self.t;
+        self.t = t_new;
+        self.y = y_new;
+        let h = self.t - self.t_prev;
+        self.h_last = Some(h);
+        self.update_stats();
+        self.stats.record_step_size(h);
+        Ok(())
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        if t >= self.t || self.t == self.t_prev {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        if let Some(y0) = &self.sliver {
+            // The Euler sliver: linear.
+            let th = ((t - self.t_prev) / (self.t - self.t_prev)).max(0.0);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = y0[i] + th * (self.y[i] - y0[i]);
+            }
+            return;
+        }
+        let Some(solver) = self.solver.as_ref() else {
+            out.copy_from_slice(&self.y);
+            return;
+        };
+        let mut buf = self.buf.borrow_mut();
+        // diffsol's own end time may differ from ours by rounding when a stop time was hit.
+        let t_end = with_solver!(solver, s => s.state().t);
+        let tq = t.max(self.t_prev).min(t_end);
+        match with_solver!(solver, s => s.interpolate_inplace(tq, &mut buf)) {
+            Ok(()) => out.copy_from_slice(buf.inner().as_slice()),
+            // Unreachable for t in [t_prev, t]; the end state is the safe answer.
+            Err(_) => out.copy_from_slice(&self.y),
+        }
+    }
+
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.sliver = None;
+        self.update_stats();
+        self.base = self.stats.clone();
+        let h = self.h_last.map(|h| h.min(self.opts.h_max));
+        self.start(t, y, h)?;
+        self.update_stats();
+        Ok(())
+    }
+
+    fn stats(&self) -> &Stats {
+        &self.stats
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testset::Orego;
+    use diffsol::MatrixCommon;
+
+    /// Orego without its Jacobian (finite differences).
+    struct OregoFd;
+    impl OdeSystem for OregoFd {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+            Orego.rhs(t, y, dy);
+        }
+    }
+
+    fn rhs_op<S: OdeSystem + ?Sized>(sys: &S) -> SysRhs<'_, S> {
+        let n = sys.dim();
+        SysRhs {
+            sys,
+            n,
+            ctx: Cx::default(),
+            jac_eval: RefCell::new(JacobianEvaluator::new(vec![1.0; n])),
+            work: RefCell::new((
+                vec![0.0; n],
+                vec![0.0; n],
+                vec![0.0; n],
+                faer::Mat::zeros(n, n),
+            )),
+            counts: RefCell::new(Stats::default()),
+        }
+    }
+
+    /// J v from the product and column j of the dense Jacobian agree with the analytic
+    /// Jacobian, for the system's Jacobian and for finite differences.
+    #[test]
+    fn jacobian_products_and_dense_jacobians_agree() {
+        let ctx = Cx::default();
+        let y = [2.0, 300.0, 40.0];
+        let v = [0.3, -1.0, 2.0];
+        let mut exact = faer::Mat::<f64>::zeros(3, 3);
+        Orego.jacobian(0.0, &y, exact.as_mut());
+        let jv: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|j| exact[(i, j)] * v[j]).sum())
+            .collect();
+        let (yv, vv) = (Vd::from_slice(&y, ctx), Vd::from_slice(&v, ctx));
+        for fd in [false, true] {
+            let mut out = Vd::zeros(3, ctx);
+            let mut dense = <Md as Matrix>::zeros(3, 3, ctx);
+            let (prod, jac) = if fd {
+                let op = rhs_op(&OregoFd);
+                op.jac_mul_inplace(&yv, 0.0, &vv, &mut out);
+                op.jacobian_inplace(&yv, 0.0, &mut dense);
+                // one product: f(y) and f(y + εv); one Jacobian: f(y) and 3 columns
+                assert_eq!(op.counts.borrow().rhs_evals, 2 + 4);
+                assert_eq!(op.counts.borrow().jac_evals, 1);
+                (
+                    out.inner().as_slice().to_vec(),
+                    dense.inner().as_slice().to_vec(),
+                )
+            } else {
+                let op = rhs_op(&Orego);
+                op.jac_mul_inplace(&yv, 0.0, &vv, &mut out);
+                op.jacobian_inplace(&yv, 0.0, &mut dense);
+                assert_eq!(op.counts.borrow().rhs_evals, 0);
+                assert_eq!(op.counts.borrow().jac_evals, 2);
+                (
+                    out.inner().as_slice().to_vec(),
+                    dense.inner().as_slice().to_vec(),
+                )
+            };
+            // Forward differences: relative error ~√ε·(curvature) ≲ 1e-6 of the row scale.
+            let tol = if fd { 1e-5 } else { 1e-12 };
+            for i in 0..3 {
+                let scale = jv[i].abs().max(77.27 * 300.0 * 1e-3);
+                assert!((prod[i] - jv[i]).abs() < tol * scale, "fd {fd}: J v [{i}]");
+                for j in 0..3 {
+                    let e = exact[(i, j)];
+                    // column-major dense storage
+                    let d = jac[i + 3 * j];
+                    assert!(
+                        (d - e).abs() < tol * e.abs().max(1.0),
+                        "fd {fd}: J[{i},{j}] {d} vs {e}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,740 @@
+//! Rodas5P: a stiffly accurate Rosenbrock–Wanner method of order 5 with an embedded order-4
+//! solution and an order-4 continuous extension (Steinebach 2023).
+//!
+//! ```text
+//! W = I/(hγ) − J,   J = ∂f/∂y(t_n, y_n),   f_t = ∂f/∂t(t_n, y_n)
+//! stage i = 1..8:
+//!   U_i   = y_n + Σ_{j<i} a_ij k_j
+//!   W k_i = f(t_n + c_i h, U_i) + d_i h f_t + Σ_{j<i} (C_ij / h) k_j
+//! y_{n+1} = U_8 + k_8            (a_8j = a_7j + δ_j7 = a_6j + δ_j6 + δ_j7: stiffly accurate)
+//! ŷ_{n+1} = U_8                  (embedded, order 4); error estimate ‖k_8‖
+//! dense:  y(t_n + θh) = (1−θ) y_n + θ (y_{n+1} + (1−θ)(K_1 + θ (K_2 + θ K_3))),
+//!         K_r = Σ_j H_rj k_j
+//! ```
+//!
+//! This is the transformed form of HNW II, §IV.7, (7.25)–(7.26) (variables k_i = u_i there), in
+//! which every stage needs one right-hand side and one solve with the same LU factors of W.
+//! Coefficients: G. Steinebach, "Construction of Rosenbrock–Wanner method Rodas5P and
+//! numerical benchmarks within the Julia Differential Equations package", BIT Numer. Math. 63,
+//! 27 (2023), as tabulated in OrdinaryDiffEq.jl's `Rodas5PTableau` (γ, a, C, c, d and the dense
+//! output matrix H). The test `tableau_is_consistent` checks their redundant data (c_i and d_i
+//! recomputed from a and C) and the order conditions up to order 4.
+//!
+//! Derivatives: J is the system's Jacobian, or forward differences with increments floored
+//! at atol_i/rtol ([`crate::jacobian`]). f_t is a forward difference in t, skipped (f_t = 0)
+//! when [`OdeSystem::is_autonomous`] says so; the order of the method needs the exact J
+//! (a Rosenbrock method is not a W-method), so difference errors (~10⁻⁸ relative) show up
+//! only below that level. W is factored in place by faer's LU with partial pivoting.
+//!
+//! Cost per step: one Jacobian (analytic, or n RHS evaluations by differences), one RHS for
+//! f(t_n, y_n), one for ∂f/∂t by differences unless the system is autonomous; per attempt one
+//! LU factorisation of W, 7 RHS evaluations and 8 triangular solves. A rejected attempt reuses
+//! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
+//! h0 on every step, the error estimate ignored.
+//!
+//! Step size: only through [`StepSizeControl`] (default controller Gustafsson's predictive
+//! one, any [`crate::ControllerKind`] accepted), with error order p̂ = 4. A singular W (a zero
+//! or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4; non-finite
+//! stages reject it as an error-test failure with ε = ∞. When h falls below
+//! max(h_min, 16 ε |t|) the step fails with `NewtonFailure` (the last failure was a singular
+//! W), `NonFiniteState` (non-finite stages) or `StepSizeTooSmall`. A one-step method has no
+//! history: `restart` resets the controller and starts again from the last accepted step size.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
+
+use crate::controller::StepSizeControl;
+use crate::controller::{ControllerKind, StepLimits};
+use crate::error::SolveError;
+use crate::jacobian::JacobianEvaluator;
+use crate::options::{Method, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::{error_norm, initial_step, Stepper};
+use crate::system::OdeSystem;
+
+/// Number of stages.
+const S: usize = 8;
+
+/// γ, the diagonal of the Rosenbrock matrix Γ (Steinebach 2023; OrdinaryDiffEq.jl
+/// `Rodas5PTableau`).
+pub const GAMMA: f64 = 0.21193756319429014;
+
+/// Stage coefficients a_ij of the transformed form, rows 7 and 8 written out
+/// (a_7j = a_6j + δ_j6, a_8j = a_7j + δ_j7). Source: OrdinaryDiffEq.jl `Rodas5PTableau`
+/// (a21 … a65), Steinebach 2023.
+pub const A: [[f64; S]; S] = {
+    const R6: [f64; 5] = [
+        -7.502846399306121,
+        2.561846144803919,
+        -11.627539656261098,
+        -0.18268767659942256,
+        0.030198172008377946,
+    ];
+    [
+        [0.0; S],
+        [3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            2.849394379747939,
+            0.45842242204463923,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            -6.954028509809101,
+            2.489845061869568,
+            -10.358996098473584,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            2.8029986275628964,
+            0.5072464736228206,
+            -0.3988312541770524,
+            -0.04721187230404641,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 0.0, 0.0, 0.0],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 1.0, 0.0, 0.0],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 1.0, 1.0, 0.0],
+    ]
+};
+
+/// Weights m_j of the solution y_{n+1} = y_n + Σ m_j k_j (= row 8 of [`A`] plus δ_j8).
+pub const M: [f64; S] = [A[7][0], A[7][1], A[7][2], A[7][3], A[7][4], 1.0, 1.0, 1.0];
+
+/// Coupling coefficients C_ij of the transformed form (C = diag(1/γ) − Γ⁻¹). Source:
+/// OrdinaryDiffEq.jl `Rodas5PTableau` (C21 … C87), Steinebach 2023.
+pub const C: [[f64; S]; S] = [
+    [0.0; S],
+    [-14.155112264123755, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [
+        -17.97296035885952,
+        -2.859693295451294,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        147.12150275711716,
+        -1.41221402718213,
+        71.68940251302358,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        165.43517024871676,
+        -0.4592823456491126,
+        42.90938336958603,
+        -5.961986721573306,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        24.854864614690072,
+        -3.0009227002832186,
+        47.4931110020768,
+        5.5814197821558125,
+        -0.6610691825249471,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        30.91273214028599,
+        -3.1208243349937974,
+        77.79954646070892,
+        34.28646028294783,
+        -19.097331116725623,
+        -28.087943162872662,
+        0.0,
+        0.0,
+    ],
+    [
+        37.80277123390563,
+        -3.2571969029072276,
+        112.26918849496327,
+        66.9347231244047,
+        -40.06618937091002,
+        -54.66780262877968,
+        -9.48861652309627,
+        0.0,
+    ],
+];
+
+/// Stage times c_i (c_1 = 0; stages 6–8 at t_n + h). Source: OrdinaryDiffEq.jl
+/// `Rodas5PTableau` (c2 … c5).
+pub const C_TIME: [f64; S] = [
+    0.0,
+    0.6358126895828704,
+    0.4095798393397535,
+    0.9769306725060716,
+    0.4288403609558664,
+    1.0,
+    1.0,
+    1.0,
+];
+
+/// Time-derivative coefficients d_i = Σ_j γ_ij (zero for stages 6–8). Source:
+/// OrdinaryDiffEq.jl `Rodas5PTableau` (d1 … d5).
+pub const D: [f64; S] = [
+    0.21193756319429014,
+    -0.42387512638858027,
+    -0.3384627126235924,
+    1.8046452872882734,
+    2.325825639765069,
+    0.0,
+    0.0,
+    0.0,
+];
+
+/// Dense-output coefficients H_rj, K_r = Σ_j H_rj k_j (rows h2·, h3·, h4· of
+/// OrdinaryDiffEq.jl `Rodas5PTableau`, Steinebach 2023).
+pub const H: [[f64; S]; 3] = [
+    [
+        25.948786856663858,
+        -2.5579724845846235,
+        10.433815404888879,
+        -2.3679251022685204,
+        0.524948541321073,
+        1.1241088310450404,
+        0.4272876194431874,
+        -0.17202221070155493,
+    ],
+    [
+        -9.91568850695171,
+        -0.9689944594115154,
+        3.0438037242978453,
+        -24.495224566215796,
+        20.176138334709044,
+        15.98066361424651,
+        -6.789040303419874,
+        -6.710236069923372,
+    ],
+    [
+        11.419903575922262,
+        2.8879645146136994,
+        72.92137995996029,
+        80.12511834622643,
+        -52.072871366152654,
+        -59.78993625266729,
+        -0.15582684282751913,
+        4.883087185713722,
+    ],
+];
+
+/// Order of the embedded error estimate (the controller's p̂).
+const P_HAT: usize = 4;
+
+/// Dense LU factors with partial pivoting (faer), kept between steps: P W = L U in place,
+/// with preallocated permutation and scratch buffers (no allocation per step).
+struct DenseLu {
+    lu: Mat<f64>,
+    fwd: Vec<usize>,
+    bwd: Vec<usize>,
+    mem: MemBuffer,
+}
+
+impl DenseLu {
+    fn new(n: usize) -> Self {
+        let req = factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq));
+        DenseLu {
+            lu: Mat::zeros(n, n),
+            fwd: vec![0; n],
+            bwd: vec![0; n],
+            mem: MemBuffer::new(req),
+        }
+    }
+
+    /// Factors the matrix held in `self.lu`; false when a pivot is zero or not finite.
+    fn factor(&mut self) -> bool {
+        factor::lu_in_place(
+            self.lu.as_mut(),
+            &mut self.fwd,
+            &mut self.bwd,
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        (0..self.lu.nrows()).all(|i| {
+            let p = self.lu[(i, i)];
+            p != 0.0 && p.is_finite()
+        })
+    }
+
+    /// Solves W x = b in place (b in `x`).
+    fn solve(&mut self, x: &mut [f64]) {
+        let n = x.len();
+        let perm = PermRef::new_checked(&self.fwd, &self.bwd, n);
+        solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            MatMut::from_column_major_slice_mut(x, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+    }
+}
+
+/// Why the last attempt was rejected (decides the error when h underflows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Failure {
+    None,
+    Error,
+    Singular,
+    NonFinite,
+}
+
+/// Our own Rosenbrock stepper, Rodas5P.
+///
+/// ```text
+/// (I/(hγ) − J) k_i = f(t + c_i h, y + Σ a_ij k_j) + d_i h f_t + Σ (C_ij/h) k_j,  i = 1..8
+/// y_{n+1} = y_n + Σ m_i k_i,  error ‖k_8‖,  order 5(4)
+/// ```
+/// Steinebach 2023 (BIT 63:27); see the module documentation for the tableau's source, the
+/// dense output and the failure handling.
+pub struct Rodas5p<'a, Sy: OdeSystem + ?Sized> {
+    sys: &'a Sy,
+    opts: SolverOptions,
+    autonomous: bool,
+    control: StepSizeControl,
+    t: f64,
+    t_prev: f64,
+    y: Vec<f64>,
+    y_prev: Vec<f64>,
+    /// Next trial step (None: estimate it at the next step).
+    h: Option<f64>,
+    /// Last accepted step size (for restarts).
+    h_last: Option<f64>,
+    /// f(t, y), J, f_t are valid for the current (t, y).
+    prepared: bool,
+    f0: Vec<f64>,
+    dfdt: Vec<f64>,
+    jac: Mat<f64>,
+    w: DenseLu,
+    jac_eval: JacobianEvaluator,
+    k: Vec<Vec<f64>>,
+    dense: [Vec<f64>; 3],
+    u: Vec<f64>,
+    fu: Vec<f64>,
+    y_new: Vec<f64>,
+    stats: Stats,
+}
+
+impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
+    /// Builds the stepper at (t0, y0). Options must be validated; `opts.controller` defaults
+    /// to Gustafsson's. Nothing is evaluated before the first step.
+    pub fn new(sys: &'a Sy, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
+        let n = y0.len();
+        if n != sys.dim() {
+            return Err(SolveError::InvalidOptions(format!(
+                "y0 has {n} entries, the system {}",
+                sys.dim()
+            )));
+        }
+        let kind = opts.controller.unwrap_or(ControllerKind::Gustafsson);
+        let limits: StepLimits = opts.limits.clone();
+        let control = StepSizeControl::new(Box::new(kind.build()), limits);
+        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        Ok(Rodas5p {
+            sys,
+            opts: opts.clone(),
+            autonomous: sys.is_autonomous(),
+            control,
+            t: t0,
+            t_prev: t0,
+            y: y0.to_vec(),
+            y_prev: y0.to_vec(),
+            h: None,
+            h_last: None,
+            prepared: false,
+            f0: vec![0.0; n],
+            dfdt: vec![0.0; n],
+            jac: Mat::zeros(n, n),
+            w: DenseLu::new(n),
+            jac_eval: JacobianEvaluator::new(scale),
+            k: vec![vec![0.0; n]; S],
+            dense: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+            u: vec![0.0; n],
+            fu: vec![0.0; n],
+            y_new: vec![0.0; n],
+            stats: Stats::default(),
+        })
+    }
+
+    /// Evaluates f(t, y), J and f_t at the current state.
+    fn prepare(&mut self) -> Result<(), SolveError> {
+        let (sys, t) = (self.sys, self.t);
+        sys.rhs(t, &self.y, &mut self.f0);
+        self.stats.rhs_evals += 1;
+        if !self.f0.iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFiniteState {
+                t,
+                y: self.y.clone(),
+            });
+        }
+        self.jac_eval.jacobian(
+            sys,
+            t,
+            &self.y,
+            &self.f0,
+            self.jac.as_mut(),
+            &mut self.stats,
+        );
+        if self.autonomous {
+            self.dfdt.fill(0.0);
+        } else {
+            self.jac_eval.time_derivative(
+                sys,
+                t,
+                &self.y,
+                &self.f0,
+                &mut self.dfdt,
+                &mut self.stats,
+            );
+        }
+        self.prepared = true;
+        Ok(())
+    }
+
+    /// One attempt with step h: fills `k`, `y_new`. Returns the failure kind or the scaled
+    /// error norm.
+    fn attempt(&mut self, h: f64) -> Result<f64, Failure> {
+        let n = self.y.len();
+        // W = I/(hγ) − J
+        let diag = 1.0 / (h * GAMMA);
+        for j in 0..n {
+            for i in 0..n {
+                self.w.lu[(i, j)] = -self.jac[(i, j)];
+            }
+            self.w.lu[(j, j)] += diag;
+        }
+        self.stats.lu_factorizations += 1;
+        if !self.w.factor() {
+            return Err(Failure::Singular);
+        }
+        let (sys, t) = (self.sys, self.t);
+        for i in 0..S {
+            // Stage value and its right-hand side.
+            if i == 0 {
+                self.fu.copy_from_slice(&self.f0);
+            } else {
+                self.u.copy_from_slice(&self.y);
+                for j in 0..i {
+                    let a = A[i][j];
+                    if a != 0.0 {
+                        let kj = &self.k[j];
+                        for (ul, kl) in self.u.iter_mut().zip(kj) {
+                            *ul += a * kl;
+                        }
+                    }
+                }
+                sys.rhs(t + C_TIME[i] * h, &self.u, &mut self.fu);
+                self.stats.rhs_evals += 1;
+            }
+            let (done, rest) = self.k.split_at_mut(i);
+            let ki = &mut rest[0];
+            let dh = D[i] * h;
+            for l in 0..n {
+                let mut v = self.fu[l] + dh * self.dfdt[l];
+                for (j, kj) in done.iter().enumerate() {
+                    v += C[i][j] / h * kj[l];
+                }
+                ki[l] = v;
+            }
+            self.w.solve(ki);
+            if !ki.iter().all(|v| v.is_finite()) {
+                return Err(Failure::NonFinite);
+            }
+        }
+        for l in 0..n {
+            let mut v = self.y[l];
+            for j in 0..S {
+                v += M[j] * self.k[j][l];
+            }
+            self.y_new[l] = v;
+        }
+        Ok(error_norm(&self.k[S - 1], &self.y, &self.y_new, &self.opts))
+    }
+
+    fn underflow_error(&self, h: f64, last: Failure) -> SolveError {
+        match last {
+            Failure::Singular => SolveError::NewtonFailure {
+                t: self.t,
+                y: self.y.clone(),
+                reason: format!("W = I/(hγ) − J is singular for every step size down to {h:e}"),
+            },
+            Failure::NonFinite => SolveError::NonFiniteState {
+                t: self.t,
+                y: self.y.clone(),
+            },
+            Failure::None | Failure::Error => SolveError::StepSizeTooSmall {
+                t: self.t,
+                h,
+                y: self.y.clone(),
+            },
+        }
+    }
+}
+
+impl<Sy: OdeSystem + ?Sized> Stepper for Rodas5p<'_, Sy> {
+    fn method(&self) -> Method {
+        Method::Rodas5p
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        let remaining = t_stop - self.t;
+        if !(remaining > 0.0) {
+            return Err(SolveError::StepSizeTooSmall {
+                t: self.t,
+                h: remaining,
+                y: self.y.clone(),
+            });
+        }
+        if !self.prepared {
+            self.prepare()?;
+        }
+        let adaptive = self.opts.adaptive;
+        let mut h = if !adaptive {
+            self.opts.h0.unwrap_or(remaining)
+        } else if let Some(h) = self.h {
+            h
+        } else if let Some(h0) = self.opts.h0 {
+            h0
+        } else {
+            let h = initial_step(
+                self.sys, self.t, &self.y, &self.f0, P_HAT, &self.opts, t_stop,
+            );
+            self.stats.rhs_evals += 1;
+            // Hairer's estimate is a heuristic: raise it to h_min (only a rejection below
+            // h_min is a failure).
+            h.max(self.opts.h_min)
+        };
+        h = h.min(self.opts.h_max);
+        let mut last = Failure::None;
+        loop {
+            if self.stats.steps >= self.opts.max_steps {
+                return Err(SolveError::TooManySteps {
+                    t: self.t,
+                    steps: self.stats.steps,
+                    y: self.y.clone(),
+                });
+            }
+            // Land exactly on t_stop when the step would reach it or leave a sliver below
+            // 10⁻¹⁰ h (the rule of the RK4 stepper).
+            let lands = remaining <= h * (1.0 + 1e-10);
+            let h_try = if lands { remaining } else { h };
+            let floor = self.opts.h_min.max(16.0 * f64::EPSILON * self.t.abs());
+            if !lands && h_try < floor || !(h_try > 0.0) {
+                return Err(self.underflow_error(h_try, last));
+            }
+            self.stats.steps += 1;
+            match self.attempt(h_try) {
+                Ok(err) if err <= 1.0 || !adaptive => {
+                    if !adaptive && !err.is_finite() {
+                        return Err(SolveError::NonFiniteState {
+                            t: self.t,
+                            y: self.y.clone(),
+                        });
+                    }
+                    self.t_prev = self.t;
+                    self.t = if lands { t_stop } else { self.t + h_try };
+                    std::mem::swap(&mut self.y_prev, &mut self.y);
+                    std::mem::swap(&mut self.y, &mut self.y_new);
+                    for (r, dr) in self.dense.iter_mut().enumerate() {
+                        for l in 0..dr.len() {
+                            let mut v = 0.0;
+                            for j in 0..S {
+                                v += H[r][j] * self.k[j][l];
+                            }
+                            dr[l] = v;
+                        }
+                    }
+                    self.stats.accepted += 1;
+                    self.stats.record_step_size(h_try);
+                    self.h_last = Some(h_try);
+                    if adaptive {
+                        let next = self.control.accept(h_try, err, P_HAT);
+                        self.h = Some(next.min(self.opts.h_max));
+                    }
+                    self.prepared = false;
+                    return Ok(());
+                }
+                Ok(err) => {
+                    self.stats.rejected_error += 1;
+                    last = if err.is_finite() {
+                        Failure::Error
+                    } else {
+                        Failure::NonFinite
+                    };
+                    h = self.control.reject(h_try, err, P_HAT);
+                }
+                Err(Failure::Singular) => {
+                    self.stats.rejected_newton += 1;
+                    if !adaptive {
+                        return Err(self.underflow_error(h_try, Failure::Singular));
+                    }
+                    last = Failure::Singular;
+                    h = self.control.reject_newton(h_try);
+                }
+                Err(f) => {
+                    if !adaptive {
+                        return Err(self.underflow_error(h_try, Failure::NonFinite));
+                    }
+                    self.stats.rejected_error += 1;
+                    last = f;
+                    h = self.control.reject(h_try, f64::INFINITY, P_HAT);
+                }
+            }
+        }
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let h = self.t - self.t_prev;
+        if h == 0.0 {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        let th = (t - self.t_prev) / h;
+        let th1 = 1.0 - th;
+        let [k1, k2, k3] = &self.dense;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o =
+                th1 * self.y_prev[i] + th * (self.y[i] + th1 * (k1[i] + th * (k2[i] + th * k3[i])));
+        }
+    }
+
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        self.y_prev.copy_from_slice(y);
+        self.control.reset();
+        self.prepared = false;
+        self.h = self.h_last.map(|h| h.min(self.opts.h_max));
+        Ok(())
+    }
+
+    fn stats(&self) -> &Stats {
+        &self.stats
+    }
+    fn stats_mut(&mut self) -> &mut Stats {
+        &mut self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Γ from C = diag(1/γ) − Γ⁻¹ (lower triangular inverse), α = a Γ.
+    fn gamma_alpha() -> ([[f64; S]; S], [[f64; S]; S]) {
+        let mut gi = [[0.0; S]; S];
+        for i in 0..S {
+            for j in 0..S {
+                gi[i][j] = if i == j { 1.0 / GAMMA } else { -C[i][j] };
+            }
+        }
+        let mut g = [[0.0; S]; S];
+        for j in 0..S {
+            for i in j..S {
+                let mut s = if i == j { 1.0 } else { 0.0 };
+                for k in j..i {
+                    s -= gi[i][k] * g[k][j];
+                }
+                g[i][j] = s / gi[i][i];
+            }
+        }
+        let mut alpha = [[0.0; S]; S];
+        for i in 0..S {
+            for j in 0..S {
+                alpha[i][j] = (0..S).map(|k| A[i][k] * g[k][j]).sum();
+            }
+        }
+        (g, alpha)
+    }
+
+    #[test]
+    fn tableau_is_consistent() {
+        let (g, alpha) = gamma_alpha();
+        for i in 0..S {
+            let ci: f64 = alpha[i].iter().sum();
+            let di: f64 = g[i].iter().sum();
+            assert!(
+                (ci - C_TIME[i]).abs() < 1e-13,
+                "c_{i}: {ci} vs {}",
+                C_TIME[i]
+            );
+            assert!((di - D[i]).abs() < 1e-13, "d_{i}: {di} vs {}", D[i]);
+        }
+        // Weights of the original form: b = m Γ (solution), b̂ = m̂ Γ (embedded, k_8 dropped).
+        let b: Vec<f64> = (0..S)
+            .map(|j| (0..S).map(|k| M[k] * g[k][j]).sum())
+            .collect();
+        let mut m_hat = M;
+        m_hat[S - 1] = 0.0;
+        let bh: Vec<f64> = (0..S)
+            .map(|j| (0..S).map(|k| m_hat[k] * g[k][j]).sum())
+            .collect();
+        let beta = |i: usize, j: usize| alpha[i][j] + g[i][j];
+        let bp: Vec<f64> = (0..S).map(|i| (0..i).map(|j| beta(i, j)).sum()).collect();
+        let al: Vec<f64> = (0..S).map(|i| alpha[i].iter().sum()).collect();
+        let gm = GAMMA;
+        // HNW II, Table IV.7.1: order conditions of Rosenbrock methods up to order 4 (first
+        // three trees of order 4 shown with the bushy one).
+        let dot = |w: &[f64], v: &dyn Fn(usize) -> f64| (0..S).map(|i| w[i] * v(i)).sum::<f64>();
+        for (w, name) in [(&b, "b"), (&bh, "b̂")] {
+            assert!(
+                (w.iter().sum::<f64>() - 1.0).abs() < 1e-13,
+                "{name}: order 1"
+            );
+            assert!(
+                (dot(w, &|i| bp[i]) - (0.5 - gm)).abs() < 1e-13,
+                "{name}: order 2"
+            );
+            assert!(
+                (dot(w, &|i| al[i] * al[i]) - 1.0 / 3.0).abs() < 1e-12,
+                "{name}: 3a"
+            );
+            let bb = dot(w, &|i| (0..i).map(|j| beta(i, j) * bp[j]).sum());
+            assert!(
+                (bb - (1.0 / 6.0 - gm + gm * gm)).abs() < 1e-12,
+                "{name}: 3b"
+            );
+            assert!(
+                (dot(w, &|i| al[i].powi(3)) - 0.25).abs() < 1e-12,
+                "{name}: 4a"
+            );
+        }
+    }
+}
