@@ -1,0 +1,25 @@
+//! # lash-validation
+//!
+//! The `lash` command: cases, the paper's study, comparisons, work–precision, sweeps, figures.
+//!
+//! ```text
+//! CASE ──case──▶ scene ──model──▶ OdeSystem ──solver──▶ samples on the grid, events, stats
+//!      ──metrics──▶ summary.json ──io──▶ --out (atomic)      trajectory.csv, figures (plot)
+//! SWEEP.json ──sweep──▶ points × runner ──▶ one result.json per point ──merge──▶ table
+//! ```
+//!
+//! Modules: [`cli`] (arguments), [`app`] (dispatch), [`error`] (exit codes), [`io`] (atomic
+//! writes), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
+//! (trajectory.csv), [`ideal`] (closed-form slider-crank), [`metrics`] (last-revolution
+//! metrics), [`plot`] (SVG + PNG figures), [`sweep`] (grids, shards, resume, merge).
+
+#![warn(missing_docs)]
+
+pub mod app;
+pub mod case;
+pub mod cli;
+pub mod error;
+pub mod io;
+pub mod sweep;
+
+pub use error::Error;
