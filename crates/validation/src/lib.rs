@@ -19,7 +19,11 @@ pub mod app;
 pub mod case;
 pub mod cli;
 pub mod error;
+pub mod ideal;
 pub mod io;
+pub mod metrics;
+pub mod summary;
 pub mod sweep;
+pub mod trajectory;
 
 pub use error::Error;
