@@ -22,6 +22,7 @@ pub mod error;
 pub mod ideal;
 pub mod io;
 pub mod metrics;
+pub mod plot;
 pub mod summary;
 pub mod sweep;
 pub mod trajectory;
