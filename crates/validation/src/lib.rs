@@ -23,6 +23,7 @@ pub mod ideal;
 pub mod io;
 pub mod metrics;
 pub mod plot;
+pub mod report;
 pub mod summary;
 pub mod sweep;
 pub mod trajectory;
