@@ -84,7 +84,9 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
         None => (w.iter().map(|s| s.t).collect(), "time t, s"),
     };
     type Get = fn(&Sample) -> Option<f64>;
-    let slider: [(&str, &str, &str, Get, fn(&IdealSliderCrank, f64) -> f64); 3] = [
+    type IdealFn = fn(&IdealSliderCrank, f64) -> f64;
+    type SliderFigure<'s> = (&'s str, &'s str, &'s str, Get, IdealFn);
+    let slider: [SliderFigure<'_>; 3] = [
         (
             "slider_x",
             "Slider position",
