@@ -10,14 +10,15 @@
 //! [`Error::NotYetAvailable`].
 
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 
 use lash_solver::SolverOptions;
 
 use crate::case::Case;
-use crate::cli::{self, Command, Parsed, StudyArgs, StudyName};
+use crate::cli::{self, Command, Parsed, StudyArgs, StudyName, SweepArgs};
 use crate::error::{Error, EXIT_OK};
-use crate::sweep;
+use crate::sweep::{self, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
 pub fn main_with<I, T>(args: I) -> u8
@@ -103,4 +104,96 @@ pub fn default_out(command: &str, name: &str) -> PathBuf {
     PathBuf::from("out")
         .join(command)
         .join(name.replace(':', "_"))
+}
+
+/// `lash sweep` with a point runner: loads and checks the sweep file, runs the shard's
+/// unfinished points in parallel (`--jobs`), a progress bar when standard error is a terminal,
+/// and prints one line of counts. The output directory defaults to `out/sweep/STEM`.
+pub fn sweep_command<F>(a: &SweepArgs, runner: F) -> Result<SweepReport, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let spec = sweep::SweepSpec::load(&a.file)?;
+    let points = spec.points()?;
+    let out = a.out.clone().unwrap_or_else(|| {
+        let stem = a
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sweep".into());
+        default_out("sweep", &stem)
+    });
+    let opts = SweepOptions {
+        jobs: a.jobs,
+        shard: a.shard.unwrap_or(Shard::ALL),
+        progress: std::io::stderr().is_terminal(),
+    };
+    let report = sweep::run_sweep(&points, &out, &opts, runner)?.into_result()?;
+    eprintln!(
+        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
+        opts.shard,
+        points.len(),
+        report.ok,
+        report.solver_failed,
+        report.skipped,
+        out.display()
+    );
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::MergeArgs;
+
+    #[test]
+    fn sweep_shards_then_merge_through_the_commands() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("base.json"), b"{}").unwrap();
+        let file = d.path().join("grid.json");
+        std::fs::write(
+            &file,
+            br#"{"case": "base.json", "speed_rpm": [120, 150, 180], "clearance": [1e-4, 2e-4]}"#,
+        )
+        .unwrap();
+        let out = d.path().join("res");
+        let runner = |p: &SweepPoint, _: &Path| {
+            Ok(PointResult::flatten(&serde_json::json!({
+                "x": p.params.speed_rpm.unwrap() * p.params.clearance.unwrap()
+            })))
+        };
+        for i in 0..2 {
+            let a = SweepArgs {
+                file: file.clone(),
+                jobs: Some(2),
+                shard: Some(Shard { index: i, count: 2 }),
+                out: Some(out.clone()),
+            };
+            let r = sweep_command(&a, runner).unwrap();
+            assert_eq!((r.selected, r.ok), (3, 3));
+        }
+        execute(Some(Command::Merge(MergeArgs {
+            dirs: vec![out.clone()],
+            out: None,
+        })))
+        .unwrap();
+        let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows.len(), 7);
+        assert!(
+            rows[0].ends_with(",speed_rpm,clearance,status,error,x"),
+            "{}",
+            rows[0]
+        );
+        // Point 0 = 120 rpm × 1e-4 m.
+        assert!(rows[1].ends_with(",120.0,0.0001,ok,,0.012"), "{}", rows[1]);
+    }
+
+    #[test]
+    fn default_out_is_per_command_and_case() {
+        assert_eq!(
+            default_out("run", "testset:hires"),
+            PathBuf::from("out/run/testset_hires")
+        );
+    }
 }
