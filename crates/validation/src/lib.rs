@@ -11,7 +11,8 @@
 //! Modules: [`cli`] (arguments), [`app`] (dispatch), [`error`] (exit codes), [`io`] (atomic
 //! writes), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
 //! (trajectory.csv), [`ideal`] (closed-form slider-crank), [`metrics`] (last-revolution
-//! metrics), [`plot`] (SVG + PNG figures), [`sweep`] (grids, shards, resume, merge).
+//! metrics), [`plot`] (SVG + PNG figures), [`report`] (the files of one run), [`sweep`]
+//! (grids, shards, resume, merge), [`workprecision`] (error against cost, cheapest runs).
 
 #![warn(missing_docs)]
 
@@ -27,5 +28,6 @@ pub mod report;
 pub mod summary;
 pub mod sweep;
 pub mod trajectory;
+pub mod workprecision;
 
 pub use error::Error;
