@@ -24,6 +24,12 @@ pub const BUILTIN_PREFIX: &str = "testset:";
 pub const BUILTIN_NAMES: &[&str] = &[];
 
 /// Where a case comes from.
+///
+/// ```text
+/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME)
+/// ```
+///
+/// Source: INTERFACES.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum CaseSource {
     /// A scene file.

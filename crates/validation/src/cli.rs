@@ -39,6 +39,7 @@ pub const RTOL_MIN: f64 = 1e-14;
 #[command(
     name = "lash",
     version,
+    long_about = None,
     about = "Planar mechanisms with revolute clearance joints: runs, studies, comparisons, work-precision, sweeps"
 )]
 pub struct Cli {
@@ -48,6 +49,12 @@ pub struct Cli {
 }
 
 /// The subcommands.
+///
+/// ```text
+/// run | study | compare | work-precision | sweep | merge
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run one case: DIR/summary.json, DIR/trajectory.csv and figures.
@@ -65,6 +72,13 @@ pub enum Command {
 }
 
 /// The solver flags of `lash run`.
+///
+/// ```text
+/// [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
+/// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only
+/// ```
+///
+/// Source: INTERFACES.md (method and controller names).
 #[derive(Debug, Clone, Default, PartialEq, Args)]
 pub struct SolverFlags {
     /// Integration method (rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p).
@@ -151,6 +165,12 @@ impl SolverFlags {
 }
 
 /// Arguments of `lash run`.
+///
+/// ```text
+/// lash run CASE [solver flags] [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct RunArgs {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -164,6 +184,12 @@ pub struct RunArgs {
 }
 
 /// The studies `lash study` knows.
+///
+/// ```text
+/// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
+/// ```
+///
+/// Source: MODEL.md §6.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StudyName {
     /// The paper's case study: speeds and clearances, dry and lubricated.
@@ -171,6 +197,12 @@ pub enum StudyName {
 }
 
 /// Arguments of `lash study`.
+///
+/// ```text
+/// lash study NAME [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct StudyArgs {
     /// Which study.
@@ -182,6 +214,12 @@ pub struct StudyArgs {
 }
 
 /// Arguments of `lash compare`.
+///
+/// ```text
+/// lash compare CASE [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct CompareArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -192,6 +230,12 @@ pub struct CompareArgs {
 }
 
 /// Arguments of `lash work-precision`.
+///
+/// ```text
+/// lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..] [--controllers C,..]
+/// ```
+///
+/// Source: INTERFACES.md (comma-separated lists).
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct WorkPrecisionArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -199,8 +243,8 @@ pub struct WorkPrecisionArgs {
     /// Methods, comma-separated. Default: every method of this build.
     #[arg(long, value_name = "M,..", value_delimiter = ',', value_parser = parse_method)]
     pub methods: Option<Vec<Method>>,
-    /// Relative tolerances of the adaptive methods, comma-separated (atol = rtol · the case's
-    /// scale). Default 1e-4,1e-6,1e-8.
+    /// Relative tolerances of the adaptive methods, comma-separated (atol as
+    /// in the case). Default 1e-4,1e-6,1e-8.
     #[arg(long, value_name = "R,..", value_delimiter = ',', value_parser = parse_rtol,
           allow_hyphen_values = true)]
     pub tolerances: Option<Vec<f64>>,
@@ -289,6 +333,12 @@ impl WorkPrecisionArgs {
 }
 
 /// Arguments of `lash sweep`.
+///
+/// ```text
+/// lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SweepArgs {
     /// The sweep file (JSON): a base case and lists of parameter values.
@@ -305,6 +355,12 @@ pub struct SweepArgs {
 }
 
 /// Arguments of `lash merge`.
+///
+/// ```text
+/// lash merge DIR... [--out DIR]  →  DIR/merged.csv, DIR/merged.md
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct MergeArgs {
     /// Sweep output directories (or point directories) to join.
@@ -316,6 +372,12 @@ pub struct MergeArgs {
 }
 
 /// What parsing the command line gave.
+///
+/// ```text
+/// Cli(command) | Print(help or version text, exit 0)
+/// ```
+///
+/// Source: clap's error kinds DisplayHelp, DisplayVersion.
 #[derive(Debug)]
 pub enum Parsed {
     /// A command to execute.

@@ -30,6 +30,8 @@ pub const EXIT_SOLVER: u8 = 3;
 ///
 /// Every variant's message is one line that names the problem (the flag, the file, the field);
 /// [`Error::report`] adds the time and state of a solver failure.
+///
+/// Source: INTERFACES.md ("Exit codes of `lash`").
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad command line: a wrong flag combination, an out-of-range number, an unknown name.

@@ -99,6 +99,12 @@ impl Sample {
 }
 
 /// The clearance joint's data the metrics need.
+///
+/// ```text
+/// c = R_B − R_J;  lubricated ⇒ film_thickness_min = c (1 − min(ε_max, 1))
+/// ```
+///
+/// Source: MODEL.md §2, INTERFACES.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointInfo {
     /// Radial clearance c, m.
@@ -108,6 +114,12 @@ pub struct JointInfo {
 }
 
 /// What an event function measures.
+///
+/// ```text
+/// Penetration: g = δ = |e| − c;  FilmCap: g = ε − ε_cap
+/// ```
+///
+/// Source: MODEL.md §7.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EventQuantity {
     /// The penetration δ of the clearance joint (rising = contact onset).
@@ -119,6 +131,12 @@ pub enum EventQuantity {
 }
 
 /// A located event.
+///
+/// ```text
+/// contact onset ⇔ quantity = Penetration ∧ rising
+/// ```
+///
+/// Source: INTERFACES.md (`contact_onsets`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EventRecord {
     /// Event time, s.
@@ -235,6 +253,12 @@ pub struct Metrics {
 }
 
 /// Where the samples lie: the last revolution before `t_end`.
+///
+/// ```text
+/// [t_end − T, t_end],  T = 60 / rpm
+/// ```
+///
+/// Source: INTERFACES.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
     /// End time, s.

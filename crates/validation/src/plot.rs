@@ -61,6 +61,12 @@ fn ensure_font() -> Result<(), Error> {
 }
 
 /// How a series is drawn.
+///
+/// ```text
+/// Line ──   Dashed - -   Points ·   LinePoints ·─·
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SeriesStyle {
     /// A solid line.
@@ -93,6 +99,12 @@ pub struct Series<'a> {
 }
 
 /// Title and axis labels.
+///
+/// ```text
+/// title above; x_label below the x axis; y_label left of the y axis
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Copy, Debug)]
 pub struct Axes<'a> {
     /// Figure title.
@@ -104,6 +116,12 @@ pub struct Axes<'a> {
 }
 
 /// The two files a figure function wrote.
+///
+/// ```text
+/// stem → (stem.svg, stem.png)
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Written {
     /// The SVG file.

@@ -210,6 +210,12 @@ fn canonical(v: &Value) -> String {
 }
 
 /// One grid point.
+///
+/// ```text
+/// (index, id = PointParams::id(), params);  shard I/N runs it iff index mod N = I
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepPoint {
     /// Position in the grid (0-based), the index sharding uses.
@@ -221,6 +227,12 @@ pub struct SweepPoint {
 }
 
 /// A loaded and checked sweep: the file, its base case, its grid.
+///
+/// ```text
+/// SWEEP.json + base case → points() = the grid of the module doc
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Clone, Debug)]
 pub struct SweepSpec {
     /// The parsed file.
@@ -478,6 +490,12 @@ fn flatten_into(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
 }
 
 /// How a finished point ended.
+///
+/// ```text
+/// ok | solver_failed  (both finished: a rerun skips them)
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PointStatus {
@@ -488,6 +506,12 @@ pub enum PointStatus {
 }
 
 /// The content of OUT/id/result.json.
+///
+/// ```text
+/// OUT/id/result.json = { id, index, params, status, error, values }
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointRecord {
     /// The point's id (its directory name).
@@ -505,6 +529,12 @@ pub struct PointRecord {
 }
 
 /// How [`run_sweep`] runs.
+///
+/// ```text
+/// jobs threads (None = cores), shard I/N, progress bar on/off
+/// ```
+///
+/// Source: the issue "The lash command".
 #[derive(Clone, Debug)]
 pub struct SweepOptions {
     /// Worker threads; None = one per core.
@@ -526,6 +556,12 @@ impl Default for SweepOptions {
 }
 
 /// What [`run_sweep`] did.
+///
+/// ```text
+/// selected = skipped + ok + solver_failed + |failed|
+/// ```
+///
+/// Source: this module.
 #[derive(Debug, Default)]
 pub struct SweepReport {
     /// Points in the shard.

@@ -36,6 +36,12 @@ pub const COLUMNS: [&str; 13] = [
 ];
 
 /// An extra column after the fixed ones: a name and one value per sample.
+///
+/// ```text
+/// header = COLUMNS, extra names...;  row i = fixed values, extra values[i]...
+/// ```
+///
+/// Source: INTERFACES.md (`trajectory.csv`: extra columns after).
 #[derive(Clone, Copy, Debug)]
 pub struct Extra<'a> {
     /// Column name (no comma, quote or newline; not a fixed column's name).

@@ -88,6 +88,12 @@ impl WpRun {
 }
 
 /// What a run's cost is measured in.
+///
+/// ```text
+/// RhsEvals: c = stats.rhs_evals;  WallTime: c = wall_time_s
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cost {
     /// Right-hand-side evaluations.
@@ -119,6 +125,12 @@ pub fn cheapest(runs: &[WpRun], target: f64, cost: Cost) -> Option<usize> {
 }
 
 /// The cheapest runs for one target (indices into `runs`).
+///
+/// ```text
+/// by_X = argmin { cost_X(run k) : error_k ≤ target }
+/// ```
+///
+/// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Cheapest {
     /// Accuracy target.
