@@ -21,24 +21,33 @@ use crate::error::{Error, EXIT_OK};
 use crate::sweep::{self, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
+/// A panic (a bug) is caught and becomes exit code 1 (its message is printed by the panic hook).
 pub fn main_with<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let result = cli::parse(args).and_then(|p| match p {
-        Parsed::Print(s) => {
-            print!("{s}");
-            Ok(())
-        }
-        Parsed::Cli(c) => execute(c.command),
-    });
-    match result {
-        Ok(()) => EXIT_OK,
-        Err(e) => {
+    guard(|| {
+        cli::parse(args).and_then(|p| match p {
+            Parsed::Print(s) => {
+                print!("{s}");
+                Ok(())
+            }
+            Parsed::Cli(c) => execute(c.command),
+        })
+    })
+}
+
+/// Runs `f` and maps its outcome to an exit code: 0, the error's code (its report printed on
+/// standard error), or 1 for a panic.
+pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(())) => EXIT_OK,
+        Ok(Err(e)) => {
             eprintln!("{}", e.report());
             e.exit_code()
         }
+        Err(_) => crate::error::EXIT_BUG,
     }
 }
 
@@ -187,6 +196,22 @@ mod tests {
         );
         // Point 0 = 120 rpm × 1e-4 m.
         assert!(rows[1].ends_with(",120.0,0.0001,ok,,0.012"), "{}", rows[1]);
+    }
+
+    #[test]
+    fn guard_maps_outcomes_to_exit_codes() {
+        assert_eq!(guard(|| Ok(())), 0);
+        assert_eq!(guard(|| Err(Error::Usage("x".into()))), 2);
+        assert_eq!(
+            guard(
+                || Err(Error::Solver(lash_solver::SolveError::NonFiniteState {
+                    t: 1.0,
+                    y: vec![]
+                }))
+            ),
+            3
+        );
+        assert_eq!(guard(|| panic!("a bug")), 1);
     }
 
     #[test]
