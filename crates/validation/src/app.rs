@@ -1,0 +1,224 @@
+//! Dispatch: parsed command line → work → exit code.
+//!
+//! ```text
+//! main_with(args) = 0 on success; on failure print Error::report() to stderr and return
+//!                   Error::exit_code()  (2 usage/input, 3 solver, 1 bug)
+//! ```
+//!
+//! Source: INTERFACES.md ("Exit codes of `lash`"). Commands whose engine (the model, the
+//! adaptive and stiff solvers) is not wired in yet check all their input and then fail with
+//! [`Error::NotYetAvailable`].
+
+use std::ffi::OsString;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use lash_solver::SolverOptions;
+
+use crate::case::Case;
+use crate::cli::{self, Command, Parsed, StudyArgs, StudyName, SweepArgs};
+use crate::error::{Error, EXIT_OK};
+use crate::sweep::{self, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
+
+/// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
+/// A panic (a bug) is caught and becomes exit code 1 (its message is printed by the panic hook).
+pub fn main_with<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    guard(|| {
+        cli::parse(args).and_then(|p| match p {
+            Parsed::Print(s) => {
+                print!("{s}");
+                Ok(())
+            }
+            Parsed::Cli(c) => execute(c.command),
+        })
+    })
+}
+
+/// Runs `f` and maps its outcome to an exit code: 0, the error's code (its report printed on
+/// standard error), or 1 for a panic.
+pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(())) => EXIT_OK,
+        Ok(Err(e)) => {
+            eprintln!("{}", e.report());
+            e.exit_code()
+        }
+        Err(_) => crate::error::EXIT_BUG,
+    }
+}
+
+/// Executes one command; `None` is the default study (`lash study paper`).
+pub fn execute(command: Option<Command>) -> Result<(), Error> {
+    let command = command.unwrap_or(Command::Study(StudyArgs {
+        study: StudyName::Paper,
+        out: None,
+    }));
+    match command {
+        Command::Run(a) => {
+            let case = Case::load(&a.case, None)?;
+            let _opts = a.solver.apply(&SolverOptions::default())?;
+            let _out = a.out.unwrap_or_else(|| default_out("run", &case.name));
+            Err(Error::NotYetAvailable(
+                "lash run (the model is not wired in)".into(),
+            ))
+        }
+        Command::Study(a) => {
+            let StudyName::Paper = a.study;
+            Err(Error::NotYetAvailable(
+                "lash study paper (the model is not wired in)".into(),
+            ))
+        }
+        Command::Compare(a) => {
+            Case::load(&a.case, None)?;
+            Err(Error::NotYetAvailable(
+                "lash compare (the model is not wired in)".into(),
+            ))
+        }
+        Command::WorkPrecision(a) => {
+            Case::load(&a.case, None)?;
+            a.plan()?;
+            Err(Error::NotYetAvailable(
+                "lash work-precision (the model is not wired in)".into(),
+            ))
+        }
+        Command::Sweep(a) => {
+            let spec = sweep::SweepSpec::load(&a.file)?;
+            let _points = spec.points()?;
+            Err(Error::NotYetAvailable(
+                "lash sweep (the point runner needs the model)".into(),
+            ))
+        }
+        Command::Merge(a) => {
+            let out = a.out.unwrap_or_else(|| a.dirs[0].clone());
+            let table = sweep::merge(&a.dirs)?;
+            let (csv, md) = table.write(&out)?;
+            println!(
+                "merged {} points into {} and {}",
+                table.rows.len(),
+                csv.display(),
+                md.display()
+            );
+            Ok(())
+        }
+    }
+}
+
+/// Default output directory of a command for a case: `out/COMMAND/NAME` (a `:` in a built-in
+/// name becomes `_`).
+pub fn default_out(command: &str, name: &str) -> PathBuf {
+    PathBuf::from("out")
+        .join(command)
+        .join(name.replace(':', "_"))
+}
+
+/// `lash sweep` with a point runner: loads and checks the sweep file, runs the shard's
+/// unfinished points in parallel (`--jobs`), a progress bar when standard error is a terminal,
+/// and prints one line of counts. The output directory defaults to `out/sweep/STEM`.
+pub fn sweep_command<F>(a: &SweepArgs, runner: F) -> Result<SweepReport, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let spec = sweep::SweepSpec::load(&a.file)?;
+    let points = spec.points()?;
+    let out = a.out.clone().unwrap_or_else(|| {
+        let stem = a
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sweep".into());
+        default_out("sweep", &stem)
+    });
+    let opts = SweepOptions {
+        jobs: a.jobs,
+        shard: a.shard.unwrap_or(Shard::ALL),
+        progress: std::io::stderr().is_terminal(),
+    };
+    let report = sweep::run_sweep(&points, &out, &opts, runner)?.into_result()?;
+    eprintln!(
+        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
+        opts.shard,
+        points.len(),
+        report.ok,
+        report.solver_failed,
+        report.skipped,
+        out.display()
+    );
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::MergeArgs;
+
+    #[test]
+    fn sweep_shards_then_merge_through_the_commands() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("base.json"), b"{}").unwrap();
+        let file = d.path().join("grid.json");
+        std::fs::write(
+            &file,
+            br#"{"case": "base.json", "speed_rpm": [120, 150, 180], "clearance": [1e-4, 2e-4]}"#,
+        )
+        .unwrap();
+        let out = d.path().join("res");
+        let runner = |p: &SweepPoint, _: &Path| {
+            Ok(PointResult::flatten(&serde_json::json!({
+                "x": p.params.speed_rpm.unwrap() * p.params.clearance.unwrap()
+            })))
+        };
+        for i in 0..2 {
+            let a = SweepArgs {
+                file: file.clone(),
+                jobs: Some(2),
+                shard: Some(Shard { index: i, count: 2 }),
+                out: Some(out.clone()),
+            };
+            let r = sweep_command(&a, runner).unwrap();
+            assert_eq!((r.selected, r.ok), (3, 3));
+        }
+        execute(Some(Command::Merge(MergeArgs {
+            dirs: vec![out.clone()],
+            out: None,
+        })))
+        .unwrap();
+        let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows.len(), 7);
+        assert!(
+            rows[0].ends_with(",speed_rpm,clearance,status,error,x"),
+            "{}",
+            rows[0]
+        );
+        // Point 0 = 120 rpm × 1e-4 m.
+        assert!(rows[1].ends_with(",120.0,0.0001,ok,,0.012"), "{}", rows[1]);
+    }
+
+    #[test]
+    fn guard_maps_outcomes_to_exit_codes() {
+        assert_eq!(guard(|| Ok(())), 0);
+        assert_eq!(guard(|| Err(Error::Usage("x".into()))), 2);
+        assert_eq!(
+            guard(
+                || Err(Error::Solver(lash_solver::SolveError::NonFiniteState {
+                    t: 1.0,
+                    y: vec![]
+                }))
+            ),
+            3
+        );
+        assert_eq!(guard(|| panic!("a bug")), 1);
+    }
+
+    #[test]
+    fn default_out_is_per_command_and_case() {
+        assert_eq!(
+            default_out("run", "testset:hires"),
+            PathBuf::from("out/run/testset_hires")
+        );
+    }
+}

@@ -1,0 +1,183 @@
+//! Case references: a scene file or a built-in test problem.
+//!
+//! ```text
+//! CASE = "testset:NAME"   a built-in test problem (summary.case = "testset:NAME",
+//!                         scene_sha256 = null)
+//!      | PATH             a JSON scene file (summary.case = file stem,
+//!                         scene_sha256 = hex sha256 of the file's bytes)
+//! ```
+//!
+//! Source: INTERFACES.md (`summary.json` fields `case`, `scene_sha256`). Loading checks that
+//! the file exists and is well-formed JSON; the model crate validates the scene itself.
+
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+use crate::error::Error;
+
+/// Prefix of built-in test problems.
+pub const BUILTIN_PREFIX: &str = "testset:";
+
+/// Names (after the prefix) of the built-in test problems this build knows. Empty until the
+/// test problems are wired in.
+pub const BUILTIN_NAMES: &[&str] = &[];
+
+/// Where a case comes from.
+///
+/// ```text
+/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME)
+/// ```
+///
+/// Source: INTERFACES.md (`case`, `scene_sha256`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum CaseSource {
+    /// A scene file.
+    File {
+        /// Its path, as given (resolved against the base directory if relative).
+        path: PathBuf,
+        /// Its bytes.
+        bytes: Vec<u8>,
+        /// Hex sha256 of the bytes.
+        sha256: String,
+        /// The parsed JSON (syntax checked only).
+        json: serde_json::Value,
+    },
+    /// A built-in test problem, by its name after `testset:`.
+    BuiltIn(String),
+}
+
+/// A loaded case reference.
+///
+/// ```text
+/// name = file stem | "testset:" NAME;   sha256 = sha256(file bytes) | none
+/// ```
+///
+/// Source: INTERFACES.md (`case`, `scene_sha256`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// The name recorded in summary.json (`case`).
+    pub name: String,
+    /// The file or the built-in.
+    pub source: CaseSource,
+}
+
+impl Case {
+    /// Resolves `spec` (a path or `testset:NAME`). A relative path is taken relative to
+    /// `base_dir` when one is given (a sweep file's directory), else to the working directory.
+    pub fn load(spec: &str, base_dir: Option<&Path>) -> Result<Case, Error> {
+        if let Some(name) = spec.strip_prefix(BUILTIN_PREFIX) {
+            return Case::builtin(name);
+        }
+        if spec.is_empty() {
+            return Err(Error::Input("case: empty name".into()));
+        }
+        let given = Path::new(spec);
+        let path = match base_dir {
+            Some(b) if given.is_relative() => b.join(given),
+            _ => given.to_path_buf(),
+        };
+        if !path.is_file() {
+            return Err(Error::Input(format!(
+                "case file {} not found",
+                path.display()
+            )));
+        }
+        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        let json: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| {
+            Error::Input(format!(
+                "case file {} is not valid JSON: {e}",
+                path.display()
+            ))
+        })?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .ok_or_else(|| Error::Input(format!("case file {} has no name", path.display())))?;
+        Ok(Case {
+            name,
+            source: CaseSource::File {
+                path,
+                sha256: sha256_hex(&bytes),
+                bytes,
+                json,
+            },
+        })
+    }
+
+    /// A built-in test problem by its name (without the prefix).
+    pub fn builtin(name: &str) -> Result<Case, Error> {
+        if !BUILTIN_NAMES.contains(&name) {
+            let known = if BUILTIN_NAMES.is_empty() {
+                "none in this build".to_string()
+            } else {
+                BUILTIN_NAMES.join(", ")
+            };
+            return Err(Error::Input(format!(
+                "unknown built-in case '{BUILTIN_PREFIX}{name}' (known: {known})"
+            )));
+        }
+        Ok(Case {
+            name: format!("{BUILTIN_PREFIX}{name}"),
+            source: CaseSource::BuiltIn(name.to_string()),
+        })
+    }
+
+    /// The scene's sha256 (hex), None for built-ins.
+    pub fn sha256(&self) -> Option<&str> {
+        match &self.source {
+            CaseSource::File { sha256, .. } => Some(sha256),
+            CaseSource::BuiltIn(_) => None,
+        }
+    }
+}
+
+/// Lower-case hex sha256 of `bytes` (FIPS 180-4).
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sha256_matches_fips_test_vector() {
+        // FIPS 180-4 example "abc".
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+
+    #[test]
+    fn file_case_has_stem_and_hash() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("dry_150rpm_c0.1.json");
+        std::fs::write(&p, b"{\"a\": 1}").unwrap();
+        let c = Case::load("dry_150rpm_c0.1.json", Some(d.path())).unwrap();
+        assert_eq!(c.name, "dry_150rpm_c0.1");
+        assert_eq!(c.sha256(), Some(sha256_hex(b"{\"a\": 1}").as_str()));
+        let abs = Case::load(p.to_str().unwrap(), None).unwrap();
+        assert_eq!(abs, c);
+    }
+
+    #[test]
+    fn missing_and_invalid_cases_are_input_errors() {
+        let d = tempfile::tempdir().unwrap();
+        let e = Case::load("nope.json", Some(d.path())).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("nope.json not found"), "{e}");
+        std::fs::write(d.path().join("bad.json"), b"{oops").unwrap();
+        let e = Case::load("bad.json", Some(d.path())).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("not valid JSON"), "{e}");
+        assert!(!e.to_string().contains('\n'));
+        let e = Case::load("testset:nosuch", None).unwrap_err();
+        assert!(e
+            .to_string()
+            .starts_with("unknown built-in case 'testset:nosuch'"));
+        assert!(Case::load("", None).is_err());
+    }
+}

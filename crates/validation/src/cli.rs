@@ -1,0 +1,805 @@
+//! The command line of `lash` (clap derive) and the checks clap cannot express.
+//!
+//! ```text
+//! lash                                   the default study (= lash study paper)
+//! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C] [--out DIR]
+//! lash study paper [--out DIR]
+//! lash compare CASE [--out DIR]
+//! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
+//!                          [--controllers C,..] [--out DIR]
+//! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
+//! lash merge DIR... [--out DIR]
+//! ```
+//!
+//! Names and list syntax are the contract of INTERFACES.md: methods and controllers by
+//! [`Method::from_name`] and [`ControllerKind::from_name`], lists comma-separated, `--step` only
+//! for fixed-step methods, `--rtol`/`--atol`/`--controller` only for adaptive ones. Every parse
+//! error becomes one line and exit code 2 ([`parse`]).
+
+use std::ffi::OsString;
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
+
+use crate::error::Error;
+use crate::sweep::Shard;
+
+/// Smallest relative tolerance accepted (the solver's range, `SolverOptions::rtol`).
+pub const RTOL_MIN: f64 = 1e-14;
+
+/// The `lash` command line.
+///
+/// ```text
+/// lash [COMMAND]      no command = `lash study paper`
+/// ```
+///
+/// Source: the issue "The lash command"; names from INTERFACES.md.
+#[derive(Debug, Parser)]
+#[command(
+    name = "lash",
+    version,
+    long_about = None,
+    about = "Planar mechanisms with revolute clearance joints: runs, studies, comparisons, work-precision, sweeps"
+)]
+pub struct Cli {
+    /// What to do; without one, the default study (`lash study paper`).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The subcommands.
+///
+/// ```text
+/// run | study | compare | work-precision | sweep | merge
+/// ```
+///
+/// Source: the issue "The lash command".
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run one case: DIR/summary.json, DIR/trajectory.csv and figures.
+    Run(RunArgs),
+    /// Run a study (a set of cases with its report).
+    Study(StudyArgs),
+    /// Compare the methods on one case.
+    Compare(CompareArgs),
+    /// Error against cost for every method and tolerance (and RK4 against step).
+    WorkPrecision(WorkPrecisionArgs),
+    /// Run a parameter grid, in parallel, resumable, shardable.
+    Sweep(SweepArgs),
+    /// Join the finished points of sweep directories into one table (CSV and markdown).
+    Merge(MergeArgs),
+}
+
+/// The solver flags of `lash run`.
+///
+/// ```text
+/// [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
+/// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only
+/// ```
+///
+/// Source: INTERFACES.md (method and controller names).
+#[derive(Debug, Clone, Default, PartialEq, Args)]
+pub struct SolverFlags {
+    /// Integration method (rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p).
+    #[arg(long, value_name = "M", value_parser = parse_method)]
+    pub method: Option<Method>,
+    /// Relative tolerance of adaptive methods, in [1e-14, 1).
+    #[arg(long, value_name = "R", value_parser = parse_rtol, allow_hyphen_values = true)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance of adaptive methods: one number, or one per state component
+    /// (comma-separated); each finite and > 0.
+    #[arg(long, value_name = "A", value_parser = parse_atol, allow_hyphen_values = true)]
+    pub atol: Option<Atol>,
+    /// Fixed step of fixed-step methods, s; finite and > 0.
+    #[arg(long, value_name = "H", value_parser = parse_step, allow_hyphen_values = true)]
+    pub step: Option<f64>,
+    /// Step-size controller of adaptive methods (i, pi, pid, h211, h312, gustafsson).
+    #[arg(long, value_name = "C", value_parser = parse_controller)]
+    pub controller: Option<ControllerKind>,
+}
+
+impl SolverFlags {
+    /// Lays the flags over `base` (the case's own options, or the defaults) and checks that
+    /// they fit the method that results.
+    ///
+    /// ```text
+    /// method = --method or base.method
+    /// fixed-step: --rtol, --atol, --controller are usage errors; step = --step, or base.step
+    ///             if the method did not change; none → "needs --step"
+    /// adaptive:   --step is a usage error; --controller on diffsol's methods is a usage error;
+    ///             rtol, atol = the flag or base; controller = the flag, or base's if the
+    ///             method did not change
+    /// ```
+    pub fn apply(&self, base: &SolverOptions) -> Result<SolverOptions, Error> {
+        let method = self.method.unwrap_or(base.method);
+        let same = method == base.method;
+        let mut o = base.clone();
+        o.method = method;
+        if method.is_fixed_step() {
+            for (flag, given) in [
+                ("--rtol", self.rtol.is_some()),
+                ("--atol", self.atol.is_some()),
+                ("--controller", self.controller.is_some()),
+            ] {
+                if given {
+                    return Err(Error::Usage(format!(
+                        "{flag} is only for adaptive methods, and {method} is fixed-step"
+                    )));
+                }
+            }
+            o.step = self.step.or(if same { base.step } else { None });
+            if o.step.is_none() {
+                return Err(Error::Usage(format!(
+                    "method {method} is fixed-step and needs --step"
+                )));
+            }
+            o.controller = None;
+        } else {
+            if self.step.is_some() {
+                return Err(Error::Usage(format!(
+                    "--step is only for fixed-step methods, and {method} is adaptive"
+                )));
+            }
+            if self.controller.is_some() && method.is_diffsol() {
+                return Err(Error::Usage(format!(
+                    "--controller does not apply to {method}, which uses diffsol's own step control"
+                )));
+            }
+            o.step = None;
+            if let Some(r) = self.rtol {
+                o.rtol = r;
+            }
+            if let Some(a) = &self.atol {
+                o.atol = a.clone();
+            }
+            o.controller = if method.is_diffsol() {
+                None
+            } else {
+                self.controller
+                    .or(if same { base.controller } else { None })
+            };
+        }
+        Ok(o)
+    }
+}
+
+/// Arguments of `lash run`.
+///
+/// ```text
+/// lash run CASE [solver flags] [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct RunArgs {
+    /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
+    pub case: String,
+    /// Solver choice.
+    #[command(flatten)]
+    pub solver: SolverFlags,
+    /// Output directory. Default `out/run/CASE`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// The studies `lash study` knows.
+///
+/// ```text
+/// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
+/// ```
+///
+/// Source: MODEL.md §6.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StudyName {
+    /// The paper's case study: speeds and clearances, dry and lubricated.
+    Paper,
+}
+
+/// Arguments of `lash study`.
+///
+/// ```text
+/// lash study NAME [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct StudyArgs {
+    /// Which study.
+    #[arg(value_enum)]
+    pub study: StudyName,
+    /// Output directory. Default `out/study/NAME`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// Arguments of `lash compare`.
+///
+/// ```text
+/// lash compare CASE [--out DIR]
+/// ```
+///
+/// Source: the issue "The lash command".
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct CompareArgs {
+    /// The case: a scene file (JSON) or `testset:NAME`.
+    pub case: String,
+    /// Output directory. Default `out/compare/CASE`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// Arguments of `lash work-precision`.
+///
+/// ```text
+/// lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..] [--controllers C,..]
+/// ```
+///
+/// Source: INTERFACES.md (comma-separated lists).
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct WorkPrecisionArgs {
+    /// The case: a scene file (JSON) or `testset:NAME`.
+    pub case: String,
+    /// Methods, comma-separated. Default: every method of this build.
+    #[arg(long, value_name = "M,..", value_delimiter = ',', value_parser = parse_method)]
+    pub methods: Option<Vec<Method>>,
+    /// Relative tolerances of the adaptive methods, comma-separated (atol as
+    /// in the case). Default 1e-4,1e-6,1e-8.
+    #[arg(long, value_name = "R,..", value_delimiter = ',', value_parser = parse_rtol,
+          allow_hyphen_values = true)]
+    pub tolerances: Option<Vec<f64>>,
+    /// Steps of the fixed-step methods, s, comma-separated. Default: derived from the case.
+    #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
+          allow_hyphen_values = true)]
+    pub steps: Option<Vec<f64>>,
+    /// Controllers compared on one adaptive method, comma-separated. Default: all.
+    #[arg(long, value_name = "C,..", value_delimiter = ',', value_parser = parse_controller)]
+    pub controllers: Option<Vec<ControllerKind>>,
+    /// Output directory. Default `out/work-precision/CASE`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// Default tolerances of `lash work-precision`.
+pub const DEFAULT_TOLERANCES: [f64; 3] = [1e-4, 1e-6, 1e-8];
+
+/// A checked work–precision request.
+///
+/// ```text
+/// runs = {adaptive m} × tolerances  ∪  {fixed-step m} × steps  ∪  controllers × tolerances
+///        (the controllers on one adaptive method of ours)
+/// ```
+///
+/// Source: the issue "The lash command" (`lash work-precision`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorkPrecisionPlan {
+    /// Methods, in the order given, no duplicates.
+    pub methods: Vec<Method>,
+    /// Tolerances of the adaptive methods (empty when there are none).
+    pub tolerances: Vec<f64>,
+    /// Steps of the fixed-step methods; None = derive from the case.
+    pub steps: Option<Vec<f64>>,
+    /// Controllers to compare (empty when no method in the list takes one).
+    pub controllers: Vec<ControllerKind>,
+}
+
+impl WorkPrecisionArgs {
+    /// Checks the lists against each other and applies the defaults.
+    pub fn plan(&self) -> Result<WorkPrecisionPlan, Error> {
+        let methods = self.methods.clone().unwrap_or_else(|| Method::ALL.to_vec());
+        no_duplicates("--methods", &methods, |m| m.name().to_string())?;
+        let any_fixed = methods.iter().any(|m| m.is_fixed_step());
+        let any_adaptive = methods.iter().any(|m| !m.is_fixed_step());
+        let any_controlled = methods
+            .iter()
+            .any(|m| !m.is_fixed_step() && !m.is_diffsol());
+        if self.steps.is_some() && !any_fixed {
+            return Err(Error::Usage(
+                "--steps is only for fixed-step methods, and --methods lists none".into(),
+            ));
+        }
+        if self.tolerances.is_some() && !any_adaptive {
+            return Err(Error::Usage(
+                "--tolerances is only for adaptive methods, and --methods lists none".into(),
+            ));
+        }
+        if self.controllers.is_some() && !any_controlled {
+            return Err(Error::Usage(
+                "--controllers needs an adaptive method with our step control in --methods".into(),
+            ));
+        }
+        let tolerances = match &self.tolerances {
+            Some(t) => t.clone(),
+            None if any_adaptive => DEFAULT_TOLERANCES.to_vec(),
+            None => vec![],
+        };
+        no_duplicates("--tolerances", &tolerances, |t| format!("{t:e}"))?;
+        if let Some(s) = &self.steps {
+            no_duplicates("--steps", s, |h| format!("{h:e}"))?;
+        }
+        let controllers = match &self.controllers {
+            Some(c) => c.clone(),
+            None if any_controlled => ControllerKind::ALL.to_vec(),
+            None => vec![],
+        };
+        no_duplicates("--controllers", &controllers, |c| c.name().to_string())?;
+        Ok(WorkPrecisionPlan {
+            methods,
+            tolerances,
+            steps: self.steps.clone(),
+            controllers,
+        })
+    }
+}
+
+/// Arguments of `lash sweep`.
+///
+/// ```text
+/// lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct SweepArgs {
+    /// The sweep file (JSON): a base case and lists of parameter values.
+    pub file: PathBuf,
+    /// Parallel jobs (≥ 1). Default: the number of cores.
+    #[arg(long, value_name = "N", value_parser = parse_jobs)]
+    pub jobs: Option<usize>,
+    /// Run only the points whose index modulo N equals I (I counts from 0).
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    pub shard: Option<Shard>,
+    /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// Arguments of `lash merge`.
+///
+/// ```text
+/// lash merge DIR... [--out DIR]  →  DIR/merged.csv, DIR/merged.md
+/// ```
+///
+/// Source: INTERFACES.md ("Sweeps").
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct MergeArgs {
+    /// Sweep output directories (or point directories) to join.
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Where merged.csv and merged.md go. Default: the first DIR.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// What parsing the command line gave.
+///
+/// ```text
+/// Cli(command) | Print(help or version text, exit 0)
+/// ```
+///
+/// Source: clap's error kinds DisplayHelp, DisplayVersion.
+#[derive(Debug)]
+pub enum Parsed {
+    /// A command to execute.
+    Cli(Cli),
+    /// Help or version text to print on standard output, then exit 0.
+    Print(String),
+}
+
+/// Parses the command line. A usage error becomes [`Error::Usage`] with clap's message on one
+/// line (without "error: ", the usage block and the tip).
+pub fn parse<I, T>(args: I) -> Result<Parsed, Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    match Cli::try_parse_from(args) {
+        Ok(cli) => Ok(Parsed::Cli(cli)),
+        Err(e) => {
+            use clap::error::ErrorKind;
+            match e.kind() {
+                ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+                    Ok(Parsed::Print(e.render().to_string()))
+                }
+                _ => Err(Error::Usage(one_line(&e.render().to_string()))),
+            }
+        }
+    }
+}
+
+/// The first paragraph of a clap error message, on one line, without the `error: ` prefix.
+pub fn one_line(msg: &str) -> String {
+    let parts: Vec<&str> = msg
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let joined = parts.join(" ");
+    joined
+        .strip_prefix("error: ")
+        .unwrap_or(&joined)
+        .to_string()
+}
+
+fn no_duplicates<T>(flag: &str, v: &[T], name: impl Fn(&T) -> String) -> Result<(), Error> {
+    for (i, a) in v.iter().enumerate() {
+        if v[..i].iter().any(|b| name(b) == name(a)) {
+            return Err(Error::Usage(format!("{flag} lists {} twice", name(a))));
+        }
+    }
+    Ok(())
+}
+
+/// Parses a method name (INTERFACES.md).
+pub fn parse_method(s: &str) -> Result<Method, String> {
+    Method::from_name(s).ok_or_else(|| {
+        let known: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown method '{s}' (known: {})", known.join(", "))
+    })
+}
+
+/// Parses a controller name (INTERFACES.md).
+pub fn parse_controller(s: &str) -> Result<ControllerKind, String> {
+    ControllerKind::from_name(s).ok_or_else(|| {
+        let known: Vec<&str> = ControllerKind::ALL.iter().map(|c| c.name()).collect();
+        format!("unknown controller '{s}' (known: {})", known.join(", "))
+    })
+}
+
+fn parse_number(s: &str, what: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{what} must be a number, got '{s}'"))?;
+    if !v.is_finite() {
+        return Err(format!("{what} must be finite, got {s}"));
+    }
+    Ok(v)
+}
+
+/// Parses a relative tolerance: a number in [1e-14, 1).
+pub fn parse_rtol(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "rtol")?;
+    if !(RTOL_MIN..1.0).contains(&v) {
+        return Err(format!("rtol must be in [1e-14, 1), got {s}"));
+    }
+    Ok(v)
+}
+
+/// Parses an absolute tolerance: one number, or comma-separated numbers; each finite and > 0.
+pub fn parse_atol(s: &str) -> Result<Atol, String> {
+    let mut v = Vec::new();
+    for part in s.split(',') {
+        let a = parse_number(part, "atol")?;
+        if !(a > 0.0) {
+            return Err(format!("atol must be > 0, got {}", part.trim()));
+        }
+        v.push(a);
+    }
+    Ok(if v.len() == 1 {
+        Atol::Scalar(v[0])
+    } else {
+        Atol::Vector(v)
+    })
+}
+
+/// Parses a fixed step: finite and > 0 (s).
+pub fn parse_step(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "step")?;
+    if !(v > 0.0) {
+        return Err(format!("step must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
+fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("jobs must be a whole number >= 1, got '{s}'")),
+    }
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse::<Shard>().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cli(args: &[&str]) -> Result<Cli, Error> {
+        let mut v = vec!["lash"];
+        v.extend_from_slice(args);
+        match parse(v)? {
+            Parsed::Cli(c) => Ok(c),
+            Parsed::Print(_) => panic!("help printed"),
+        }
+    }
+
+    fn usage(args: &[&str]) -> String {
+        match cli(args) {
+            Err(Error::Usage(m)) => {
+                assert!(!m.contains('\n'), "multi-line: {m}");
+                m
+            }
+            other => panic!("expected a usage error for {args:?}, got {other:?}"),
+        }
+    }
+
+    fn run_flags(args: &[&str]) -> SolverFlags {
+        let mut v = vec!["run", "case.json"];
+        v.extend_from_slice(args);
+        match cli(&v).unwrap().command {
+            Some(Command::Run(r)) => r.solver,
+            c => panic!("{c:?}"),
+        }
+    }
+
+    #[test]
+    fn no_subcommand_is_the_default_study() {
+        assert!(cli(&[]).unwrap().command.is_none());
+    }
+
+    #[test]
+    fn run_parses_every_flag() {
+        let c = cli(&[
+            "run",
+            "c.json",
+            "--method",
+            "dopri54",
+            "--rtol",
+            "1e-8",
+            "--atol",
+            "1e-10,2e-10",
+            "--controller",
+            "h211",
+            "--out",
+            "o",
+        ])
+        .unwrap();
+        let Some(Command::Run(r)) = c.command else {
+            panic!()
+        };
+        assert_eq!(r.case, "c.json");
+        assert_eq!(r.solver.method, Some(Method::Dopri54));
+        assert_eq!(r.solver.rtol, Some(1e-8));
+        assert_eq!(r.solver.atol, Some(Atol::Vector(vec![1e-10, 2e-10])));
+        assert_eq!(r.solver.controller, Some(ControllerKind::H211));
+        assert_eq!(r.out, Some(PathBuf::from("o")));
+        let o = r.solver.apply(&SolverOptions::default()).unwrap();
+        assert_eq!(o.method, Method::Dopri54);
+        assert_eq!(o.rtol, 1e-8);
+        assert_eq!(o.controller, Some(ControllerKind::H211));
+        assert_eq!(o.step, None);
+    }
+
+    #[test]
+    fn every_interface_name_parses() {
+        for m in Method::ALL {
+            assert_eq!(parse_method(m.name()), Ok(m));
+        }
+        for c in ControllerKind::ALL {
+            assert_eq!(parse_controller(c.name()), Ok(c));
+        }
+        for (s, c) in [
+            ("i", ControllerKind::I),
+            ("gustafsson", ControllerKind::Gustafsson),
+        ] {
+            assert_eq!(parse_controller(s), Ok(c));
+        }
+    }
+
+    #[test]
+    fn bad_values_name_the_flag_on_one_line() {
+        let m = usage(&["run", "c.json", "--method", "euler"]);
+        assert!(
+            m.contains("'--method <M>'") && m.contains("unknown method 'euler'"),
+            "{m}"
+        );
+        let m = usage(&["run", "c.json", "--controller", "pd"]);
+        assert!(m.contains("unknown controller 'pd'"), "{m}");
+        let m = usage(&["run", "c.json", "--rtol", "-1"]);
+        assert!(m.contains("rtol must be in [1e-14, 1), got -1"), "{m}");
+        let m = usage(&["run", "c.json", "--rtol", "1"]);
+        assert!(m.contains("rtol must be in"), "{m}");
+        let m = usage(&["run", "c.json", "--rtol", "1e-15"]);
+        assert!(m.contains("rtol must be in"), "{m}");
+        let m = usage(&["run", "c.json", "--rtol", "nan"]);
+        assert!(m.contains("rtol must be finite"), "{m}");
+        let m = usage(&["run", "c.json", "--atol", "1e-8,0"]);
+        assert!(m.contains("atol must be > 0, got 0"), "{m}");
+        let m = usage(&["run", "c.json", "--step", "0"]);
+        assert!(m.contains("step must be > 0, got 0"), "{m}");
+        let m = usage(&["run", "c.json", "--step", "abc"]);
+        assert!(m.contains("step must be a number, got 'abc'"), "{m}");
+        let m = usage(&["run"]);
+        assert!(
+            m.contains("required arguments were not provided") && m.contains("<CASE>"),
+            "{m}"
+        );
+        let m = usage(&["run", "c.json", "--stp", "1"]);
+        assert!(m.contains("unexpected argument '--stp'"), "{m}");
+        let m = usage(&["study", "nonsense"]);
+        assert!(m.contains("invalid value 'nonsense'"), "{m}");
+        let m = usage(&["frobnicate"]);
+        assert!(m.contains("unrecognized subcommand 'frobnicate'"), "{m}");
+    }
+
+    #[test]
+    fn step_is_only_for_fixed_step_methods() {
+        let d = SolverOptions::default(); // dopri54
+        let e = run_flags(&["--method", "dopri54", "--step", "1e-4"])
+            .apply(&d)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--step is only for fixed-step methods, and dopri54 is adaptive"
+        );
+        // Without --method the base method (adaptive here) decides.
+        assert!(run_flags(&["--step", "1e-4"]).apply(&d).is_err());
+        let o = run_flags(&["--method", "rk4", "--step", "1e-4"])
+            .apply(&d)
+            .unwrap();
+        assert_eq!(
+            (o.method, o.step, o.controller),
+            (Method::Rk4, Some(1e-4), None)
+        );
+        for flag in [
+            ["--rtol", "1e-6"],
+            ["--atol", "1e-9"],
+            ["--controller", "pi"],
+        ] {
+            let e = run_flags(&["--method", "rk4", "--step", "1e-4", flag[0], flag[1]])
+                .apply(&d)
+                .unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "{} is only for adaptive methods, and rk4 is fixed-step",
+                    flag[0]
+                )
+            );
+        }
+        let e = run_flags(&["--method", "rk4"]).apply(&d).unwrap_err();
+        assert_eq!(e.to_string(), "method rk4 is fixed-step and needs --step");
+    }
+
+    #[test]
+    fn base_options_fill_what_the_flags_leave_out() {
+        let base = SolverOptions {
+            method: Method::Rk4,
+            step: Some(2e-5),
+            ..Default::default()
+        };
+        // Same method: the case's step is kept; a flag overrides it.
+        assert_eq!(run_flags(&[]).apply(&base).unwrap().step, Some(2e-5));
+        assert_eq!(
+            run_flags(&["--step", "1e-5"]).apply(&base).unwrap().step,
+            Some(1e-5)
+        );
+        // Switching to an adaptive method drops the step.
+        let o = run_flags(&["--method", "tsit54", "--rtol", "1e-9"])
+            .apply(&base)
+            .unwrap();
+        assert_eq!((o.step, o.rtol, o.controller), (None, 1e-9, None));
+        // diffsol's methods take no controller of ours.
+        let e = run_flags(&["--method", "bdf", "--controller", "pi"])
+            .apply(&SolverOptions::default())
+            .unwrap_err();
+        assert!(e
+            .to_string()
+            .starts_with("--controller does not apply to bdf"));
+        let ctl = SolverOptions {
+            controller: Some(ControllerKind::Pid),
+            ..Default::default()
+        };
+        assert_eq!(
+            run_flags(&[]).apply(&ctl).unwrap().controller,
+            Some(ControllerKind::Pid)
+        );
+        assert_eq!(
+            run_flags(&["--method", "bdf"])
+                .apply(&ctl)
+                .unwrap()
+                .controller,
+            None
+        );
+    }
+
+    fn wp(args: &[&str]) -> Result<WorkPrecisionPlan, Error> {
+        let mut v = vec!["work-precision", "c.json"];
+        v.extend_from_slice(args);
+        match cli(&v)?.command {
+            Some(Command::WorkPrecision(w)) => w.plan(),
+            c => panic!("{c:?}"),
+        }
+    }
+
+    #[test]
+    fn work_precision_lists() {
+        let p = wp(&[
+            "--methods",
+            "bdf,rodas5p,rk4",
+            "--tolerances",
+            "1e-4,1e-6,1e-8",
+            "--steps",
+            "1e-4,5e-5",
+            "--controllers",
+            "pi,h211",
+        ])
+        .unwrap();
+        assert_eq!(p.methods, vec![Method::Bdf, Method::Rodas5p, Method::Rk4]);
+        assert_eq!(p.tolerances, vec![1e-4, 1e-6, 1e-8]);
+        assert_eq!(p.steps, Some(vec![1e-4, 5e-5]));
+        assert_eq!(
+            p.controllers,
+            vec![ControllerKind::Pi, ControllerKind::H211]
+        );
+        let p = wp(&[]).unwrap();
+        assert_eq!(p.methods, Method::ALL.to_vec());
+        assert_eq!(p.tolerances, DEFAULT_TOLERANCES.to_vec());
+        assert_eq!(p.controllers, ControllerKind::ALL.to_vec());
+        let p = wp(&["--methods", "rk4"]).unwrap();
+        assert!(p.tolerances.is_empty() && p.controllers.is_empty());
+    }
+
+    #[test]
+    fn work_precision_mismatches_are_usage_errors() {
+        let msg = |a: &[&str]| match wp(a) {
+            Err(Error::Usage(m)) => m,
+            r => panic!("{a:?}: {r:?}"),
+        };
+        assert_eq!(
+            msg(&["--methods", "dopri54", "--steps", "1e-4"]),
+            "--steps is only for fixed-step methods, and --methods lists none"
+        );
+        assert_eq!(
+            msg(&["--methods", "rk4", "--tolerances", "1e-6"]),
+            "--tolerances is only for adaptive methods, and --methods lists none"
+        );
+        assert!(msg(&["--methods", "bdf,rk4", "--controllers", "pi"]).starts_with("--controllers"));
+        assert_eq!(msg(&["--methods", "bdf,bdf"]), "--methods lists bdf twice");
+        assert!(msg(&["--tolerances", "1e-6,1e-6"]).contains("twice"));
+        assert!(msg(&["--methods", "bdf,euler"]).contains("unknown method 'euler'"));
+        assert!(msg(&["--tolerances", "1e-6,2"]).contains("rtol must be in"));
+    }
+
+    #[test]
+    fn sweep_and_merge_arguments() {
+        let c = cli(&["sweep", "s.json", "--jobs", "3", "--shard", "1/4"]).unwrap();
+        let Some(Command::Sweep(s)) = c.command else {
+            panic!()
+        };
+        assert_eq!(s.jobs, Some(3));
+        assert_eq!(s.shard, Some(Shard { index: 1, count: 4 }));
+        assert!(usage(&["sweep", "s.json", "--jobs", "0"]).contains("jobs must be"));
+        assert!(usage(&["sweep", "s.json", "--shard", "4/4"]).contains("shard"));
+        assert!(usage(&["sweep", "s.json", "--shard", "x"]).contains("shard"));
+        assert!(usage(&["merge"]).contains("<DIR>"));
+        let c = cli(&["merge", "a", "b"]).unwrap();
+        let Some(Command::Merge(m)) = c.command else {
+            panic!()
+        };
+        assert_eq!(m.dirs, vec![PathBuf::from("a"), PathBuf::from("b")]);
+    }
+
+    #[test]
+    fn help_and_version_are_printed_not_errors() {
+        for a in [["lash", "--help"], ["lash", "--version"]] {
+            match parse(a).unwrap() {
+                Parsed::Print(s) => assert!(s.contains("lash")),
+                Parsed::Cli(_) => panic!(),
+            }
+        }
+    }
+
+    #[test]
+    fn one_line_joins_the_first_paragraph() {
+        let m = "error: the following required arguments were not provided:\n  <CASE>\n\nUsage: lash run <CASE>\n";
+        assert_eq!(
+            one_line(m),
+            "the following required arguments were not provided: <CASE>"
+        );
+    }
+}

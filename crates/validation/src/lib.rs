@@ -1,0 +1,33 @@
+//! # lash-validation
+//!
+//! The `lash` command: cases, the paper's study, comparisons, work–precision, sweeps, figures.
+//!
+//! ```text
+//! CASE ──case──▶ scene ──model──▶ OdeSystem ──solver──▶ samples on the grid, events, stats
+//!      ──metrics──▶ summary.json ──io──▶ --out (atomic)      trajectory.csv, figures (plot)
+//! SWEEP.json ──sweep──▶ points × runner ──▶ one result.json per point ──merge──▶ table
+//! ```
+//!
+//! Modules: [`cli`] (arguments), [`app`] (dispatch), [`error`] (exit codes), [`io`] (atomic
+//! writes), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
+//! (trajectory.csv), [`ideal`] (closed-form slider-crank), [`metrics`] (last-revolution
+//! metrics), [`plot`] (SVG + PNG figures), [`report`] (the files of one run), [`sweep`]
+//! (grids, shards, resume, merge), [`workprecision`] (error against cost, cheapest runs).
+
+#![warn(missing_docs)]
+
+pub mod app;
+pub mod case;
+pub mod cli;
+pub mod error;
+pub mod ideal;
+pub mod io;
+pub mod metrics;
+pub mod plot;
+pub mod report;
+pub mod summary;
+pub mod sweep;
+pub mod trajectory;
+pub mod workprecision;
+
+pub use error::Error;

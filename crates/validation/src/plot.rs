@@ -1,0 +1,671 @@
+//! Figures, each written as SVG and PNG: line plots, log–log plots, journal orbits.
+//!
+//! ```text
+//! line_plot(stem, axes, series)     y against x, linear axes          → stem.svg, stem.png
+//! loglog_plot(stem, axes, series)   y against x, log10 axes (x, y > 0)
+//! orbit_plot(stem, title, ex, ey)   (e_x/c, e_y/c) inside the unit clearance circle ε = 1,
+//!                                   equal aspect: x_span / width_px = y_span / height_px
+//! ```
+//!
+//! Text is drawn with DejaVu Sans, shipped in `assets/` (Bitstream Vera licence, see
+//! `assets/DejaVuSans-LICENSE.txt`) and registered with plotters' `ab_glyph` renderer, so no
+//! system font library is needed. Both files are written atomically. Source: the issue
+//! "The lash command" (figures of `lash run` and `lash work-precision`).
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::register_font;
+
+use crate::error::Error;
+use crate::io;
+
+/// The font all text is drawn with.
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// Font family name every text style of this module uses.
+const FAMILY: &str = "sans-serif";
+
+/// Size of line and log–log figures, px.
+pub const FIGURE_SIZE: (u32, u32) = (1000, 650);
+/// Size of orbit figures, px.
+pub const ORBIT_SIZE: (u32, u32) = (760, 760);
+
+/// Tableau 10 colours, given to series in order.
+const COLORS: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// Registers the shipped font with plotters once.
+fn ensure_font() -> Result<(), Error> {
+    static DONE: OnceLock<bool> = OnceLock::new();
+    let ok = *DONE.get_or_init(|| register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::Internal(
+            "plot: the shipped font does not load".into(),
+        ))
+    }
+}
+
+/// How a series is drawn.
+///
+/// ```text
+/// Line ──   Dashed - -   Points ·   LinePoints ·─·
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeriesStyle {
+    /// A solid line.
+    Line,
+    /// A dashed line (a reference, such as the ideal mechanism).
+    Dashed,
+    /// Markers only.
+    Points,
+    /// A line with markers (work–precision curves).
+    LinePoints,
+}
+
+/// One named series of a figure.
+///
+/// ```text
+/// points (x_i, y_i), i = 0..n, equal lengths, finite (and > 0 on log axes)
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug)]
+pub struct Series<'a> {
+    /// Legend entry.
+    pub name: &'a str,
+    /// Abscissae.
+    pub x: &'a [f64],
+    /// Ordinates.
+    pub y: &'a [f64],
+    /// Line, dashed, points.
+    pub style: SeriesStyle,
+}
+
+/// Title and axis labels.
+///
+/// ```text
+/// title above; x_label below the x axis; y_label left of the y axis
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug)]
+pub struct Axes<'a> {
+    /// Figure title.
+    pub title: &'a str,
+    /// x axis label (with unit).
+    pub x_label: &'a str,
+    /// y axis label (with unit).
+    pub y_label: &'a str,
+}
+
+/// The two files a figure function wrote.
+///
+/// ```text
+/// stem → (stem.svg, stem.png)
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Written {
+    /// The SVG file.
+    pub svg: PathBuf,
+    /// The PNG file.
+    pub png: PathBuf,
+}
+
+/// Something that draws itself on any plotters backend.
+trait Figure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Renders `fig` to `stem.svg` and `stem.png` (atomically), both of `size` pixels.
+fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Result<Written, Error> {
+    ensure_font()?;
+    let svg = stem.with_extension("svg");
+    let png = stem.with_extension("png");
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        fig.draw(&root).map_err(|e| plot_err(&svg, e))?;
+        root.present().map_err(|e| plot_err(&svg, e.to_string()))?;
+    }
+    io::write_atomic(&svg, text.as_bytes())?;
+    io::write_atomic_with(&png, |tmp| {
+        let root = BitMapBackend::new(tmp, size).into_drawing_area();
+        fig.draw(&root).map_err(|e| plot_err(&png, e))?;
+        root.present().map_err(|e| plot_err(&png, e.to_string()))
+    })?;
+    Ok(Written { svg, png })
+}
+
+fn plot_err(path: &Path, e: String) -> Error {
+    Error::Internal(format!("plot {}: {e}", path.display()))
+}
+
+/// Checks lengths and finiteness (and positivity for log axes); returns the data bounds
+/// (x_min, x_max, y_min, y_max).
+fn bounds(series: &[Series<'_>], log: bool) -> Result<(f64, f64, f64, f64), Error> {
+    let mut b = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for s in series {
+        if s.x.len() != s.y.len() {
+            return Err(Error::Internal(format!(
+                "plot: series '{}' has {} x and {} y values",
+                s.name,
+                s.x.len(),
+                s.y.len()
+            )));
+        }
+        for (&x, &y) in s.x.iter().zip(s.y) {
+            if !(x.is_finite() && y.is_finite()) {
+                return Err(Error::Internal(format!(
+                    "plot: series '{}' has a non-finite point ({x}, {y})",
+                    s.name
+                )));
+            }
+            if log && !(x > 0.0 && y > 0.0) {
+                return Err(Error::Internal(format!(
+                    "plot: series '{}' has a point ({x:e}, {y:e}) that a log axis cannot show",
+                    s.name
+                )));
+            }
+            b = (b.0.min(x), b.1.max(x), b.2.min(y), b.3.max(y));
+        }
+    }
+    if !b.0.is_finite() {
+        return Err(Error::Internal("plot: no data".into()));
+    }
+    Ok(b)
+}
+
+/// A linear axis range around [lo, hi] with 5 % padding (a unit-free pad for a flat one).
+pub fn padded(lo: f64, hi: f64) -> (f64, f64) {
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else if lo != 0.0 {
+        0.05 * lo.abs()
+    } else {
+        1.0
+    };
+    (lo - pad, hi + pad)
+}
+
+/// A log axis range around [lo, hi] (both > 0), padded by 5 % of the decades (a factor 2 for
+/// a flat one).
+pub fn padded_log(lo: f64, hi: f64) -> (f64, f64) {
+    let f = if hi > lo { (hi / lo).powf(0.05) } else { 2.0 };
+    (lo / f, hi * f)
+}
+
+/// The axis ranges of a square-unit plot of half-width `r` in a plotting area of
+/// `width_px` × `height_px`: the shorter side spans [−r, r], the longer one proportionally more.
+pub fn equal_aspect(r: f64, width_px: u32, height_px: u32) -> (f64, f64) {
+    let (w, h) = (width_px.max(1) as f64, height_px.max(1) as f64);
+    if w >= h {
+        (r * w / h, r)
+    } else {
+        (r, r * h / w)
+    }
+}
+
+fn style_of(i: usize) -> RGBColor {
+    COLORS[i % COLORS.len()]
+}
+
+/// Tick label on a linear axis spanning `span`: values below 1e-9·span print as 0 (rounding
+/// noise such as −2.2e-16), others in plain form, or scientific when tiny or huge.
+fn tick(v: f64, span: f64) -> String {
+    let a = v.abs();
+    if a <= 1e-9 * span.abs() || v == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&a) {
+        let s = format!("{v:.6}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+/// Tick label on a log axis: `1e-4` for powers of ten, else one significant digit (`3e-4`).
+fn tick_log(v: f64) -> String {
+    let e = v.log10().round();
+    if (v / 10f64.powf(e) - 1.0).abs() < 1e-9 {
+        format!("1e{e}")
+    } else {
+        format!("{v:.0e}")
+    }
+}
+
+struct XyFigure<'a> {
+    axes: Axes<'a>,
+    series: &'a [Series<'a>],
+    log: bool,
+    bounds: (f64, f64, f64, f64),
+}
+
+fn draw_series<'a, DB, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    series: &[Series<'_>],
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+{
+    for (i, s) in series.iter().enumerate() {
+        let c = style_of(i);
+        let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
+        let line = ShapeStyle::from(&c).stroke_width(2);
+        let ann = match s.style {
+            SeriesStyle::Line => chart
+                .draw_series(LineSeries::new(pts, line))
+                .map_err(|e| e.to_string())?,
+            SeriesStyle::Dashed => chart
+                .draw_series(DashedLineSeries::new(pts, 10, 6, line))
+                .map_err(|e| e.to_string())?,
+            SeriesStyle::Points => chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                .map_err(|e| e.to_string())?,
+            SeriesStyle::LinePoints => {
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .draw_series(LineSeries::new(pts, line))
+                    .map_err(|e| e.to_string())?
+            }
+        };
+        ann.label(s.name).legend(move |(x, y)| {
+            PathElement::new(
+                vec![(x, y), (x + 24, y)],
+                ShapeStyle::from(&c).stroke_width(2),
+            )
+        });
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+impl Figure for XyFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (x0, x1, y0, y1) = self.bounds;
+        let mut b = ChartBuilder::on(root);
+        b.caption(self.axes.title, (FAMILY, 24))
+            .margin(15)
+            .x_label_area_size(50)
+            .y_label_area_size(85);
+        if self.log {
+            let fmt = |v: &f64| tick_log(*v);
+            let (xa, xb) = padded_log(x0, x1);
+            let (ya, yb) = padded_log(y0, y1);
+            let mut chart = b
+                .build_cartesian_2d((xa..xb).log_scale(), (ya..yb).log_scale())
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc(self.axes.x_label)
+                .y_desc(self.axes.y_label)
+                .x_label_formatter(&fmt)
+                .y_label_formatter(&fmt)
+                .label_style((FAMILY, 15))
+                .axis_desc_style((FAMILY, 17))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            draw_series(&mut chart, self.series)
+        } else {
+            let (xa, xb) = if x1 > x0 { (x0, x1) } else { padded(x0, x1) };
+            let (ya, yb) = padded(y0, y1);
+            let fx = |v: &f64| tick(*v, xb - xa);
+            let fy = |v: &f64| tick(*v, yb - ya);
+            let mut chart = b
+                .build_cartesian_2d(xa..xb, ya..yb)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc(self.axes.x_label)
+                .y_desc(self.axes.y_label)
+                .x_label_formatter(&fx)
+                .y_label_formatter(&fy)
+                .label_style((FAMILY, 15))
+                .axis_desc_style((FAMILY, 17))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            draw_series(&mut chart, self.series)
+        }
+    }
+}
+
+/// Several named series against one x axis (for example crank angle in degrees), linear axes.
+/// Writes `stem.svg` and `stem.png`.
+pub fn line_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Result<Written, Error> {
+    let fig = XyFigure {
+        axes: *axes,
+        series,
+        log: false,
+        bounds: bounds(series, false)?,
+    };
+    render(stem, FIGURE_SIZE, &fig)
+}
+
+/// Several named series on log–log axes (work–precision: error against cost). Every x and y
+/// must be > 0. Writes `stem.svg` and `stem.png`.
+pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Result<Written, Error> {
+    let fig = XyFigure {
+        axes: *axes,
+        series,
+        log: true,
+        bounds: bounds(series, true)?,
+    };
+    render(stem, FIGURE_SIZE, &fig)
+}
+
+struct OrbitFigure<'a> {
+    title: &'a str,
+    ex: &'a [f64],
+    ey: &'a [f64],
+    r: f64,
+}
+
+impl Figure for OrbitFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let area = root
+            .margin(10, 0, 0, 0)
+            .titled(self.title, (FAMILY, 24))
+            .map_err(|e| e.to_string())?;
+        let (margin, x_area, y_area) = (15u32, 50u32, 80u32);
+        let (w, h) = area.dim_in_pixel();
+        let pw = w.saturating_sub(2 * margin + y_area);
+        let ph = h.saturating_sub(2 * margin + x_area);
+        let (rx, ry) = equal_aspect(self.r, pw, ph);
+        let mut chart = ChartBuilder::on(&area)
+            .margin(margin)
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area)
+            .build_cartesian_2d(-rx..rx, -ry..ry)
+            .map_err(|e| e.to_string())?;
+        let (fx, fy) = (|v: &f64| tick(*v, 2.0 * rx), |v: &f64| tick(*v, 2.0 * ry));
+        chart
+            .configure_mesh()
+            .x_desc("e_x / c")
+            .y_desc("e_y / c")
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .label_style((FAMILY, 15))
+            .axis_desc_style((FAMILY, 17))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let circle: Vec<(f64, f64)> = (0..=360)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                (a.cos(), a.sin())
+            })
+            .collect();
+        chart
+            .draw_series(LineSeries::new(circle, BLACK.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label("clearance circle, ε = 1")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2)));
+        let c = style_of(0);
+        let orbit: Vec<(f64, f64)> = self
+            .ex
+            .iter()
+            .copied()
+            .zip(self.ey.iter().copied())
+            .collect();
+        chart
+            .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
+            .map_err(|e| e.to_string())?
+            .label("journal centre, e / c")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2)));
+        chart
+            .configure_series_labels()
+            .label_font((FAMILY, 15))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// The journal centre's orbit (e_x/c, e_y/c) inside the unit clearance circle, equal aspect.
+/// The view shows at least |e|/c ≤ 1.08, more if the journal penetrates further.
+/// Writes `stem.svg` and `stem.png`.
+pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Written, Error> {
+    let s = [Series {
+        name: "orbit",
+        x: ex,
+        y: ey,
+        style: SeriesStyle::Line,
+    }];
+    bounds(&s, false)?;
+    let r = ex
+        .iter()
+        .zip(ey)
+        .map(|(x, y)| x.hypot(*y))
+        .fold(1.0, f64::max)
+        * 1.08;
+    render(stem, ORBIT_SIZE, &OrbitFigure { title, ex, ey, r })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Decodes a PNG; returns (width, height, RGB(A) bytes, bytes per pixel).
+    fn decode(p: &Path) -> (u32, u32, Vec<u8>, usize) {
+        let dec = png::Decoder::new(std::fs::File::open(p).unwrap());
+        let mut r = dec.read_info().unwrap();
+        let mut buf = vec![0; r.output_buffer_size()];
+        let info = r.next_frame(&mut buf).unwrap();
+        buf.truncate(info.buffer_size());
+        (info.width, info.height, buf, info.color_type.samples())
+    }
+
+    /// Number of pixels darker than light grey in rows [y0, y1).
+    fn dark_pixels(img: &(u32, u32, Vec<u8>, usize), y0: u32, y1: u32) -> usize {
+        let (w, _, buf, bpp) = img;
+        (y0..y1)
+            .flat_map(|y| (0..*w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let i = ((y * w + x) as usize) * bpp;
+                buf[i..i + 3].iter().map(|&v| v as u32).sum::<u32>() < 3 * 160
+            })
+            .count()
+    }
+
+    fn demo_series() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let deg: Vec<f64> = (0..=360).map(|k| k as f64).collect();
+        let a: Vec<f64> = deg.iter().map(|d| -3.86 * d.to_radians().cos()).collect();
+        let ideal: Vec<f64> = deg.iter().map(|d| -3.80 * d.to_radians().cos()).collect();
+        (deg, a, ideal)
+    }
+
+    #[test]
+    fn line_plot_writes_svg_and_png_with_text() {
+        let d = tempfile::tempdir().unwrap();
+        let (deg, a, ideal) = demo_series();
+        let w = line_plot(
+            &d.path().join("slider_acc"),
+            &Axes {
+                title: "Slider acceleration, 150 rpm",
+                x_label: "crank angle θ, °",
+                y_label: "ẍ, m/s²",
+            },
+            &[
+                Series {
+                    name: "lash",
+                    x: &deg,
+                    y: &a,
+                    style: SeriesStyle::Line,
+                },
+                Series {
+                    name: "ideal",
+                    x: &deg,
+                    y: &ideal,
+                    style: SeriesStyle::Dashed,
+                },
+            ],
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&w.svg).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("Slider acceleration, 150 rpm"));
+        assert!(svg.contains("crank angle θ, °") && svg.contains("\nideal\n"));
+        let img = decode(&w.png);
+        assert_eq!((img.0, img.1), FIGURE_SIZE);
+        // The title band (above the plot) holds the caption's glyphs and nothing else.
+        assert!(dark_pixels(&img, 0, 40) > 200, "no title text rendered");
+        // The curves: many dark or coloured pixels overall.
+        assert!(dark_pixels(&img, 40, FIGURE_SIZE.1) > 5000);
+        // No temporary file left behind.
+        let n = std::fs::read_dir(d.path()).unwrap().count();
+        assert_eq!(n, 2);
+    }
+
+    #[test]
+    fn loglog_plot_accepts_positive_data_only() {
+        let d = tempfile::tempdir().unwrap();
+        let cost = [1e3, 1e4, 1e5];
+        let err = [1e-3, 1e-6, 1e-9];
+        let w = loglog_plot(
+            &d.path().join("wp"),
+            &Axes {
+                title: "Work–precision",
+                x_label: "RHS evaluations",
+                y_label: "error",
+            },
+            &[Series {
+                name: "dopri54",
+                x: &cost,
+                y: &err,
+                style: SeriesStyle::LinePoints,
+            }],
+        )
+        .unwrap();
+        let img = decode(&w.png);
+        assert_eq!((img.0, img.1), FIGURE_SIZE);
+        assert!(std::fs::read_to_string(&w.svg).unwrap().contains("dopri54"));
+        let zero = [0.0, 1e-6, 1e-9];
+        let e = loglog_plot(
+            &d.path().join("bad"),
+            &Axes {
+                title: "",
+                x_label: "",
+                y_label: "",
+            },
+            &[Series {
+                name: "s",
+                x: &cost,
+                y: &zero,
+                style: SeriesStyle::Points,
+            }],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("log axis"), "{e}");
+        assert!(!d.path().join("bad.png").exists() && !d.path().join("bad.svg").exists());
+    }
+
+    #[test]
+    fn orbit_plot_is_square_and_shows_the_circle() {
+        let d = tempfile::tempdir().unwrap();
+        let th: Vec<f64> = (0..2001).map(|k| k as f64 * 0.01).collect();
+        let ex: Vec<f64> = th
+            .iter()
+            .map(|t| 0.6 * t.cos() + 0.1 * (3.0 * t).sin())
+            .collect();
+        let ey: Vec<f64> = th.iter().map(|t| 0.6 * t.sin()).collect();
+        let w = orbit_plot(&d.path().join("orbit"), "Journal orbit", &ex, &ey).unwrap();
+        let img = decode(&w.png);
+        assert_eq!((img.0, img.1), ORBIT_SIZE);
+        assert!(dark_pixels(&img, 0, 35) > 150, "no title text rendered");
+        assert!(std::fs::read_to_string(&w.svg)
+            .unwrap()
+            .contains("clearance circle"));
+    }
+
+    #[test]
+    fn bad_data_is_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let ax = Axes {
+            title: "t",
+            x_label: "x",
+            y_label: "y",
+        };
+        let e = line_plot(
+            &d.path().join("a"),
+            &ax,
+            &[Series {
+                name: "s",
+                x: &[1.0, 2.0],
+                y: &[1.0],
+                style: SeriesStyle::Line,
+            }],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("2 x and 1 y"));
+        let e = line_plot(
+            &d.path().join("a"),
+            &ax,
+            &[Series {
+                name: "s",
+                x: &[1.0],
+                y: &[f64::NAN],
+                style: SeriesStyle::Line,
+            }],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("non-finite"));
+        assert!(line_plot(&d.path().join("a"), &ax, &[]).is_err());
+        assert!(orbit_plot(&d.path().join("o"), "t", &[0.1], &[]).is_err());
+    }
+
+    #[test]
+    fn ranges() {
+        assert_eq!(padded(0.0, 10.0), (-0.5, 10.5));
+        assert_eq!(padded(2.0, 2.0), (1.9, 2.1));
+        assert_eq!(padded(0.0, 0.0), (-1.0, 1.0));
+        let (a, b) = padded_log(1e-8, 1e-4);
+        assert!((a.log10() + 8.2).abs() < 1e-12 && (b.log10() + 3.8).abs() < 1e-12);
+        // Equal aspect: data units per pixel equal in x and y.
+        let (rx, ry) = equal_aspect(1.2, 600, 400);
+        assert!((2.0 * rx / 600.0 - 2.0 * ry / 400.0).abs() < 1e-15 && ry == 1.2);
+        let (rx, ry) = equal_aspect(1.2, 300, 500);
+        assert!((2.0 * rx / 300.0 - 2.0 * ry / 500.0).abs() < 1e-15 && rx == 1.2);
+        assert_eq!(tick(0.5, 2.0), "0.5");
+        assert_eq!(tick(-2.2e-16, 2.0), "0");
+        assert_eq!(tick(1e-6, 1e-5), "1.0e-6");
+        assert_eq!(tick(-120.0, 400.0), "-120");
+        assert_eq!(tick_log(1e-4), "1e-4");
+        assert_eq!(tick_log(1000.0), "1e3");
+        assert_eq!(tick_log(3e-4), "3e-4");
+    }
+}

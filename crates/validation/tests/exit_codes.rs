@@ -1,0 +1,150 @@
+//! End-to-end: the built `lash` binary turns bad input into exit code 2 and one line on
+//! standard error (INTERFACES.md, "Exit codes of `lash`").
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn lash(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lash"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("run lash")
+}
+
+/// Asserts exit code 2, nothing on stdout, and exactly one line `error: ...` containing `needle`.
+fn usage_error(args: &[&str], cwd: &Path, needle: &str) {
+    let o = lash(args, cwd);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(o.stdout.is_empty(), "{args:?} wrote to stdout");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{args:?}: not one line: {err:?}");
+    assert!(lines[0].starts_with("error: "), "{args:?}: {err}");
+    assert!(
+        lines[0].contains(needle),
+        "{args:?}: '{needle}' not in {err}"
+    );
+}
+
+#[test]
+fn bad_input_exits_2_with_one_line() {
+    let d = tempfile::tempdir().unwrap();
+    let cwd = d.path();
+    std::fs::write(cwd.join("case.json"), b"{\"bodies\": []}").unwrap();
+    std::fs::write(cwd.join("broken.json"), b"{\"bodies\": [").unwrap();
+    usage_error(&["run"], cwd, "<CASE>");
+    usage_error(
+        &["run", "missing.json"],
+        cwd,
+        "case file missing.json not found",
+    );
+    usage_error(
+        &["run", "broken.json"],
+        cwd,
+        "case file broken.json is not valid JSON",
+    );
+    usage_error(&["run", "testset:nosuch"], cwd, "unknown built-in case");
+    usage_error(
+        &["run", "case.json", "--method", "euler"],
+        cwd,
+        "unknown method 'euler'",
+    );
+    usage_error(
+        &["run", "case.json", "--controller", "p"],
+        cwd,
+        "unknown controller 'p'",
+    );
+    usage_error(
+        &["run", "case.json", "--rtol", "0"],
+        cwd,
+        "rtol must be in [1e-14, 1)",
+    );
+    usage_error(
+        &["run", "case.json", "--step", "-1e-4"],
+        cwd,
+        "step must be > 0",
+    );
+    usage_error(
+        &["run", "case.json", "--method", "dopri54", "--step", "1e-4"],
+        cwd,
+        "--step is only for fixed-step methods",
+    );
+    usage_error(
+        &[
+            "run",
+            "case.json",
+            "--method",
+            "rk4",
+            "--step",
+            "1e-4",
+            "--rtol",
+            "1e-6",
+        ],
+        cwd,
+        "--rtol is only for adaptive methods",
+    );
+    usage_error(
+        &["run", "case.json", "--method", "rk4"],
+        cwd,
+        "needs --step",
+    );
+    usage_error(
+        &[
+            "work-precision",
+            "case.json",
+            "--methods",
+            "rk4",
+            "--tolerances",
+            "1e-6",
+        ],
+        cwd,
+        "--tolerances is only for adaptive methods",
+    );
+    usage_error(
+        &["sweep", "none.json"],
+        cwd,
+        "sweep file none.json not found",
+    );
+    usage_error(
+        &["sweep", "case.json", "--shard", "3/3"],
+        cwd,
+        "shard must be I/N",
+    );
+    usage_error(&["merge", "nodir"], cwd, "merge: nodir is not a directory");
+    usage_error(&["frobnicate"], cwd, "unrecognized subcommand 'frobnicate'");
+    usage_error(&["study", "other"], cwd, "invalid value 'other'");
+}
+
+#[test]
+fn help_exits_0() {
+    let d = tempfile::tempdir().unwrap();
+    let o = lash(&["--help"], d.path());
+    assert_eq!(o.status.code(), Some(0));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for sub in [
+        "run",
+        "study",
+        "compare",
+        "work-precision",
+        "sweep",
+        "merge",
+    ] {
+        assert!(out.contains(sub), "help lacks {sub}: {out}");
+    }
+}
+
+#[test]
+fn merge_of_an_empty_sweep_writes_a_header_only_table() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir(d.path().join("sweep")).unwrap();
+    let o = lash(&["merge", "sweep"], d.path());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let csv = std::fs::read_to_string(d.path().join("sweep/merged.csv")).unwrap();
+    assert_eq!(csv, "id,index,status,error\n");
+}
