@@ -15,9 +15,13 @@
 //!
 //! Methods: the paper's fixed-step RK4 ([`rk4`]); the explicit embedded pairs Bogacki–Shampine
 //! 3(2), Dormand–Prince 5(4), Tsitouras 5(4) and DOP853 ([`erk`]).
+//!
+//! Analysis ([`analysis`]): stiffness diagnostics (Jacobian eigenvalues, RK4 stability limits
+//! predicted and measured) and the largest Lyapunov exponent (Benettin's method).
 
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod controller;
 pub mod erk;
 pub mod error;
