@@ -134,7 +134,8 @@ fn rk4_ray_limit_is_the_first_exit_of_the_stability_region() {
         }
         let out = r * (1.0 + 1e-6);
         assert!(rk4_amplification(out * c, out * s) > 1.0, "θ = {th}");
-        // HNW II Fig. 2.1: the RK4 region lies between radii 2.5 and 3.0 on these rays.
+        // A sanity bound against a wrong root: the region reaches between 2.5 and 3 along
+        // every ray of the left half-plane (2.785 on the real axis, 2.828 on the imaginary).
         assert!((2.5..3.0).contains(&r), "θ = {th}: r = {r}");
     }
 }

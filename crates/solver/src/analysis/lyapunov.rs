@@ -58,7 +58,10 @@ pub struct LyapunovOptions {
     /// Time the reference trajectory is integrated alone first, to settle on the attractor.
     /// Default 0; ≥ 0.
     pub transient: f64,
-    /// Initial and renormalised separation d0 (weighted norm). Default 1e-8; > 0.
+    /// Initial and renormalised separation d0 (weighted norm). Default 1e-8; > 0. It must stay
+    /// far above the rounding of the state (d0 ≫ ε‖y‖, else z − y loses its digits and a zero
+    /// separation ends the run as `Degenerate`) and far below the scale on which f is
+    /// nonlinear; for a linear system any d0 is exact.
     pub d0: f64,
     /// Direction u of the first perturbation (length n, not all zero; normalised here).
     /// Default None: all ones.

@@ -8,7 +8,8 @@
 //!
 //! RK4 on y' = λy:  y_{n+1} = R(hλ) y_n,   R(z) = 1 + z + z²/2 + z³/6 + z⁴/24
 //! ray limit        r(θ) = sup { r ≥ 0 : |R(s e^{iθ})| ≤ 1 for all 0 ≤ s ≤ r },  Re e^{iθ} ≤ 0
-//!                  r(π)   = 2.785293563…  (root of z³ + 4z² + 12z + 24 = 0, where R = +1)
+//!                  r(π)   = 2.785293563…  (−r(π) is the real root of z³ + 4z² + 12z + 24,
+//!                                          where R(z) = +1 again)
 //!                  r(π/2) = 2√2 = 2.828427…  (|R(iy)|² = 1 − y⁶/72 + y⁸/576)
 //!                  576 (|R(r e^{iθ})|² − 1) = 1152c r + 1152c² r² + 768c³ r³ + 384c⁴ r⁴
 //!                      + (192c³ − 48c) r⁵ + (48c² − 8) r⁶ + 8c r⁷ + r⁸,   c = cos θ
@@ -517,6 +518,11 @@ pub fn sample_trajectory<S: OdeSystem + ?Sized>(
 }
 
 /// Which method family a problem favours.
+///
+/// ```text
+/// q = h_accuracy / h_stability:   Explicit (q ≤ 1) · Either (1 < q < 10) · Implicit (q ≥ 10)
+/// ```
+/// HNW II, §IV.1–IV.2 (stiffness: stability, not accuracy, limits the explicit step).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Family {
@@ -555,11 +561,12 @@ pub struct Verdict {
 /// measurement).
 pub const IMPLICIT_FACTOR: f64 = 10.0;
 
-/// Which family should win, from measured numbers: `h_accuracy`, the step the accuracy needs
-/// (an adaptive explicit run's typical step away from stability trouble, or the RK4 step the
-/// study asks for), `h_stability`, the RK4 stability limit (predicted [`StiffnessSummary::
-/// rk4_h_max`] or measured [`measure_rk4_limit`]; None when nothing limits), and `n_unstable`,
-/// the number of growing modes of the ODE.
+/// Which family should win, from measured numbers:
+/// - `h_accuracy`: the step the accuracy needs (an adaptive explicit run's typical step away
+///   from stability trouble, or the RK4 step the study asks for);
+/// - `h_stability`: the RK4 stability limit, predicted ([`StiffnessSummary::rk4_h_max`]) or
+///   measured ([`measure_rk4_limit`]); None when nothing limits the step;
+/// - `n_unstable`: the number of growing modes of the ODE (mentioned in the reason).
 pub fn verdict(
     h_accuracy: f64,
     h_stability: Option<f64>,
