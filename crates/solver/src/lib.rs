@@ -20,9 +20,13 @@
 //! ESDIRK3(4) ([`diffsol_backend`]), with dense Jacobians from the system or by finite
 //! differences ([`jacobian`]); stiff problems of the IVP Test Set with reference solutions
 //! ([`testset`]).
+//!
+//! Analysis ([`analysis`]): stiffness diagnostics (Jacobian eigenvalues, RK4 stability limits
+//! predicted and measured) and the largest Lyapunov exponent (Benettin's method).
 
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod controller;
 pub mod diffsol_backend;
 pub mod erk;

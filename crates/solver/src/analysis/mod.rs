@@ -1,0 +1,75 @@
+//! Analysis of an ODE beyond integrating it: stiffness diagnostics and Lyapunov exponents.
+//!
+//! ```text
+//! stiffness:  J = ∂f/∂y (t, y),  λ_i = eig(J);  RK4 is stable for h ≤ h_max = min_i r(arg λ_i)/|λ_i|
+//!             with r(θ) the extent of RK4's stability region along the ray θ (HNW II, §IV.2)
+//! lyapunov:   λ_max = lim_{T→∞} (1/T) ln(‖δy(T)‖ / ‖δy(0)‖)  (Benettin et al. 1980)
+//! ```
+//!
+//! Everything here is generic over [`crate::OdeSystem`] and uses only the public solver API
+//! ([`crate::solve`], [`crate::Integrator`]), so it works with every method and with systems
+//! whose events run hooks.
+//!
+//! - [`stiffness`]: dominant eigenvalues of the Jacobian, RK4 stability limits (predicted from
+//!   the eigenvalues and measured by bisection), stiffness ratio, a verdict on the method
+//!   family, and a sampler along a trajectory.
+//! - [`lyapunov`]: largest Lyapunov exponent by Benettin's two-trajectory method, and a
+//!   stroboscopic (once-per-period Poincaré) map.
+
+pub mod lyapunov;
+pub mod stiffness;
+
+pub use lyapunov::{
+    largest_lyapunov, largest_lyapunov_pair, stroboscopic_map, LyapunovEstimate, LyapunovOptions,
+    Stroboscopic,
+};
+pub use stiffness::{
+    analyze, eigenvalues, jacobian_at, measure_rk4_limit, rk4_amplification, rk4_is_stable,
+    rk4_ray_limit, sample_solution, sample_states, sample_trajectory, summarize, verdict,
+    Eigenvalue, Family, MeasuredLimit, Rk4ProbeOptions, StiffnessOptions, StiffnessSummary,
+    Verdict,
+};
+
+use crate::error::SolveError;
+
+/// Why an analysis failed. Never a panic, never a silent NaN.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnalysisError {
+    /// An argument is out of range or inconsistent (dimension, step, interval, tolerance).
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
+    /// The Jacobian (analytic or by finite differences) or the right-hand side was not finite.
+    #[error("non-finite {what} at t = {t:e}")]
+    NonFinite {
+        /// Time of the evaluation.
+        t: f64,
+        /// What was not finite.
+        what: String,
+    },
+    /// The eigenvalue iteration (faer's Hessenberg QR) did not converge.
+    #[error("eigenvalue computation did not converge at t = {t:e}")]
+    EigenNoConvergence {
+        /// Time of the Jacobian.
+        t: f64,
+    },
+    /// An integration failed.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// The step-size bracket of [`measure_rk4_limit`] does not bracket the limit.
+    #[error("no bracket: step {h:e} is {} (the lower end must be stable, the upper unstable)", if *stable { "stable" } else { "unstable" })]
+    NoBracket {
+        /// The offending end of the bracket.
+        h: f64,
+        /// Whether that step was found stable.
+        stable: bool,
+    },
+    /// The analysis cannot go on (the perturbation vanished, a stopping event ended a
+    /// trajectory early).
+    #[error("degenerate at t = {t:e}: {reason}")]
+    Degenerate {
+        /// Time at which it happened.
+        t: f64,
+        /// What happened.
+        reason: String,
+    },
+}
