@@ -758,7 +758,16 @@ impl Scene {
             let inner = e.into_inner();
             use serde_json::error::Category;
             match inner.classify() {
-                Category::Syntax | Category::Eof | Category::Io => syntax_error(&inner),
+                // The text is JSON (checked above): serde_json reports an array longer than a
+                // fixed-size field (`[1, 2, 3]` for [x, y]) as "trailing characters".
+                Category::Syntax | Category::Eof => SceneError::Schema {
+                    path: outer,
+                    message: format!(
+                        "{}: the array has more elements than the field takes",
+                        strip_position(&inner.to_string())
+                    ),
+                },
+                Category::Io => syntax_error(&inner),
                 Category::Data => {
                     let msg = inner.to_string();
                     let (path, message) = match split_marked(&msg) {
@@ -1037,7 +1046,7 @@ impl Scene {
                     return Err(invalid(
                         "t_end",
                         format!(
-                            "the time span t_end − t_start = {te} − {} overflows",
+                            "the time span t_end − t_start = {te:?} − {:?} overflows",
                             self.t_start
                         ),
                     ));
@@ -1068,8 +1077,8 @@ impl Scene {
                         return Err(invalid(
                             "revolutions",
                             format!(
-                                "the end time t_start + revolutions·2π/|ω| = {} + {span} s is \
-                                 not a finite time after t_start",
+                                "the end time t_start + revolutions·2π/|ω| = {:?} + {span:?} s \
+                                 is not a finite time after t_start",
                                 self.t_start
                             ),
                         ));
@@ -1206,6 +1215,25 @@ impl Scene {
                                     ),
                                 ));
                             }
+                        }
+                        // Extreme moduli (1e308, 5e-324) pass the checks above but give an
+                        // infinite or zero K.
+                        let k = crate::laws::hertz_stiffness(
+                            b.radius,
+                            j.radius,
+                            m.bearing.youngs_modulus,
+                            m.bearing.poisson_ratio,
+                            m.journal.youngs_modulus,
+                            m.journal.poisson_ratio,
+                        );
+                        if !(k.is_finite() && k > 0.0) {
+                            return Err(invalid(
+                                format!("{path}.materials"),
+                                format!(
+                                    "the Hertz stiffness K = {k} N/m^1.5 of these materials is \
+                                     not a finite positive number"
+                                ),
+                            ));
                         }
                         Ok(())
                     }
