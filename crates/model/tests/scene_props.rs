@@ -2,21 +2,25 @@
 //! extremes": faults and bad input).
 //!
 //! 1. Arbitrary input (bytes, UTF-8 text, JSON values, scene-shaped JSON with random pieces)
-//!    never panics in [`Scene::from_json_str`], [`Mechanism::from_scene`] or the first
-//!    evaluations of a mechanism, and every error *names a location* (defined on
-//!    [`check_located`]).
+//!    never panics in [`Scene::from_json_str`], [`Mechanism::from_scene`], the first
+//!    evaluations of a mechanism or 20 RK4 steps, and every error *names a location* (defined
+//!    on [`check_located`]).
 //! 2. Mutated valid scenes (the press catalogue and random valid mechanisms) give a valid scene
 //!    or an error whose path is where the mutation was, or above it, wherever that relation is
 //!    well defined (each mutation states its own relation on [`check_mutation`]).
 //! 3. Every number of a valid scene set to NaN or ±∞ in code is rejected with its own path.
 //! 4. Random valid slider-cranks, four-bars and pendulum chains (ideal, dry or lubricated
-//!    clearance joint) assemble, integrate with DOPRI5(4) without error or NaN, and keep the
-//!    constraint violation ‖Φ‖ below [`PHI_BOUND`].
+//!    clearance joint) assemble, integrate with DOPRI5(4) without NaN and with typed errors
+//!    only, and keep the constraint violation ‖Φ‖ below [`PHI_BOUND`].
+//! 5. Regressions: the inputs these properties found, as they are answered now.
 //!
-//! Case counts are explicit (`cases(n)`) and the seed is fixed, so the default run is the same
-//! on every machine; `PROPTEST_CASES=n` and `PROPTEST_RNG_SEED=s` explore further, and the
-//! `#[ignore]`d `*_long` tests run 20× more cases:
+//! Case counts are explicit and the seed is fixed, so the default run (about 7 s in release on
+//! two cores) is the same on every machine: 400 byte strings, 600 texts, 600 JSON values, 3000
+//! scene-shaped documents, 100 files, 10 000 mutations, every number of 42 scenes × 3
+//! non-finite values, 150 mechanisms. `PROPTEST_CASES=n` and `PROPTEST_RNG_SEED=s` explore
+//! further, and the `#[ignore]`d `*_long` tests run 20× the cases (1–2 minutes each):
 //! `cargo test --release -p lash-model --test scene_props -- --ignored`.
+//! A cargo-fuzz target for the parser is in `crates/model/fuzz/` (README there).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -24,7 +28,7 @@ use std::fmt::Write as _;
 use lash_model::cases::press_catalogue;
 use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec};
 use lash_model::{Mechanism, Scene, SceneError};
-use lash_solver::{Atol, Integrator, Method, OdeSystem, Output, SolveError, SolverOptions};
+use lash_solver::{solve, Atol, Integrator, Method, OdeSystem, Output, SolveError, SolverOptions};
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::strategy::ValueTree;
@@ -175,9 +179,10 @@ fn check_located(text: &str, e: &SceneError) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// Parses `text`; when that succeeds, builds the mechanism and evaluates it once (right-hand
-/// side, events, outputs, power at the initial state). Nothing may panic; every error must
-/// name a location. A built mechanism has a finite time span and a finite initial state.
+/// Parses `text`; when that succeeds, builds the mechanism, evaluates it once (right-hand side,
+/// events, Jacobian, outputs, power at the initial state) and takes 20 RK4 steps. Nothing may
+/// panic; every error must name a location. A built mechanism has a finite time span and a
+/// finite initial state; the steps end in a typed error or a finite state.
 fn parse_and_build(text: &str) -> Result<Result<Mechanism, SceneError>, TestCaseError> {
     let r = Scene::from_json_str(text).and_then(|s| Mechanism::from_scene(&s));
     match &r {
@@ -198,6 +203,17 @@ fn parse_and_build(text: &str) -> Result<Result<Mechanism, SceneError>, TestCase
             m.jacobian(t0, &y0, jac.as_mut());
             let _ = m.outputs(t0, &y0);
             let _ = m.power(t0, &y0);
+            // 20 RK4 steps with events: a typed error or a finite state.
+            let h = ((t1 - t0) / 20.0).min(1e-4);
+            let opts = SolverOptions {
+                method: Method::Rk4,
+                step: Some(h),
+                output: Output::Final,
+                ..SolverOptions::default()
+            };
+            if let Ok(sol) = solve(m, (t0, t0 + 20.0 * h), &y0, &opts) {
+                prop_assert!(sol.y_final.iter().all(|v| v.is_finite()));
+            }
         }
     }
     Ok(r)
@@ -696,7 +712,7 @@ fn scene_shaped_json_never_panics_and_errors_name_a_location() {
 }
 
 #[test]
-#[ignore = "20x the default case count (about a minute)"]
+#[ignore = "20x the default case count (1–2 minutes)"]
 fn scene_shaped_json_long() {
     scene_shaped(60_000);
 }
@@ -1369,7 +1385,7 @@ fn mutated_valid_scenes_fail_where_they_were_mutated() {
 }
 
 #[test]
-#[ignore = "20x the default case count (about a minute)"]
+#[ignore = "20x the default case count (1–2 minutes)"]
 fn mutated_valid_scenes_long() {
     mutations(200_000);
 }
@@ -1991,7 +2007,7 @@ fn random_valid_mechanisms_keep_the_constraints() {
 }
 
 #[test]
-#[ignore = "20x the default case count (about a minute)"]
+#[ignore = "20x the default case count (1–2 minutes)"]
 fn random_valid_mechanisms_long() {
     random_mechanisms(3000);
 }
