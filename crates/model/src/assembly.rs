@@ -206,7 +206,9 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<Vec<f64>, SceneError> {
     }
     let (_, phid, jac) = eval(mech, &rows, t0, &y);
     let (_, verr) = worst(&phid);
-    if !(verr <= VEL_TOL * (1.0 + y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs())))) {
+    let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    // A huge velocity guess (1e308) overflows in the projection: never return a non-finite y0.
+    if !(vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax)) {
         return fail(mech, &phid, &jac, "velocities", 1);
     }
     // Rank of the ideal equations (the KKT system) at the assembled state.

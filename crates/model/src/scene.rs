@@ -120,6 +120,7 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
     /// The moving bodies (ground is implicit). At least one.
+    #[serde(deserialize_with = "objects")]
     pub bodies: Vec<BodySpec>,
     /// Joints, drivers and clearance joints. Default none.
     #[serde(default)]
@@ -128,7 +129,7 @@ pub struct Scene {
     #[serde(default)]
     pub gravity: [f64; 2],
     /// Baumgarte stabilisation. Default α = β = 5 s⁻¹.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "object")]
     pub baumgarte: Baumgarte,
     /// Start time (s). Default 0.
     #[serde(default)]
@@ -140,7 +141,7 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub revolutions: Option<f64>,
     /// Named parts the press metrics need (INTERFACES.md). Default none.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "object")]
     pub roles: RoleNames,
 }
 
@@ -205,8 +206,10 @@ pub struct RevoluteSpec {
     /// Unique joint name.
     pub name: String,
     /// First attachment.
+    #[serde(deserialize_with = "object")]
     pub a: Attachment,
     /// Second attachment.
+    #[serde(deserialize_with = "object")]
     pub b: Attachment,
 }
 
@@ -307,8 +310,10 @@ pub struct ClearanceSpec {
     /// Unique joint name.
     pub name: String,
     /// The bearing (hole), radius R_B.
+    #[serde(deserialize_with = "object")]
     pub bearing: ClearanceEnd,
     /// The journal (pin), radius R_J < R_B.
+    #[serde(deserialize_with = "object")]
     pub journal: ClearanceEnd,
     /// Normal contact law.
     pub normal: NormalSpec,
@@ -316,7 +321,11 @@ pub struct ClearanceSpec {
     #[serde(default)]
     pub friction: FrictionSpec,
     /// Hydrodynamic film. Default none (dry joint).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "object_opt"
+    )]
     pub film: Option<FilmSpec>,
     /// Initial eccentricity e(t_start), global (m). Default [0, 0] (centred); ė(t_start) = 0.
     #[serde(default)]
@@ -346,8 +355,10 @@ pub struct Material {
 #[serde(deny_unknown_fields)]
 pub struct Materials {
     /// Bearing material.
+    #[serde(deserialize_with = "object")]
     pub bearing: Material,
     /// Journal material.
+    #[serde(deserialize_with = "object")]
     pub journal: Material,
 }
 
@@ -363,7 +374,11 @@ pub struct ImpactSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<f64>,
     /// Materials for the Hertz stiffness. Exactly one of `k` and `materials`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "object_opt"
+    )]
     pub materials: Option<Materials>,
     /// Maximum damping c_max (N·s/m), ≥ 0.
     pub c_max: f64,
@@ -383,7 +398,11 @@ pub struct RestitutionSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<f64>,
     /// Materials for the Hertz stiffness. Exactly one of `k` and `materials`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "object_opt"
+    )]
     pub materials: Option<Materials>,
     /// Coefficient of restitution c_r in (0, 1].
     pub restitution: f64,
@@ -566,6 +585,45 @@ impl JointSpec {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Structs only as objects.
+//
+// serde's derive also reads a struct from an array of its fields in order (`"baumgarte": [5, 5]`,
+// a body as `["crank", 1.0, 0.1]`). The format has no such form: these read a struct through
+// `deserialize_map`, so an array is "invalid type: sequence, expected an object" at its own path
+// (the map access passed on is serde_path_to_error's, so deeper paths are kept).
+// ---------------------------------------------------------------------------------------------
+
+struct Obj<T>(T);
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Obj<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for V<T> {
+            type Value = T;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+                T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+            }
+        }
+        d.deserialize_map(V(std::marker::PhantomData)).map(Obj)
+    }
+}
+
+fn object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+    Obj::deserialize(d).map(|o| o.0)
+}
+
+fn object_opt<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
+    Option::<Obj<T>>::deserialize(d).map(|o| o.map(|o| o.0))
+}
+
+fn objects<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T>, D::Error> {
+    Vec::<Obj<T>>::deserialize(d).map(|v| v.into_iter().map(|o| o.0).collect())
+}
+
+// ---------------------------------------------------------------------------------------------
 // Internally tagged enums with full error paths.
 //
 // serde's derive for internally tagged enums buffers the object, so errors inside a variant lose
@@ -590,7 +648,12 @@ fn variant<'de, D: Deserializer<'de>, T: DeserializeOwned>(
             Some((p, m)) => (format!("{path}.{p}"), m.to_string()),
             None => (path, inner),
         };
-        D::Error::custom(format!("{PATH_MARK}{path}{PATH_MARK}{inner}"))
+        if path == "." {
+            // At the variant object itself (a missing field): the outer path says where.
+            D::Error::custom(inner)
+        } else {
+            D::Error::custom(format!("{PATH_MARK}{path}{PATH_MARK}{inner}"))
+        }
     })
 }
 
@@ -676,35 +739,51 @@ impl<'de> Deserialize<'de> for FrictionSpec {
 
 impl Scene {
     /// Parses and validates a scene from JSON text.
+    ///
+    /// Text that is not JSON gets a [`SceneError::Syntax`] (its first syntax error), never a
+    /// schema error about the part read before it; a missing field's path names the field.
     pub fn from_json_str(text: &str) -> Result<Scene, SceneError> {
+        // Syntax first, on the whole text: the typed pass below stops at the first value of
+        // the wrong type, which may come before a syntax error (`0x`, a truncated file).
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| syntax_error(&e))?;
+        if !value.is_object() {
+            return Err(SceneError::Schema {
+                path: ".".into(),
+                message: format!("expected a JSON object (the scene), got {}", kind(&value)),
+            });
+        }
         let de = &mut serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
             let outer = e.path().to_string();
             let inner = e.into_inner();
             use serde_json::error::Category;
             match inner.classify() {
-                Category::Syntax | Category::Eof | Category::Io => SceneError::Syntax {
-                    line: inner.line(),
-                    column: inner.column(),
-                    message: strip_position(&inner.to_string()),
+                // The text is JSON (checked above): serde_json reports an array longer than a
+                // fixed-size field (`[1, 2, 3]` for [x, y]) as "trailing characters".
+                Category::Syntax | Category::Eof => SceneError::Schema {
+                    path: outer,
+                    message: format!(
+                        "{}: the array has more elements than the field takes",
+                        strip_position(&inner.to_string())
+                    ),
                 },
+                Category::Io => syntax_error(&inner),
                 Category::Data => {
                     let msg = inner.to_string();
-                    match split_marked(&msg) {
-                        Some((p, m)) => SceneError::Schema {
-                            path: if outer == "." {
-                                p.to_string()
-                            } else {
-                                format!("{outer}.{p}")
-                            }
-                            .replace(".[", "["),
-                            message: m.to_string(),
-                        },
-                        None => SceneError::Schema {
-                            path: outer,
-                            message: msg,
-                        },
-                    }
+                    let (path, message) = match split_marked(&msg) {
+                        // (The inner path starts with a key: a variant is an object.)
+                        Some((p, m)) => (join_path(&outer, p), m.to_string()),
+                        None => (outer, msg),
+                    };
+                    // serde reports a missing field at its object: name the field itself.
+                    let path = match message
+                        .strip_prefix("missing field `")
+                        .and_then(|r| r.split_once('`'))
+                    {
+                        Some((field, _)) => join_path(&path, field),
+                        None => path,
+                    };
+                    SceneError::Schema { path, message }
                 }
             }
         })?;
@@ -735,6 +814,37 @@ impl Scene {
     /// Index of the joint named `name`.
     pub fn joint_index(&self, name: &str) -> Option<usize> {
         self.joints.iter().position(|j| j.name() == name)
+    }
+}
+
+/// The JSON type of a value, for messages.
+fn kind(v: &serde_json::Value) -> &'static str {
+    match v {
+        serde_json::Value::Null => "null",
+        serde_json::Value::Bool(_) => "a boolean",
+        serde_json::Value::Number(_) => "a number",
+        serde_json::Value::String(_) => "a string",
+        serde_json::Value::Array(_) => "an array",
+        serde_json::Value::Object(_) => "an object",
+    }
+}
+
+/// `outer.inner`; `.` (the root) on either side is left out.
+fn join_path(outer: &str, inner: &str) -> String {
+    if inner == "." {
+        outer.to_string()
+    } else if outer == "." {
+        inner.to_string()
+    } else {
+        format!("{outer}.{inner}")
+    }
+}
+
+fn syntax_error(e: &serde_json::Error) -> SceneError {
+    SceneError::Syntax {
+        line: e.line(),
+        column: e.column(),
+        message: strip_position(&e.to_string()),
     }
 }
 
@@ -932,6 +1042,15 @@ impl Scene {
                         format!("must be greater than t_start = {}, got {te}", self.t_start),
                     ));
                 }
+                if !(te - self.t_start).is_finite() {
+                    return Err(invalid(
+                        "t_end",
+                        format!(
+                            "the time span t_end − t_start = {te:?} − {:?} overflows",
+                            self.t_start
+                        ),
+                    ));
+                }
             }
             (None, Some(n)) => {
                 C::positive("revolutions", n, "revolutions")?;
@@ -943,10 +1062,25 @@ impl Scene {
                 };
                 let k = self.joint_index(d).expect("checked above");
                 if let JointSpec::Driver(dr) = &self.joints[k] {
-                    if dr.omega_rad_s() == 0.0 {
+                    let w = dr.omega_rad_s();
+                    if w == 0.0 {
                         return Err(invalid(
                             "revolutions",
                             format!("the crank driver '{d}' does not turn (omega = 0)"),
+                        ));
+                    }
+                    // The end time must be a finite time after t_start in f64 (1e300 revolutions
+                    // overflow; t_start = 1e300 absorbs any span).
+                    let span = n * 2.0 * std::f64::consts::PI / w.abs();
+                    let te = self.t_start + span;
+                    if !(span.is_finite() && te.is_finite() && te > self.t_start) {
+                        return Err(invalid(
+                            "revolutions",
+                            format!(
+                                "the end time t_start + revolutions·2π/|ω| = {:?} + {span:?} s \
+                                 is not a finite time after t_start",
+                                self.t_start
+                            ),
                         ));
                     }
                 }
@@ -1008,6 +1142,8 @@ impl Scene {
                 )),
             }
         } else {
+            // The body first: a misspelt "ground" is an unknown body, not a misplaced "at".
+            self.check_moving_body(&format!("{path}.body"), body)?;
             if at.is_some() {
                 return Err(invalid(
                     format!("{path}.at"),
@@ -1016,10 +1152,7 @@ impl Scene {
             }
             match point {
                 Some(pt) => self.check_body_point(path, body, pt),
-                None => {
-                    self.check_moving_body(&format!("{path}.body"), body)?;
-                    Err(invalid(format!("{path}.point"), "missing the point name"))
-                }
+                None => Err(invalid(format!("{path}.point"), "missing the point name")),
             }
         }
     }
@@ -1082,6 +1215,25 @@ impl Scene {
                                     ),
                                 ));
                             }
+                        }
+                        // Extreme moduli (1e308, 5e-324) pass the checks above but give an
+                        // infinite or zero K.
+                        let k = crate::laws::hertz_stiffness(
+                            b.radius,
+                            j.radius,
+                            m.bearing.youngs_modulus,
+                            m.bearing.poisson_ratio,
+                            m.journal.youngs_modulus,
+                            m.journal.poisson_ratio,
+                        );
+                        if !(k.is_finite() && k > 0.0) {
+                            return Err(invalid(
+                                format!("{path}.materials"),
+                                format!(
+                                    "the Hertz stiffness K = {k} N/m^1.5 of these materials is \
+                                     not a finite positive number"
+                                ),
+                            ));
                         }
                         Ok(())
                     }
