@@ -157,29 +157,37 @@ pub struct State {
 
 /// Two representative states of a press with one clearance joint, from a run of two
 /// revolutions with DOP853 at rtol 1e-8: the state of largest penetration δ (in contact, or
-/// for a lubricated joint the most loaded film) and the one of smallest δ (free flight, the
-/// journal nearest the bearing's centre).
+/// for a lubricated joint the most loaded film) and a free-flight state, the one after the
+/// first quarter of the run whose δ is nearest −c/2 (journal half-way between the bearing's
+/// centre and its wall; the initial state is centred, a special case of the geometry).
 pub fn contact_and_free_states(m: &Mechanism) -> (State, State) {
     let mut o = options(Method::Dop853, 1e-8, 1e-11, 0.0, Output::Steps);
     o.event_samples = 2;
     let y0 = m.initial_state();
-    let sol = solve(m, (m.t_start(), m.t_end()), &y0, &o).expect("the press case runs");
-    let mut best: Option<State> = None;
-    let mut worst: Option<State> = None;
+    let (t0, t1) = (m.t_start(), m.t_end());
+    let sol = solve(m, (t0, t1), &y0, &o).expect("the press case runs");
+    let mut contact: Option<State> = None;
+    let mut free: Option<(f64, State)> = None;
     for k in 0..sol.len() {
         let (t, y) = (sol.t[k], sol.state(k));
-        let delta = m.outputs(t, y).clearance[0].delta;
+        let cl = m.outputs(t, y).clearance[0].clone();
+        let delta = cl.delta;
         let s = || State {
             t,
             y: y.to_vec(),
             delta,
         };
-        if best.as_ref().is_none_or(|b| delta > b.delta) {
-            best = Some(s());
+        if contact.as_ref().is_none_or(|b| delta > b.delta) {
+            contact = Some(s());
         }
-        if worst.as_ref().is_none_or(|w| delta < w.delta) {
-            worst = Some(s());
+        if t > t0 + 0.25 * (t1 - t0) && delta < 0.0 {
+            // c = |e| − δ = ε c − δ  ⇒  c = −δ / (1 − ε), and ε < 1 when δ < 0.
+            let clearance = -delta / (1.0 - cl.eps);
+            let dist = (delta + 0.5 * clearance).abs();
+            if free.as_ref().is_none_or(|(d, _)| dist < *d) {
+                free = Some((dist, s()));
+            }
         }
     }
-    (best.expect("steps"), worst.expect("steps"))
+    (contact.expect("steps"), free.expect("a free flight").1)
 }

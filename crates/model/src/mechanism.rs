@@ -672,19 +672,9 @@ impl Mechanism {
         for k in 0..self.clr.len() {
             let st = self.clearance_state(k, sc);
             let c = &self.clr[k];
-            let mut ev = ClrEval {
-                st,
-                ..ClrEval::default()
-            };
+            let ev = self.clearance_forces(k, st);
             // Dry contact.
             if st.delta > 0.0 {
-                ev.f_n = c
-                    .normal
-                    .force(st.delta, st.delta_dot, c.impact_velocity.get());
-                ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
-                if let Some(fr) = &c.friction {
-                    ev.f_t = fr.force(st.v_t, ev.f_n);
-                }
                 let f_j = [
                     -ev.f_n * st.n[0] + ev.f_t * st.t[0],
                     -ev.f_n * st.n[1] + ev.f_t * st.t[1],
@@ -701,10 +691,8 @@ impl Mechanism {
                 }
             }
             // Oil film.
-            if let Some(film) = &c.film {
-                let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
-                ev.f_r = fr;
-                ev.f_tf = ft;
+            if c.film.is_some() {
+                let (fr, ft) = (ev.f_r, ev.f_tf);
                 let f_j = [fr * st.n[0] + ft * st.t[0], fr * st.n[1] + ft * st.t[1]];
                 if let Some(kj) = c.journal.body {
                     let arm = rot(sc.cs[kj], c.journal.s);
@@ -717,6 +705,32 @@ impl Mechanism {
             }
             sc.clr[k] = ev;
         }
+    }
+
+    /// The force laws of clearance joint k at the clearance state `st` (MODEL.md §3–§4):
+    /// normal force, friction, elastic part (δ > 0 only) and film forces (when lubricated).
+    #[inline]
+    pub(crate) fn clearance_forces(&self, k: usize, st: ClearanceState) -> ClrEval {
+        let c = &self.clr[k];
+        let mut ev = ClrEval {
+            st,
+            ..ClrEval::default()
+        };
+        if st.delta > 0.0 {
+            ev.f_n = c
+                .normal
+                .force(st.delta, st.delta_dot, c.impact_velocity.get());
+            ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
+            if let Some(fr) = &c.friction {
+                ev.f_t = fr.force(st.v_t, ev.f_n);
+            }
+        }
+        if let Some(film) = &c.film {
+            let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
+            ev.f_r = fr;
+            ev.f_tf = ft;
+        }
+        ev
     }
 
     /// Value Φ, rate Φ̇, γ (Φ̈ = Φ_q q̈ − γ, prescribed accelerations folded in) and the
