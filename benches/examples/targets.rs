@@ -2,7 +2,7 @@
 //! performance", every claim as a ratio of two measurements taken side by side in one run.
 //!
 //! ```text
-//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [--reps N]
+//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [--reps N]
 //! (a) one RHS evaluation of the dry press (150 rpm, c = 0.1 mm), ns, against 1 µs
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
 //!     second revolution (2001 points); the cheapest run of each method with error ≤ 1e-6 m/s²
@@ -10,6 +10,7 @@
 //! (c) dry 150 rpm, c = 0.1 mm: the same error over the first half revolution; the adaptive
 //!     methods with event location against RK4 without events (its error over h)
 //! (d) rodas5p against bdf at equal error on several press cases (work–precision)
+//! (e) Rodas5P with the previous Jacobian (plain central differences of f) against the new one
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -435,6 +436,97 @@ fn section_d(ctx: &Ctx) {
     }
 }
 
+/// The mechanism with the Jacobian of the previous version: central differences of f in every
+/// component of y with h_j = 1e-8 · max(|y_j|, 1) (24 RHS evaluations), for a side-by-side
+/// comparison with the mechanism's own Jacobian.
+struct PlainDifferences<'a>(&'a Mechanism);
+
+impl OdeSystem for PlainDifferences<'_> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.0.rhs(t, y, dy)
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, t: f64, y: &[f64], mut jac: faer::MatMut<'_, f64>) {
+        let n = y.len();
+        let nq = n / 2;
+        let (mut yp, mut fp, mut fm) = (y.to_vec(), vec![0.0; n], vec![0.0; n]);
+        for j in 0..n {
+            for i in 0..n {
+                jac[(i, j)] = 0.0;
+            }
+        }
+        for i in 0..nq {
+            jac[(i, nq + i)] = 1.0;
+        }
+        for j in 0..n {
+            let h = 1e-8 * y[j].abs().max(1.0);
+            yp[j] = y[j] + h;
+            self.0.rhs(t, &yp, &mut fp);
+            yp[j] = y[j] - h;
+            self.0.rhs(t, &yp, &mut fm);
+            yp[j] = y[j];
+            for i in nq..n {
+                jac[(i, j)] = (fp[i] - fm[i]) * (0.5 / h);
+            }
+        }
+    }
+    fn n_events(&self) -> usize {
+        self.0.n_events()
+    }
+    fn event_spec(&self, i: usize) -> lash_solver::EventSpec {
+        self.0.event_spec(i)
+    }
+    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        self.0.events(t, y, g)
+    }
+    fn on_event(&self, hit: &lash_solver::EventHit, y: &mut [f64]) -> lash_solver::EventAction {
+        self.0.on_event(hit, y)
+    }
+}
+
+fn section_e(ctx: &Ctx) {
+    println!(
+        "\n(e) Rodas5P with the previous Jacobian (plain differences of f) and with the new one"
+    );
+    for stem in ["lubricated_150rpm_c0.1", "dry_150rpm_c0.1"] {
+        let m = press(stem, 2.0);
+        for rtol in [1e-6, 1e-8] {
+            let o = options(Method::Rodas5p, rtol, rtol * 1e-3, 0.0, Output::Final);
+            let y0 = m.initial_state();
+            let time = |sys: &dyn Fn() -> lash_solver::Solution| {
+                let mut best = f64::INFINITY;
+                let mut sol = None;
+                for _ in 0..ctx.reps.max(3) {
+                    let start = Instant::now();
+                    sol = Some(sys());
+                    best = best.min(start.elapsed().as_secs_f64());
+                }
+                (best, sol.expect("ran"))
+            };
+            let plain = PlainDifferences(&m);
+            let (w_old, s_old) = time(&|| {
+                lash_solver::solve(&plain, (m.t_start(), m.t_end()), &y0, &o).expect("runs")
+            });
+            let (w_new, s_new) =
+                time(&|| lash_solver::solve(&m, (m.t_start(), m.t_end()), &y0, &o).expect("runs"));
+            println!(
+                "  {stem:24} rtol {rtol:.0e}: previous {:6} steps {:8.4} s, new {:6} steps {:8.4} s, \
+                 previous/new wall = {:.1}×",
+                s_old.stats.accepted,
+                w_old,
+                s_new.stats.accepted,
+                w_new,
+                w_old / w_new
+            );
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut reps = 3;
@@ -448,15 +540,15 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--reps takes a number");
             }
-            s @ ("a" | "b" | "c" | "d") => sections.push(s.to_string()),
+            s @ ("a" | "b" | "c" | "d" | "e") => sections.push(s.to_string()),
             other => {
-                eprintln!("unknown argument {other}: expected a, b, c, d, --reps N");
+                eprintln!("unknown argument {other}: expected a, b, c, d, e, --reps N");
                 std::process::exit(2);
             }
         }
     }
     if sections.is_empty() {
-        sections = ["a", "b", "c", "d"].map(String::from).to_vec();
+        sections = ["a", "b", "c", "d", "e"].map(String::from).to_vec();
     }
     let ctx = Ctx { reps };
     for s in sections {
@@ -464,7 +556,8 @@ fn main() {
             "a" => section_a(&ctx),
             "b" => section_b(&ctx),
             "c" => section_c(&ctx),
-            _ => section_d(&ctx),
+            "d" => section_d(&ctx),
+            _ => section_e(&ctx),
         }
     }
 }
