@@ -1,48 +1,338 @@
 //! The Jacobian ∂f/∂y of the mechanism ODE for implicit methods.
 //!
 //! ```text
-//! f = (q̇, q̈(t, q, q̇))      ∂f/∂y = [ 0        I        ]
-//!                                   [ ∂q̈/∂q   ∂q̈/∂q̇   ]
-//! ∂q̈/∂y_j ≈ (q̈(y + h_j e_j) − q̈(y − h_j e_j)) / (2 h_j),  h_j = 1e-8 · max(|y_j|, 1)
+//! f = (q̇, q̈(t, q, q̇)),   ∂f/∂y = [ 0        I       ]
+//!                                 [ ∂q̈/∂q   ∂q̈/∂q̇  ]
+//! q̈ = K(t, q, q̇; g),  g = g(q, q̇) the applied forces (gravity and clearance joints),
+//!   K the KKT solution, linear in g:  ∂K/∂g = A = M⁻¹ − M⁻¹Φ_qᵀ S⁻¹ Φ_q M⁻¹
+//! ∂q̈/∂y = ∂K/∂y |_{g fixed} + A ∂g/∂y
+//!   ∂K/∂q  |_g : central differences, h_j = 1e-8 · max(|q_j|, 1)
+//!   ∂K/∂q̇  |_g = M⁻¹Φ_qᵀ S⁻¹ ∂r/∂q̇,  r = γ − 2αΦ̇ − β²Φ,
+//!                ∂r/∂q̇ = ∂γ/∂q̇ − 2α Φ_q   (closed form; γ ∋ ω² (w·A s))
+//!   ∂g/∂y = ∂g/∂u · ∂u/∂y + ∂g/∂φ |_u,  u = (e, ė, φ̇_J, φ̇_B) of each clearance joint,
+//!           ∂u/∂y closed form (e = r_J + A_J s_J − r_B − A_B s_B, ė its time derivative),
+//!           ∂(F, T)/∂u by central differences in u, with steps scaled to the joint:
+//!           h_e = 1e-6 · min(|e|, |δ|) (floor 1e-10 c), h_ė = 1e-6 · max(|ė|, |v_T|, 1e-9)
 //! ```
-//! The upper blocks are exact; the lower ones are central differences of the KKT solution
-//! (finite differences are what MODEL.md allows for the KKT part). The step is small against
-//! the penetrations of the contact law (≥ 1e-7 m in practice), so the relative truncation error
-//! is about (h/δ)², and the rounding error about 1e-8 relative.
+//! F is the total force of the joint on its journal (contact, friction, film), T the friction
+//! force (its moment arm R_J or R_B about the pin centres); the journal body receives
+//! (F, (A_J s_J) × F + R_J T), the bearing body the opposite with R_B.
+//!
+//! Why not plain differences of f: the clearance forces vary on the scale of the clearance
+//! (c = 0.1 mm) and, through the normal n = e/|e|, on the scale |e| itself, which is 0 at the
+//! centred start of the press and grows through 10⁻¹²…10⁻⁸ m; an increment of 10⁻⁸ m in the
+//! body coordinates straddles that and gives a Jacobian with O(1) errors, which costs a
+//! Rosenbrock method (it needs the exact Jacobian for its order) thousands of tiny steps.
+//! Differencing in e, ė directly with increments relative to |e| and |δ| has no such limit and
+//! no cancellation (e is not recomputed from positions of size 0.35 m). The constraint part
+//! varies on the scale of the links (≥ 1.5 cm), where 10⁻⁸ is accurate to ~1e-8 relative.
+//! MODEL.md allows finite differences for the KKT part; the closed forms above are exact.
 
 use faer::MatMut;
-use lash_solver::OdeSystem;
 
-use crate::mechanism::Mechanism;
+use crate::geometry::{ClearanceInput, ClearanceState};
+use crate::mechanism::{perp, rot, Mechanism, Owner, Scratch, TermKind};
 
-/// Relative finite-difference step.
+/// Relative finite-difference step of the position columns (constraint geometry).
 pub const FD_STEP: f64 = 1e-8;
+
+/// Relative step of the differences in the clearance variables u = (e, ė, φ̇_J, φ̇_B).
+const LOCAL_STEP: f64 = 1e-6;
 
 /// Fills `jac` (n × n) with ∂f/∂y at (t, y).
 pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, f64>) {
     let n = y.len();
     let nq = n / 2;
-    let mut yp = y.to_vec();
-    let mut fp = vec![0.0; n];
-    let mut fm = vec![0.0; n];
-    for i in 0..n {
-        for j in 0..n {
+    let m = mech.rows.len();
+    for j in 0..n {
+        for i in 0..n {
             jac[(i, j)] = 0.0;
         }
     }
     for i in 0..nq {
         jac[(i, nq + i)] = 1.0;
     }
+    let mut sc = mech.scratch.borrow_mut();
+    if !mech.evaluate(t, y, &mut sc, false) {
+        for j in 0..n {
+            for i in nq..n {
+                jac[(i, j)] = f64::NAN;
+            }
+        }
+        return;
+    }
+    // ∂g/∂y (nq × n, column-major) through the clearance joints.
+    let mut dg = vec![0.0; nq * n];
+    for k in 0..mech.clr.len() {
+        clearance_force_jacobian(mech, k, &sc, n, &mut dg);
+    }
+    // Lower-left and lower-right blocks: A ∂g/∂y (A applied column by column, with the
+    // Cholesky factor of S from the evaluation at y).
+    let mut col = vec![0.0; nq];
+    let mut lam = vec![0.0; m];
     for j in 0..n {
-        let h = FD_STEP * y[j].abs().max(1.0);
-        yp[j] = y[j] + h;
-        mech.rhs(t, &yp, &mut fp);
-        yp[j] = y[j] - h;
-        mech.rhs(t, &yp, &mut fm);
-        yp[j] = y[j];
-        let inv = 0.5 / h;
-        for i in nq..n {
-            jac[(i, j)] = (fp[i] - fm[i]) * inv;
+        let dgj = &dg[j * nq..(j + 1) * nq];
+        if dgj.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        project(mech, &sc, dgj, &mut lam, &mut col);
+        for i in 0..nq {
+            jac[(nq + i, j)] = col[i];
         }
     }
+    // ∂K/∂q̇ at fixed g: M⁻¹ Φ_qᵀ S⁻¹ ∂r/∂q̇, column by column.
+    let drdv = constraint_rhs_velocity_jacobian(mech, &sc);
+    for j in 0..nq {
+        for a in 0..m {
+            lam[a] = drdv[a * nq + j];
+        }
+        if lam.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        solve_s(&sc.smat, m, &mut lam);
+        for i in 0..nq {
+            let mut s = 0.0;
+            for a in 0..m {
+                s += sc.jac[a * nq + i] * lam[a];
+            }
+            jac[(nq + i, nq + j)] += mech.minv[i] * s;
+        }
+    }
+    // ∂K/∂q at fixed g: central differences of the KKT solution with g held at g(y).
+    let g0 = sc.g.clone();
+    let mut yp = y.to_vec();
+    let mut fp = vec![0.0; nq];
+    for j in 0..nq {
+        let h = FD_STEP * y[j].abs().max(1.0);
+        yp[j] = y[j] + h;
+        let okp = frozen_kkt(mech, t, &yp, &g0, &mut sc);
+        fp.copy_from_slice(&sc.qdd);
+        yp[j] = y[j] - h;
+        let okm = frozen_kkt(mech, t, &yp, &g0, &mut sc);
+        yp[j] = y[j];
+        let inv = 0.5 / h;
+        for i in 0..nq {
+            jac[(nq + i, j)] += if okp && okm {
+                (fp[i] - sc.qdd[i]) * inv
+            } else {
+                f64::NAN
+            };
+        }
+    }
+}
+
+/// The KKT solution at (t, y) with the applied forces fixed at `g`; false if S is singular.
+fn frozen_kkt(mech: &Mechanism, t: f64, y: &[f64], g: &[f64], sc: &mut Scratch) -> bool {
+    mech.kinematics(t, y, sc);
+    sc.g.copy_from_slice(g);
+    mech.constraint_rows(t, sc, false);
+    mech.solve_kkt(sc)
+}
+
+/// Solves S x = b in place with the Cholesky factor L (lower, row-major m × m) in `smat`.
+fn solve_s(smat: &[f64], m: usize, b: &mut [f64]) {
+    for i in 0..m {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= smat[i * m + k] * b[k];
+        }
+        b[i] = s / smat[i * m + i];
+    }
+    for i in (0..m).rev() {
+        let mut s = b[i];
+        for k in i + 1..m {
+            s -= smat[k * m + i] * b[k];
+        }
+        b[i] = s / smat[i * m + i];
+    }
+}
+
+/// out = A v = M⁻¹ (v − Φ_qᵀ S⁻¹ Φ_q M⁻¹ v) (after an evaluation: Φ_q in `sc.jac`, the
+/// Cholesky factor of S in `sc.smat`).
+fn project(mech: &Mechanism, sc: &Scratch, v: &[f64], lam: &mut [f64], out: &mut [f64]) {
+    let nq = v.len();
+    let m = lam.len();
+    let minv = &mech.minv;
+    for a in 0..m {
+        let ja = &sc.jac[a * nq..(a + 1) * nq];
+        let mut s = 0.0;
+        for j in 0..nq {
+            s += ja[j] * minv[j] * v[j];
+        }
+        lam[a] = s;
+    }
+    solve_s(&sc.smat, m, lam);
+    for j in 0..nq {
+        let mut s = v[j];
+        for a in 0..m {
+            s -= sc.jac[a * nq + j] * lam[a];
+        }
+        out[j] = minv[j] * s;
+    }
+}
+
+/// ∂r/∂q̇ (m × nq, row-major) of the constraint right-hand side r = γ − 2αΦ̇ − β²Φ.
+fn constraint_rhs_velocity_jacobian(mech: &Mechanism, sc: &Scratch) -> Vec<f64> {
+    let nq = mech.nq();
+    let a2 = 2.0 * mech.alpha;
+    let mut out = vec![0.0; mech.rows.len() * nq];
+    for (r, row) in mech.rows.iter().enumerate() {
+        for term in &row.terms[..row.n_terms] {
+            let Owner::Int(i) = mech.bodies[term.body].owner else {
+                continue;
+            };
+            let base = r * nq + 3 * i;
+            match term.kind {
+                TermKind::Point { s, w: wv } => {
+                    let a = rot(sc.cs[term.body], s);
+                    let b = perp(a);
+                    let w = sc.vel[term.body][2];
+                    out[base] -= a2 * wv[0];
+                    out[base + 1] -= a2 * wv[1];
+                    out[base + 2] += 2.0 * w * (wv[0] * a[0] + wv[1] * a[1])
+                        - a2 * (wv[0] * b[0] + wv[1] * b[1]);
+                }
+                TermKind::Angle { c } => out[base + 2] -= a2 * c,
+            }
+        }
+    }
+    out
+}
+
+/// The joint's force on its journal F and its friction force T as functions of
+/// u = (e_x, e_y, ė_x, ė_y, φ̇_J, φ̇_B).
+fn local_forces(mech: &Mechanism, k: usize, u: &[f64; 6]) -> [f64; 3] {
+    let c = &mech.clr[k];
+    let st = ClearanceState::compute(&ClearanceInput {
+        r_j: [u[0], u[1]],
+        r_b: [0.0, 0.0],
+        v_j: [u[2], u[3]],
+        v_b: [0.0, 0.0],
+        phi_dot_j: u[4],
+        phi_dot_b: u[5],
+        radius_j: c.rj,
+        radius_b: c.rb,
+    });
+    let ev = mech.clearance_forces(k, st);
+    let fn_ = -ev.f_n + ev.f_r;
+    let ft = ev.f_t + ev.f_tf;
+    [
+        fn_ * st.n[0] + ft * st.t[0],
+        fn_ * st.n[1] + ft * st.t[1],
+        ev.f_t,
+    ]
+}
+
+/// Adds the contribution of clearance joint k to ∂g/∂y (nq × n, column-major in `dg`).
+fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, dg: &mut [f64]) {
+    let nq = n / 2;
+    let c = &mech.clr[k];
+    let st = sc.clr[k].st;
+    let w_j = c.journal.body.map_or(0.0, |b| sc.vel[b][2]);
+    let w_b = c.bearing.body.map_or(0.0, |b| sc.vel[b][2]);
+    let edot = ed(mech, k, sc);
+    let u0 = [st.e[0], st.e[1], edot[0], edot[1], w_j, w_b];
+    // Steps scaled to the joint (see the module documentation).
+    let he = (LOCAL_STEP * st.e_norm.min(st.delta.abs())).max(1e-10 * c.c);
+    let vscale = u0[2].abs().max(u0[3].abs()).max(st.v_t.abs()).max(1e-9);
+    let hv = LOCAL_STEP * vscale;
+    let hw = hv / c.rj.max(c.rb);
+    let steps = [he, he, hv, hv, hw, hw];
+    // ∂(F_x, F_y, T)/∂u, 3 × 6.
+    let mut lu = [[0.0; 6]; 3];
+    let f0 = local_forces(mech, k, &u0);
+    let mut u = u0;
+    for j in 0..6 {
+        let h = steps[j];
+        u[j] = u0[j] + h;
+        let hp = u[j] - u0[j];
+        let fp = local_forces(mech, k, &u);
+        u[j] = u0[j] - h;
+        let hm = u0[j] - u[j];
+        let fm = local_forces(mech, k, &u);
+        u[j] = u0[j];
+        for i in 0..3 {
+            lu[i][j] = (fp[i] - fm[i]) / (hp + hm);
+        }
+    }
+    // ∂u/∂y for each integrated end: e = ±(r + A s), ė = ±(v + ω perp(A s)), φ̇ of the body.
+    // Column index of (x, y, φ) of body i: 3i..3i+2; of (ẋ, ẏ, ω): nq + 3i..nq + 3i+2.
+    let mut du = vec![[0.0; 6]; n];
+    let ends = [(c.journal, 1.0, 4usize), (c.bearing, -1.0, 5usize)];
+    for (end, sign, wslot) in ends {
+        let Some(kb) = end.body else { continue };
+        let Owner::Int(i) = mech.bodies[kb].owner else {
+            continue;
+        };
+        let a = rot(sc.cs[kb], end.s);
+        let b = perp(a);
+        let w = sc.vel[kb][2];
+        let (px, py, pp, vx, vy, vw) = (
+            3 * i,
+            3 * i + 1,
+            3 * i + 2,
+            nq + 3 * i,
+            nq + 3 * i + 1,
+            nq + 3 * i + 2,
+        );
+        du[px][0] += sign;
+        du[py][1] += sign;
+        du[pp][0] += sign * b[0];
+        du[pp][1] += sign * b[1];
+        // ∂(ω perp(A s))/∂φ = −ω A s.
+        du[pp][2] -= sign * w * a[0];
+        du[pp][3] -= sign * w * a[1];
+        du[vx][2] += sign;
+        du[vy][3] += sign;
+        du[vw][2] += sign * b[0];
+        du[vw][3] += sign * b[1];
+        du[vw][wslot] += 1.0;
+    }
+    // dF/dy, dT/dy, then the generalized forces of both ends.
+    let f = [f0[0], f0[1]];
+    for j in 0..n {
+        let dj = &du[j];
+        if dj.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        let mut d = [0.0; 3];
+        for (i, di) in d.iter_mut().enumerate() {
+            *di = (0..6).map(|l| lu[i][l] * dj[l]).sum();
+        }
+        let col = &mut dg[j * nq..(j + 1) * nq];
+        for (end, sign, radius) in [(c.journal, 1.0, c.rj), (c.bearing, -1.0, c.rb)] {
+            let Some(kb) = end.body else { continue };
+            let Owner::Int(i) = mech.bodies[kb].owner else {
+                continue;
+            };
+            let a = rot(sc.cs[kb], end.s);
+            col[3 * i] += sign * d[0];
+            col[3 * i + 1] += sign * d[1];
+            col[3 * i + 2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
+        }
+    }
+    // The moment arms A s turn with their own bodies: ∂((A s) × F)/∂φ = perp(A s) × F = −(A s)·F.
+    for (end, sign) in [(c.journal, 1.0), (c.bearing, -1.0)] {
+        let Some(kb) = end.body else { continue };
+        let Owner::Int(i) = mech.bodies[kb].owner else {
+            continue;
+        };
+        let a = rot(sc.cs[kb], end.s);
+        dg[(3 * i + 2) * nq + 3 * i + 2] -= sign * (a[0] * f[0] + a[1] * f[1]);
+    }
+}
+
+/// ė of clearance joint k (after `kinematics`).
+fn ed(mech: &Mechanism, k: usize, sc: &Scratch) -> [f64; 2] {
+    let c = &mech.clr[k];
+    let vel = |end: &crate::mechanism::End| match end.body {
+        None => [0.0; 2],
+        Some(kb) => {
+            let a = rot(sc.cs[kb], end.s);
+            let [vx, vy, w] = sc.vel[kb];
+            [vx - w * a[1], vy + w * a[0]]
+        }
+    };
+    let (vj, vb) = (vel(&c.journal), vel(&c.bearing));
+    [vj[0] - vb[0], vj[1] - vb[1]]
 }

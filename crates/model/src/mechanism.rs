@@ -672,19 +672,9 @@ impl Mechanism {
         for k in 0..self.clr.len() {
             let st = self.clearance_state(k, sc);
             let c = &self.clr[k];
-            let mut ev = ClrEval {
-                st,
-                ..ClrEval::default()
-            };
+            let ev = self.clearance_forces(k, st);
             // Dry contact.
             if st.delta > 0.0 {
-                ev.f_n = c
-                    .normal
-                    .force(st.delta, st.delta_dot, c.impact_velocity.get());
-                ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
-                if let Some(fr) = &c.friction {
-                    ev.f_t = fr.force(st.v_t, ev.f_n);
-                }
                 let f_j = [
                     -ev.f_n * st.n[0] + ev.f_t * st.t[0],
                     -ev.f_n * st.n[1] + ev.f_t * st.t[1],
@@ -701,10 +691,8 @@ impl Mechanism {
                 }
             }
             // Oil film.
-            if let Some(film) = &c.film {
-                let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
-                ev.f_r = fr;
-                ev.f_tf = ft;
+            if c.film.is_some() {
+                let (fr, ft) = (ev.f_r, ev.f_tf);
                 let f_j = [fr * st.n[0] + ft * st.t[0], fr * st.n[1] + ft * st.t[1]];
                 if let Some(kj) = c.journal.body {
                     let arm = rot(sc.cs[kj], c.journal.s);
@@ -717,6 +705,32 @@ impl Mechanism {
             }
             sc.clr[k] = ev;
         }
+    }
+
+    /// The force laws of clearance joint k at the clearance state `st` (MODEL.md §3–§4):
+    /// normal force, friction, elastic part (δ > 0 only) and film forces (when lubricated).
+    #[inline]
+    pub(crate) fn clearance_forces(&self, k: usize, st: ClearanceState) -> ClrEval {
+        let c = &self.clr[k];
+        let mut ev = ClrEval {
+            st,
+            ..ClrEval::default()
+        };
+        if st.delta > 0.0 {
+            ev.f_n = c
+                .normal
+                .force(st.delta, st.delta_dot, c.impact_velocity.get());
+            ev.elastic = c.normal.stiffness() * st.delta * st.delta.sqrt();
+            if let Some(fr) = &c.friction {
+                ev.f_t = fr.force(st.v_t, ev.f_n);
+            }
+        }
+        if let Some(film) = &c.film {
+            let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
+            ev.f_r = fr;
+            ev.f_tf = ft;
+        }
+        ev
     }
 
     /// Value Φ, rate Φ̇, γ (Φ̈ = Φ_q q̈ − γ, prescribed accelerations folded in) and the
@@ -809,47 +823,54 @@ impl Mechanism {
             }
             return true;
         }
-        // S = J M⁻¹ Jᵀ (lower triangle), b = J M⁻¹ g − rc.
+        // S = J M⁻¹ Jᵀ (lower triangle), b = J M⁻¹ g − rc. Slices of exact length let the
+        // compiler drop the bounds checks; the products keep the order (J_aj M⁻¹_j) x_j.
+        let minv = &minv[..nq];
+        let g = &g[..nq];
         for a in 0..m {
             let ja = &jac[a * nq..(a + 1) * nq];
             let mut ba = 0.0;
-            for j in 0..nq {
-                ba += ja[j] * minv[j] * g[j];
+            for ((&x, &w), &gj) in ja.iter().zip(minv).zip(g) {
+                ba += x * w * gj;
             }
             lam[a] = ba - rc[a];
-            for b in 0..=a {
+            let row = &mut smat[a * m..a * m + a + 1];
+            for (b, sab) in row.iter_mut().enumerate() {
                 let jb = &jac[b * nq..(b + 1) * nq];
                 let mut s = 0.0;
-                for j in 0..nq {
-                    s += ja[j] * minv[j] * jb[j];
+                for ((&x, &w), &y) in ja.iter().zip(minv).zip(jb) {
+                    s += x * w * y;
                 }
-                smat[a * m + b] = s;
+                *sab = s;
             }
         }
         // Cholesky S = L Lᵀ in place (lower).
         for j in 0..m {
-            let mut d = smat[j * m + j];
-            for k in 0..j {
-                d -= smat[j * m + k] * smat[j * m + k];
+            let (row_j, rest) = smat[j * m..].split_at_mut(m);
+            let mut d = row_j[j];
+            for &v in &row_j[..j] {
+                d -= v * v;
             }
             if !(d > 0.0) {
                 return false;
             }
             let d = d.sqrt();
-            smat[j * m + j] = d;
-            for i in j + 1..m {
-                let mut s = smat[i * m + j];
-                for k in 0..j {
-                    s -= smat[i * m + k] * smat[j * m + k];
+            row_j[j] = d;
+            let lj = &row_j[..j];
+            for row_i in rest.chunks_exact_mut(m) {
+                let mut s = row_i[j];
+                for (&x, &y) in row_i[..j].iter().zip(lj) {
+                    s -= x * y;
                 }
-                smat[i * m + j] = s / d;
+                row_i[j] = s / d;
             }
         }
         // Forward and back substitution.
         for i in 0..m {
+            let li = &smat[i * m..i * m + i];
             let mut s = lam[i];
-            for k in 0..i {
-                s -= smat[i * m + k] * lam[k];
+            for (&x, &y) in li.iter().zip(&lam[..i]) {
+                s -= x * y;
             }
             lam[i] = s / smat[i * m + i];
         }

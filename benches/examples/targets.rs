@@ -1,0 +1,563 @@
+//! Measures the performance targets of the issue "Stability at the extremes … and
+//! performance", every claim as a ratio of two measurements taken side by side in one run.
+//!
+//! ```text
+//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [--reps N]
+//! (a) one RHS evaluation of the dry press (150 rpm, c = 0.1 mm), ns, against 1 µs
+//! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
+//!     second revolution (2001 points); the cheapest run of each method with error ≤ 1e-6 m/s²
+//!     against RK4 at the largest step h = Δ/k (Δ the grid spacing) that reaches it
+//! (c) dry 150 rpm, c = 0.1 mm: the same error over the first half revolution; the adaptive
+//!     methods with event location against RK4 without events (its error over h)
+//! (d) rodas5p against bdf at equal error on several press cases (work–precision)
+//! (e) Rodas5P with the previous Jacobian (plain central differences of f) against the new one
+//! ```
+//! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
+//! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
+//! minimum over `--reps` runs
+//! (default 3; a run under 50 ms is repeated up to 10 times).
+
+use std::time::Instant;
+
+use lash_benches::{
+    contact_and_free_states, crank_period, grid, max_abs_diff, options, press, sample, Sampled,
+};
+use lash_model::Mechanism;
+use lash_solver::{Method, OdeSystem, Output};
+
+/// Grid points of a window (INTERFACES.md metrics).
+const N_GRID: usize = 2001;
+/// The error target (m/s²).
+const TARGET: f64 = 1e-6;
+
+struct Ctx {
+    reps: usize,
+}
+
+/// One measured run.
+#[derive(Clone, Debug)]
+struct Run {
+    label: String,
+    error: f64,
+    wall: f64,
+    steps: usize,
+    rhs: usize,
+    jac: usize,
+    lu: usize,
+    events: usize,
+}
+
+impl Ctx {
+    /// Runs `m` to `t_end` with `opts`, samples on `times`, repeats for the minimum wall time.
+    fn measure(
+        &self,
+        m: &Mechanism,
+        t_end: f64,
+        opts: &lash_solver::SolverOptions,
+        times: &[f64],
+    ) -> Result<Sampled, String> {
+        let first = sample(m, t_end, opts, times).map_err(|e| e.to_string())?;
+        let mut best = first.wall;
+        let reps = if first.wall < 0.05 {
+            self.reps.max(10)
+        } else {
+            self.reps
+        };
+        for _ in 1..reps {
+            let s = sample(m, t_end, opts, times).map_err(|e| e.to_string())?;
+            best = best.min(s.wall);
+        }
+        Ok(Sampled {
+            wall: best,
+            ..first
+        })
+    }
+
+    fn run(
+        &self,
+        label: String,
+        m: &Mechanism,
+        t_end: f64,
+        opts: &lash_solver::SolverOptions,
+        times: &[f64],
+        reference: &[f64],
+    ) -> Option<Run> {
+        match self.measure(m, t_end, opts, times) {
+            Ok(s) => Some(Run {
+                label,
+                error: max_abs_diff(&s.slider_a, reference),
+                wall: s.wall,
+                steps: s.stats.accepted,
+                rhs: s.stats.rhs_evals,
+                jac: s.stats.jac_evals,
+                lu: s.stats.lu_factorizations,
+                events: s.stats.events,
+            }),
+            Err(e) => {
+                println!("  {label:28} failed: {e}");
+                None
+            }
+        }
+    }
+}
+
+fn print_header() {
+    println!(
+        "  {:28} {:>10} {:>10} {:>9} {:>10} {:>7} {:>7} {:>6}",
+        "run", "error", "wall [s]", "steps", "rhs", "jac", "lu", "events"
+    );
+}
+
+fn print_run(r: &Run) {
+    println!(
+        "  {:28} {:>10.2e} {:>10.4} {:>9} {:>10} {:>7} {:>7} {:>6}",
+        r.label, r.error, r.wall, r.steps, r.rhs, r.jac, r.lu, r.events
+    );
+}
+
+/// Reference slider acceleration on `times`: Rodas5P at rtol 1e-13 (atol 1e-16), events on.
+/// Prints its distance to Rodas5P at 1e-12 and to DOP853 at 1e-12 (an independent method): an
+/// estimate of the reference's own error. (DOP853 at 1e-14 is no better on the lubricated
+/// press: a million stability-bound steps there add up rounding errors of ~5e-7 m/s².)
+fn reference(m: &Mechanism, t_end: f64, times: &[f64]) -> Vec<f64> {
+    let run = |method: Method, rtol: f64| {
+        let o = options(method, rtol, rtol * 1e-3, 0.0, Output::Final);
+        let start = Instant::now();
+        let s = sample(m, t_end, &o, times).expect("the reference run succeeds");
+        (s.slider_a, start.elapsed().as_secs_f64())
+    };
+    let (r13, wr) = run(Method::Rodas5p, 1e-13);
+    let (r12, _) = run(Method::Rodas5p, 1e-12);
+    let (d12, wd) = run(Method::Dop853, 1e-12);
+    println!(
+        "  reference rodas5p(1e-13): |rodas5p(1e-12) − ref| = {:.1e}, |dop853(1e-12) − ref| = \
+         {:.1e} m/s² (walls {wr:.2} s, {wd:.2} s); max |a_ref| = {:.1} m/s²",
+        max_abs_diff(&r12, &r13),
+        max_abs_diff(&d12, &r13),
+        r13.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+    );
+    r13
+}
+
+/// Tolerances of the scans, half decades.
+fn tolerances(from: i32, to: i32) -> Vec<f64> {
+    let mut v = Vec::new();
+    for e in from..=to {
+        v.push(10f64.powi(-e));
+        if e < to {
+            v.push(10f64.powi(-e) / 10f64.sqrt());
+        }
+    }
+    v
+}
+
+/// Scans one adaptive method over `tols`; stops after the first run below `TARGET / 30`.
+fn scan(
+    ctx: &Ctx,
+    method: Method,
+    m: &Mechanism,
+    t_end: f64,
+    times: &[f64],
+    reference: &[f64],
+    tols: &[f64],
+    events: bool,
+) -> Vec<Run> {
+    let mut out = Vec::new();
+    for &rtol in tols {
+        let mut o = options(method, rtol, rtol * 1e-3, 0.0, Output::Final);
+        o.events = events;
+        o.max_wall_time = Some(60.0);
+        if let Some(r) = ctx.run(
+            format!("{} rtol {rtol:.1e}", method.name()),
+            m,
+            t_end,
+            &o,
+            times,
+            reference,
+        ) {
+            print_run(&r);
+            let done = r.error < TARGET / 30.0;
+            out.push(r);
+            if done {
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// The cheapest run with error ≤ target.
+fn cheapest(runs: &[Run], target: f64) -> Option<&Run> {
+    runs.iter()
+        .filter(|r| r.error <= target)
+        .min_by(|a, b| a.wall.total_cmp(&b.wall))
+}
+
+/// RK4 at h = Δ/k: returns the run.
+fn rk4_run(
+    ctx: &Ctx,
+    m: &Mechanism,
+    t_end: f64,
+    times: &[f64],
+    reference: &[f64],
+    k: usize,
+    events: bool,
+) -> Option<Run> {
+    let delta = times[1] - times[0];
+    let h = delta / k as f64;
+    let mut o = options(Method::Rk4, 0.0, 0.0, h, Output::Final);
+    o.events = events;
+    let r = ctx.run(
+        format!("rk4 h {h:.3e}{}", if events { " events" } else { "" }),
+        m,
+        t_end,
+        &o,
+        times,
+        reference,
+    )?;
+    print_run(&r);
+    Some(r)
+}
+
+/// Smallest k (largest h = Δ/k) with RK4 error ≤ target, by bisection between `k_lo` (fails)
+/// and `k_hi` (succeeds), single runs; the step found is then timed with `ctx.reps`.
+fn rk4_search(
+    ctx: &Ctx,
+    m: &Mechanism,
+    t_end: f64,
+    times: &[f64],
+    reference: &[f64],
+    mut k_lo: usize,
+    mut k_hi: usize,
+) -> Option<Run> {
+    let once = Ctx { reps: 1 };
+    let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
+    let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
+    if !ok(&first) {
+        println!("  rk4 misses the target at k = {k_hi}");
+        return None;
+    }
+    while k_hi - k_lo > 1 {
+        let k = (k_lo + k_hi) / 2;
+        if ok(&rk4_run(&once, m, t_end, times, reference, k, false)) {
+            k_hi = k;
+        } else {
+            k_lo = k;
+        }
+    }
+    println!("  rk4: largest step reaching the target: k = {k_hi}; timed:");
+    rk4_run(ctx, m, t_end, times, reference, k_hi, false)
+}
+
+fn section_a(ctx: &Ctx) {
+    println!("\n(a) one right-hand side of the press, 150 rpm, c = 0.1 mm");
+    for stem in ["dry_150rpm_c0.1", "lubricated_150rpm_c0.1"] {
+        let m = press(stem, 2.0);
+        let (contact, free) = contact_and_free_states(&m);
+        for (label, s) in [("contact", contact), ("free", free)] {
+            let mut dy = vec![0.0; m.dim()];
+            let n = 200_000;
+            let mut best = f64::INFINITY;
+            for _ in 0..ctx.reps.max(5) {
+                let start = Instant::now();
+                for _ in 0..n {
+                    m.rhs(
+                        std::hint::black_box(s.t),
+                        std::hint::black_box(&s.y),
+                        std::hint::black_box(&mut dy),
+                    );
+                }
+                best = best.min(start.elapsed().as_secs_f64() / n as f64);
+            }
+            println!(
+                "  {stem:24} {label:8} δ = {:+.2e} m   rhs {:7.1} ns   (1 µs / rhs = {:.2})",
+                s.delta,
+                best * 1e9,
+                1e-6 / best
+            );
+        }
+    }
+}
+
+fn section_b(ctx: &Ctx) {
+    let stem = "lubricated_150rpm_c0.1";
+    println!("\n(b) {stem}, two revolutions, error over the second (target {TARGET:.0e} m/s²)");
+    let m = press(stem, 2.0);
+    let per = crank_period(&m);
+    let times = grid(per, 2.0 * per, N_GRID);
+    let t_end = m.t_end();
+    let reference = reference(&m, t_end, &times);
+    print_header();
+    let mut best: Vec<Run> = Vec::new();
+    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        let runs = scan(
+            ctx,
+            method,
+            &m,
+            t_end,
+            &times,
+            &reference,
+            &tolerances(4, 11),
+            true,
+        );
+        if let Some(r) = cheapest(&runs, TARGET) {
+            best.push(r.clone());
+        }
+    }
+    // RK4: h = Δ/k, Δ the grid spacing (grid times are step ends); k = 100 is the stable step
+    // of the tests (2e-6 s). Below it RK4 is unstable; search k in (50, 800].
+    let delta = times[1] - times[0];
+    println!("  rk4: largest h = Δ/k with error ≤ {TARGET:.0e} (Δ = {delta:.1e} s)");
+    for k in [50, 100] {
+        rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, false);
+    }
+    let rk4 = rk4_search(ctx, &m, t_end, &times, &reference, 100, 800);
+    println!("  cheapest run of each method with error ≤ {TARGET:.0e}:");
+    best.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+    for r in &best {
+        print_run(r);
+    }
+    if let (Some(rk), Some(b)) = (rk4, best.first()) {
+        print_run(&rk);
+        println!(
+            "  => rk4 wall / {} wall = {:.0}×  (target ≥ 100×)",
+            b.label,
+            rk.wall / b.wall
+        );
+    }
+}
+
+fn section_c(ctx: &Ctx) {
+    let stem = "dry_150rpm_c0.1";
+    println!("\n(c) {stem}, error over the first half revolution (target {TARGET:.0e} m/s²)");
+    let m = press(stem, 0.5);
+    let half = 0.5 * crank_period(&m);
+    let times = grid(0.0, half, N_GRID);
+    let t_end = m.t_end();
+    let reference = reference(&m, t_end, &times);
+    print_header();
+    let mut best: Vec<Run> = Vec::new();
+    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        let runs = scan(
+            ctx,
+            method,
+            &m,
+            t_end,
+            &times,
+            &reference,
+            &tolerances(4, 11),
+            true,
+        );
+        if let Some(r) = cheapest(&runs, TARGET) {
+            best.push(r.clone());
+        }
+    }
+    println!(
+        "  rk4 without events, h = Δ/k (Δ = {:.1e} s):",
+        times[1] - times[0]
+    );
+    let mut rk4_runs = Vec::new();
+    for k in [1, 2, 4, 8, 16, 32, 64, 128, 256] {
+        if let Some(r) = rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, false) {
+            rk4_runs.push(r);
+        }
+    }
+    println!("  rk4 with events (located contact onsets and losses), h = Δ/k:");
+    for k in [1, 4, 16, 64] {
+        rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, true);
+    }
+    println!("  cheapest run of each method with error ≤ {TARGET:.0e}:");
+    best.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+    for r in &best {
+        print_run(r);
+    }
+    let min_rk4 = rk4_runs
+        .iter()
+        .map(|r| r.error)
+        .fold(f64::INFINITY, f64::min);
+    println!("  => smallest rk4 error without events: {min_rk4:.2e} m/s²");
+}
+
+fn section_d(ctx: &Ctx) {
+    println!("\n(d) rodas5p against bdf at equal error (error over the last revolution of two)");
+    let targets = [1e-2, 1e-4, 1e-6];
+    let mut summary = Vec::new();
+    for stem in [
+        "dry_150rpm_c0.1",
+        "dry_150rpm_c0.5",
+        "lubricated_150rpm_c0.1",
+        "lubricated_150rpm_c0.2",
+        "lubricated_200rpm_c0.1",
+    ] {
+        println!(" {stem}");
+        let m = press(stem, 2.0);
+        let per = crank_period(&m);
+        let times = grid(per, 2.0 * per, N_GRID);
+        let t_end = m.t_end();
+        let reference = reference(&m, t_end, &times);
+        print_header();
+        let tols = tolerances(3, 10);
+        let rodas = scan(
+            ctx,
+            Method::Rodas5p,
+            &m,
+            t_end,
+            &times,
+            &reference,
+            &tols,
+            true,
+        );
+        let bdf = scan(ctx, Method::Bdf, &m, t_end, &times, &reference, &tols, true);
+        for target in targets {
+            let (r, b) = (cheapest(&rodas, target), cheapest(&bdf, target));
+            let line = match (r, b) {
+                (Some(r), Some(b)) => format!(
+                    "{stem:24} error ≤ {target:.0e}: rodas5p {:.4} s ({}), bdf {:.4} s ({}), \
+                     bdf/rodas5p = {:.2}",
+                    r.wall,
+                    r.label,
+                    b.wall,
+                    b.label,
+                    b.wall / r.wall
+                ),
+                (r, b) => format!(
+                    "{stem:24} error ≤ {target:.0e}: rodas5p {}, bdf {}",
+                    r.map_or("not reached".into(), |r| format!("{:.4} s", r.wall)),
+                    b.map_or("not reached".into(), |b| format!("{:.4} s", b.wall)),
+                ),
+            };
+            println!("  {line}");
+            summary.push(line);
+        }
+    }
+    println!("\n(d) summary");
+    for l in summary {
+        println!("  {l}");
+    }
+}
+
+/// The mechanism with the Jacobian of the previous version: central differences of f in every
+/// component of y with h_j = 1e-8 · max(|y_j|, 1) (24 RHS evaluations), for a side-by-side
+/// comparison with the mechanism's own Jacobian.
+struct PlainDifferences<'a>(&'a Mechanism);
+
+impl OdeSystem for PlainDifferences<'_> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.0.rhs(t, y, dy)
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, t: f64, y: &[f64], mut jac: faer::MatMut<'_, f64>) {
+        let n = y.len();
+        let nq = n / 2;
+        let (mut yp, mut fp, mut fm) = (y.to_vec(), vec![0.0; n], vec![0.0; n]);
+        for j in 0..n {
+            for i in 0..n {
+                jac[(i, j)] = 0.0;
+            }
+        }
+        for i in 0..nq {
+            jac[(i, nq + i)] = 1.0;
+        }
+        for j in 0..n {
+            let h = 1e-8 * y[j].abs().max(1.0);
+            yp[j] = y[j] + h;
+            self.0.rhs(t, &yp, &mut fp);
+            yp[j] = y[j] - h;
+            self.0.rhs(t, &yp, &mut fm);
+            yp[j] = y[j];
+            for i in nq..n {
+                jac[(i, j)] = (fp[i] - fm[i]) * (0.5 / h);
+            }
+        }
+    }
+    fn n_events(&self) -> usize {
+        self.0.n_events()
+    }
+    fn event_spec(&self, i: usize) -> lash_solver::EventSpec {
+        self.0.event_spec(i)
+    }
+    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        self.0.events(t, y, g)
+    }
+    fn on_event(&self, hit: &lash_solver::EventHit, y: &mut [f64]) -> lash_solver::EventAction {
+        self.0.on_event(hit, y)
+    }
+}
+
+fn section_e(ctx: &Ctx) {
+    println!(
+        "\n(e) Rodas5P with the previous Jacobian (plain differences of f) and with the new one"
+    );
+    for stem in ["lubricated_150rpm_c0.1", "dry_150rpm_c0.1"] {
+        let m = press(stem, 2.0);
+        for rtol in [1e-6, 1e-8] {
+            let o = options(Method::Rodas5p, rtol, rtol * 1e-3, 0.0, Output::Final);
+            let y0 = m.initial_state();
+            let time = |sys: &dyn Fn() -> lash_solver::Solution| {
+                let mut best = f64::INFINITY;
+                let mut sol = None;
+                for _ in 0..ctx.reps.max(3) {
+                    let start = Instant::now();
+                    sol = Some(sys());
+                    best = best.min(start.elapsed().as_secs_f64());
+                }
+                (best, sol.expect("ran"))
+            };
+            let plain = PlainDifferences(&m);
+            let (w_old, s_old) = time(&|| {
+                lash_solver::solve(&plain, (m.t_start(), m.t_end()), &y0, &o).expect("runs")
+            });
+            let (w_new, s_new) =
+                time(&|| lash_solver::solve(&m, (m.t_start(), m.t_end()), &y0, &o).expect("runs"));
+            println!(
+                "  {stem:24} rtol {rtol:.0e}: previous {:6} steps {:8.4} s, new {:6} steps {:8.4} s, \
+                 previous/new wall = {:.1}×",
+                s_old.stats.accepted,
+                w_old,
+                s_new.stats.accepted,
+                w_new,
+                w_old / w_new
+            );
+        }
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut reps = 3;
+    let mut sections = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--reps" => {
+                reps = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--reps takes a number");
+            }
+            s @ ("a" | "b" | "c" | "d" | "e") => sections.push(s.to_string()),
+            other => {
+                eprintln!("unknown argument {other}: expected a, b, c, d, e, --reps N");
+                std::process::exit(2);
+            }
+        }
+    }
+    if sections.is_empty() {
+        sections = ["a", "b", "c", "d", "e"].map(String::from).to_vec();
+    }
+    let ctx = Ctx { reps };
+    for s in sections {
+        match s.as_str() {
+            "a" => section_a(&ctx),
+            "b" => section_b(&ctx),
+            "c" => section_c(&ctx),
+            "d" => section_d(&ctx),
+            _ => section_e(&ctx),
+        }
+    }
+}
