@@ -840,3 +840,419 @@ pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metrics::Metrics;
+    use crate::study::{CaseStats, Deviations, Ensemble};
+
+    /// Statistics of one realisation with the given values (everything else neutral).
+    #[derive(Clone, Copy)]
+    struct S {
+        rms: f64,
+        eps: Option<f64>,
+        pen: Option<f64>,
+        force: Option<f64>,
+        x_dev: f64,
+        x_bdc: f64,
+        v_dev: f64,
+        a_dev: f64,
+        a_dc: f64,
+        peak: f64,
+        rel: (f64, f64, f64),
+        sectors: usize,
+        contact: Option<f64>,
+        closure: Option<f64>,
+    }
+
+    fn stats(s: S) -> CaseStats {
+        CaseStats {
+            metrics: Metrics {
+                slider_acc_max: Some(s.peak),
+                slider_acc_min: Some(-s.peak),
+                slider_acc_rms_dev_ideal: Some(s.rms),
+                eps_max: s.eps,
+                contact_onsets: s.eps.map(|_| 3),
+                contact_force_max: s.force,
+                penetration_max: s.pen,
+                film_force_max: s.eps.map(|_| 0.0),
+                film_thickness_min: None,
+                slider_x_end: Some(0.365),
+                constraint_violation_max: 1e-9,
+                energy: None,
+            },
+            dev: Deviations {
+                stroke: 0.03,
+                x_dev_max: s.x_dev,
+                v_dev_max: s.v_dev,
+                a_dev_max: s.a_dev,
+                a_ideal_peak: s.peak,
+                x_dev_bdc: s.x_bdc,
+                a_dev_dead_centres: s.a_dc,
+                x_dev_rel: s.rel.0,
+                v_dev_rel: s.rel.1,
+                a_dev_rel: s.rel.2,
+                fluctuation_sectors: s.sectors,
+                contact_fraction: s.contact,
+                orbit_closure: s.closure,
+            },
+        }
+    }
+
+    const DRY: S = S {
+        rms: 2.0,
+        eps: Some(2.1),
+        pen: Some(1.1e-4),
+        force: Some(3.1e4),
+        x_dev: 1.1e-4,
+        x_bdc: 1.1e-4,
+        v_dev: 0.02,
+        a_dev: 5.0,
+        a_dc: 5.0,
+        peak: 3.86,
+        rel: (0.01, 0.05, 0.9),
+        sectors: 8,
+        contact: Some(0.6),
+        closure: Some(2.0),
+    };
+    const LUB: S = S {
+        rms: 1e-3,
+        eps: Some(0.5),
+        pen: Some(0.0),
+        force: Some(0.0),
+        x_dev: 1e-5,
+        x_bdc: 1e-5,
+        v_dev: 1e-4,
+        a_dev: 1e-3,
+        a_dc: 1e-3,
+        peak: 3.86,
+        rel: (1e-3, 5e-4, 5e-4),
+        sectors: 0,
+        contact: Some(0.0),
+        closure: Some(0.01),
+    };
+
+    /// A table on which every claim holds, two identical realisations per clearance case.
+    fn paper_like() -> Cases {
+        let mut c = Cases::new();
+        let mut put = |name: &str, s: S, spread: f64| {
+            let n = if name.starts_with("ideal") { 1 } else { 2 };
+            c.insert(
+                name.to_string(),
+                Ensemble {
+                    members: vec![stats(s); n],
+                    acc_spread: spread,
+                },
+            );
+        };
+        for (i, name) in DRY_SPEEDS.iter().enumerate() {
+            let k = i as f64;
+            put(
+                name,
+                S {
+                    rms: 1.0 + k,
+                    eps: Some(2.0 + 0.1 * k),
+                    pen: Some(1e-4 * (1.0 + 0.1 * k)),
+                    x_dev: 1e-4 * (1.0 + 0.1 * k),
+                    x_bdc: 1e-4 * (1.0 + 0.1 * k),
+                    v_dev: 0.01 * (1.0 + k),
+                    a_dc: 4.0 + k,
+                    peak: 2.5 + k,
+                    contact: Some(0.5 + 0.1 * k),
+                    ..DRY
+                },
+                5.0,
+            );
+        }
+        for (j, name) in DRY_CLEARANCES.iter().enumerate().skip(1) {
+            let (x, v, rms, contact, pen) = [
+                (0.0, 0.0, 0.0, 0.0, 0.0),
+                (2e-4, 0.03, 2.2, 0.55, 1.2e-4),
+                (3e-4, 0.04, 3.0, 0.4, 1.3e-4),
+                (5e-4, 0.05, 5.0, 0.3, 1.5e-4),
+            ][j];
+            put(
+                name,
+                S {
+                    rms,
+                    x_dev: x,
+                    v_dev: v,
+                    contact: Some(contact),
+                    pen: Some(pen),
+                    eps: Some(1.5),
+                    ..DRY
+                },
+                5.0,
+            );
+        }
+        for (i, name) in LUB_SPEEDS.iter().enumerate() {
+            put(
+                name,
+                S {
+                    peak: 2.5 + i as f64,
+                    ..LUB
+                },
+                1e-4,
+            );
+        }
+        for (j, name) in LUB_CLEARANCES.iter().enumerate().skip(1) {
+            let (a_dev, eps) = [(0.0, 0.0), (0.01, 0.6), (0.02, 0.85), (0.3, 0.95)][j];
+            put(
+                name,
+                S {
+                    a_dev,
+                    eps: Some(eps),
+                    ..LUB
+                },
+                1e-4,
+            );
+        }
+        for name in IDEALS {
+            put(
+                name,
+                S {
+                    rms: 1e-9,
+                    eps: None,
+                    pen: None,
+                    force: None,
+                    contact: None,
+                    closure: None,
+                    ..LUB
+                },
+                0.0,
+            );
+        }
+        c
+    }
+
+    fn verdict(cases: &Cases, id: &str) -> (Verdict, usize, usize) {
+        let c = evaluate(cases).unwrap();
+        let c = c.iter().find(|c| c.id == id).unwrap();
+        (c.verdict, c.realisations_holding, c.realisations)
+    }
+
+    /// Applies `f` to every realisation of `case`.
+    fn set(cases: &mut Cases, case: &str, f: impl Fn(&mut CaseStats)) {
+        for m in cases.get_mut(case).unwrap().members.iter_mut() {
+            f(m);
+        }
+    }
+
+    #[test]
+    fn every_claim_holds_on_a_paper_like_table() {
+        let claims = evaluate(&paper_like()).unwrap();
+        assert_eq!(claims.len(), count());
+        for c in &claims {
+            assert_eq!(c.verdict, Verdict::Holds, "{}: {:?}", c.id, c.numbers);
+            assert_eq!((c.realisations_holding, c.realisations), (2, 2), "{}", c.id);
+            assert!(!c.numbers.is_empty(), "{} reads no number", c.id);
+        }
+        let ids: Vec<&str> = claims.iter().map(|c| c.id.as_str()).collect();
+        let mut unique = ids.clone();
+        unique.dedup();
+        assert_eq!(ids, unique);
+    }
+
+    type Mutation = (&'static str, fn(&mut Cases));
+
+    /// One change per claim that breaks exactly the property the claim asserts.
+    const BREAKERS: &[Mutation] = &[
+        ("P1", |c| {
+            set(c, "dry_200rpm_c0.1", |s| s.dev.x_dev_max = 3.1e-4)
+        }), // > 1 % of 0.03 m
+        ("P2", |c| {
+            set(c, "dry_180rpm_c0.1", |s| s.dev.x_dev_bdc = 1.35e-4)
+        }), // > 200 rpm's 1.3e-4
+        ("P3", |c| {
+            set(c, "dry_120rpm_c0.1", |s| s.dev.v_dev_rel = 0.95)
+        }),
+        ("P4", |c| {
+            set(c, "dry_150rpm_c0.1", |s| s.dev.fluctuation_sectors = 7)
+        }),
+        ("P5", |c| {
+            set(c, "dry_200rpm_c0.1", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(3.0)
+            })
+        }),
+        ("P6", |c| {
+            set(c, "dry_120rpm_c0.1", |s| s.dev.a_dev_dead_centres = 5.0)
+        }),
+        ("P7", |c| {
+            set(c, "dry_200rpm_c0.1", |s| s.dev.contact_fraction = Some(0.7))
+        }),
+        ("P8", |c| {
+            set(c, "dry_180rpm_c0.1", |s| {
+                s.metrics.penetration_max = Some(1.1e-4)
+            })
+        }),
+        ("P9", |c| {
+            set(c, "lubricated_180rpm_c0.1", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(3.5)
+            })
+        }),
+        ("P10", |c| {
+            set(c, "lubricated_120rpm_c0.1", |s| s.dev.x_dev_bdc = 1e-4)
+        }),
+        ("P11", |c| {
+            set(c, "lubricated_200rpm_c0.1", |s| s.dev.v_dev_max = 0.05)
+        }),
+        ("P12", |c| {
+            set(c, "lubricated_200rpm_c0.1", |s| s.dev.a_dev_max = 0.06)
+        }), // 1 % of 5.5 = 0.055
+        ("P13", |c| {
+            set(c, "lubricated_120rpm_c0.1", |s| {
+                s.metrics.eps_max = Some(1.0)
+            })
+        }),
+        ("P14", |c| {
+            set(c, "dry_150rpm_c0.3", |s| s.dev.x_dev_max = 1.5e-4)
+        }),
+        ("P15", |c| {
+            set(c, "dry_150rpm_c0.5", |s| s.dev.v_dev_max = 0.035)
+        }),
+        ("P16", |c| {
+            // 3.7 / 3.0 < 1.25 although the curve still steepens: (3.7−3)/0.2 > (3−2)/0.2.
+            set(c, "dry_150rpm_c0.5", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(3.7)
+            })
+        }),
+        ("P17", |c| {
+            set(c, "dry_150rpm_c0.3", |s| {
+                s.dev.contact_fraction = Some(0.56)
+            })
+        }),
+        ("P18", |c| {
+            set(c, "dry_150rpm_c0.5", |s| {
+                s.metrics.penetration_max = Some(1.3e-4)
+            })
+        }),
+        ("P19", |c| {
+            set(c, "lubricated_150rpm_c0.3", |s| s.dev.x_dev_max = 4e-4)
+        }),
+        ("P20", |c| {
+            set(c, "lubricated_150rpm_c0.5", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(6.0)
+            })
+        }),
+        ("P21", |c| {
+            set(c, "lubricated_150rpm_c0.5", |s| s.dev.a_dev_max = 0.19)
+        }), // < 5 % of 3.86
+        ("P22", |c| {
+            set(c, "lubricated_150rpm_c0.2", |s| {
+                s.metrics.eps_max = Some(0.9)
+            })
+        }),
+        ("P23", |c| {
+            set(c, "lubricated_150rpm_c0.5", |s| {
+                s.metrics.eps_max = Some(1.01)
+            })
+        }),
+        ("P24", |c| {
+            c.get_mut("lubricated_150rpm_c0.3").unwrap().acc_spread = 4e-3
+        }),
+        ("P25", |c| {
+            set(c, "lubricated_150rpm_c0.2", |s| {
+                s.dev.orbit_closure = Some(0.05)
+            })
+        }),
+        ("M1", |c| {
+            set(c, "ideal_180rpm", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(1e-5)
+            })
+        }),
+        ("M2", |c| {
+            set(c, "dry_150rpm_c0.1", |s| {
+                s.metrics.contact_force_max = Some(2.9e4)
+            })
+        }),
+        ("M3", |c| {
+            set(c, "lubricated_150rpm_c0.1", |s| {
+                s.metrics.slider_acc_rms_dev_ideal = Some(2e-3)
+            })
+        }),
+        ("M4", |c| {
+            c.get_mut("dry_150rpm_c0.1").unwrap().acc_spread = 1e-2
+        }),
+    ];
+
+    #[test]
+    fn every_claim_fails_when_its_property_is_broken() {
+        assert_eq!(BREAKERS.len(), count());
+        for (id, breaker) in BREAKERS {
+            let mut cases = paper_like();
+            breaker(&mut cases);
+            let claims = evaluate(&cases).unwrap();
+            for c in &claims {
+                let want = if c.id == *id {
+                    Verdict::DoesNotHold
+                } else {
+                    Verdict::Holds
+                };
+                assert_eq!(c.verdict, want, "breaking {id} changed {}", c.id);
+            }
+            let c = claims.iter().find(|c| c.id == *id).unwrap();
+            assert_eq!(c.realisations_holding, 0, "{id}");
+        }
+    }
+
+    #[test]
+    fn verdict_is_on_the_means_and_realisations_are_counted() {
+        // P5 at 200 rpm: realisation 0 has RMS 5 (> 180 rpm's 3), realisation 1 has 2.5 (< 3).
+        // Mean 3.75 > 3: HOLDS on the means, 1 of 2 realisations.
+        let mut cases = paper_like();
+        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        e.members[0].metrics.slider_acc_rms_dev_ideal = Some(5.0);
+        e.members[1].metrics.slider_acc_rms_dev_ideal = Some(2.5);
+        assert_eq!(verdict(&cases, "P5"), (Verdict::Holds, 1, 2));
+        let p5 = evaluate(&cases)
+            .unwrap()
+            .into_iter()
+            .find(|c| c.id == "P5")
+            .unwrap();
+        let n = p5
+            .numbers
+            .iter()
+            .find(|n| n.label == "dry_200rpm_c0.1 slider_acc_rms_dev_ideal")
+            .unwrap();
+        assert_eq!((n.value, n.min, n.max), (3.75, Some(2.5), Some(5.0)));
+        // Mean 2.9 < 3: DOES NOT HOLD although realisation 0 still satisfies it.
+        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        e.members[1].metrics.slider_acc_rms_dev_ideal = Some(0.8);
+        assert_eq!(verdict(&cases, "P5"), (Verdict::DoesNotHold, 1, 2));
+    }
+
+    #[test]
+    fn missing_data_is_an_error_not_a_verdict() {
+        let mut cases = paper_like();
+        cases.remove("lubricated_150rpm_c0.5");
+        let e = evaluate(&cases).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("no runs of case lubricated_150rpm_c0.5"),
+            "{e}"
+        );
+        let mut cases = paper_like();
+        set(&mut cases, "dry_120rpm_c0.1", |s| {
+            s.metrics.penetration_max = None
+        });
+        assert!(evaluate(&cases)
+            .unwrap_err()
+            .to_string()
+            .contains("dry_120rpm_c0.1 has no penetration_max"));
+        let mut cases = paper_like();
+        set(&mut cases, "dry_120rpm_c0.1", |s| {
+            s.dev.x_dev_max = f64::NAN
+        });
+        assert!(evaluate(&cases).is_err());
+        assert!(evaluate(&Cases::new()).is_err());
+    }
+
+    #[test]
+    fn strictly_increasing_is_strict() {
+        assert!(strictly_increasing(&[1.0, 2.0, 3.0]));
+        assert!(!strictly_increasing(&[1.0, 2.0, 2.0]));
+        assert!(!strictly_increasing(&[1.0, 3.0, 2.0]));
+        assert!(strictly_increasing(&[1.0]));
+    }
+}

@@ -15,6 +15,9 @@ use super::claims::{self, Claim, Origin};
 use super::{CaseResult, CaseStats, Ensemble, Kind, StudyResult};
 use crate::metrics::Metrics;
 
+/// A statistic of one realisation.
+type Stat = fn(&CaseStats) -> Option<f64>;
+
 /// A number with four significant digits, plain or scientific.
 pub fn sig(v: f64) -> String {
     if v == 0.0 {
@@ -275,7 +278,7 @@ fn convergence(out: &mut String, r: &StudyResult) {
     // Lubricated cases (not chaotic): relative change of the statistics between the settings.
     let mut worst: (f64, String) = (0.0, String::new());
     for c in r.cases.iter().filter(|c| c.kind == Kind::Lubricated) {
-        let stats: [(&str, fn(&CaseStats) -> Option<f64>); 6] = [
+        let stats: [(&str, Stat); 6] = [
             ("slider_acc_max", |s| s.metrics.slider_acc_max),
             ("slider_acc_min", |s| s.metrics.slider_acc_min),
             ("slider_acc_rms_dev_ideal", |s| {
@@ -323,7 +326,7 @@ fn convergence(out: &mut String, r: &StudyResult) {
     let _ = writeln!(out, "|---|---|---|---|---|---|");
     let mut z_max: f64 = 0.0;
     for c in r.cases.iter().filter(|c| c.kind == Kind::Dry) {
-        let stats: [fn(&CaseStats) -> Option<f64>; 5] = [
+        let stats: [Stat; 5] = [
             |s| s.metrics.slider_acc_rms_dev_ideal,
             |s| s.metrics.slider_acc_max,
             |s| s.metrics.eps_max,
