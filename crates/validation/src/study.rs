@@ -5,9 +5,10 @@
 //!              c = 0.1, 0.2, 0.3, 0.5 mm; the ideal mechanism at the four speeds (18 cases)
 //! realisation  k = 0..N−1 (N = 8): the case with the crank's initial angle θ₀ = k·Δθ,
 //!              Δθ = 1e-6 rad (k = 0 is the paper's case; the ideal cases run once)
-//! run          BDF, rtol 1e-8, atol 1e-10, 2 event samples per step; two revolutions;
+//! run          BDF, rtol 1e-10, atol 1e-12, 2 event samples per step; two revolutions;
 //!              samples on metrics::grid of each revolution (2 × 2001 points)
-//! reference    every realisation again at rtol 1e-10, atol 1e-12 (convergence check)
+//! reference    every realisation again at rtol 1e-12, atol 1e-14 (convergence check), and
+//! loose        at rtol 1e-8, atol 1e-10 (to show what a looser tolerance changes)
 //! statistics   INTERFACES.md metrics of the last revolution + [`Deviations`]
 //! claims       claims::evaluate on the ensemble means (and per realisation)
 //! files        DIR/figures/figNN[a-d].{svg,png} → DIR/report.md → DIR/study.json (last)
@@ -16,7 +17,7 @@
 //! The dry cases are chaotic (MODEL.md §9), which is why each case is an ensemble and the
 //! claims compare statistics, never pointwise values. The realisations differ by a crank phase
 //! of micro-radians: physically nothing (r·Δθ = 15 nm per step), but more than the integration
-//! error at either setting (rtol·|q| ≈ 4e-9 m at rtol 1e-8), so that they are different
+//! error at either setting (rtol·|q| ≈ 4e-11 m at rtol 1e-10), so that they are different
 //! trajectories rather than copies of one numerical trajectory, and a smooth change of every
 //! case alike (the journal's initial eccentricity is not perturbed: e = 0 is where the film's
 //! attitude angle is undefined, MODEL.md §2, and nanometre offsets there change the
@@ -26,7 +27,7 @@
 
 pub mod claims;
 mod figures;
-mod markdown;
+pub mod markdown;
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -111,7 +112,7 @@ impl Settings {
 /// What the study runs.
 ///
 /// ```text
-/// every case × realisations k = 0..N−1 (crank θ₀ = k·Δθ) × {settings, reference}
+/// every case × realisations k = 0..N−1 (crank θ₀ = k·Δθ) × {settings, reference, loose}
 /// ```
 ///
 /// Source: this module (MODEL.md §9 for why an ensemble).
@@ -121,6 +122,8 @@ pub struct Plan {
     pub settings: Settings,
     /// Tighter settings of the convergence check.
     pub reference: Settings,
+    /// Looser settings, run to show what they would change.
+    pub loose: Settings,
     /// Realisations per clearance case (N ≥ 1).
     pub realisations: usize,
     /// Step Δθ of the crank's initial angle between realisations, rad.
@@ -128,7 +131,8 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// The plan of `lash study paper`: BDF at rtol 1e-8 (reference 1e-10), atol = rtol/100,
+    /// The plan of `lash study paper`: BDF at rtol 1e-10 (reference 1e-12, loose 1e-8),
+    /// atol = rtol/100,
     /// two event samples per step, 8 realisations 1e-6 rad of crank phase apart.
     pub fn paper() -> Plan {
         let s = |rtol: f64| Settings {
@@ -138,10 +142,56 @@ impl Plan {
             event_samples: 2,
         };
         Plan {
-            settings: s(1e-8),
-            reference: s(1e-10),
+            settings: s(1e-10),
+            reference: s(1e-12),
+            loose: s(1e-8),
             realisations: 8,
             phase_step_rad: 1e-6,
+        }
+    }
+}
+
+/// Which of the plan's solver settings.
+///
+/// ```text
+/// Study = Plan::settings (reported);  Reference = Plan::reference;  Loose = Plan::loose
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Setting {
+    /// The reported runs.
+    Study,
+    /// The tighter convergence check.
+    Reference,
+    /// The looser comparison.
+    Loose,
+}
+
+impl Setting {
+    /// All three, study first.
+    pub const ALL: [Setting; 3] = [Setting::Study, Setting::Reference, Setting::Loose];
+}
+
+impl Plan {
+    /// The solver settings of `which`.
+    pub fn get(&self, which: Setting) -> Settings {
+        match which {
+            Setting::Study => self.settings,
+            Setting::Reference => self.reference,
+            Setting::Loose => self.loose,
+        }
+    }
+}
+
+impl CaseResult {
+    /// The realisations at `which` settings.
+    pub fn ensemble(&self, which: Setting) -> &Ensemble {
+        match which {
+            Setting::Study => &self.study,
+            Setting::Reference => &self.reference,
+            Setting::Loose => &self.loose,
         }
     }
 }
@@ -263,7 +313,8 @@ pub enum Kind {
 /// Everything measured for one case.
 ///
 /// ```text
-/// name, kind, rpm, c;  study = Ensemble at Plan::settings;  reference = at Plan::reference
+/// name, kind, rpm, c;  study = Ensemble at Plan::settings;  reference, loose = at
+/// Plan::reference, Plan::loose
 /// ```
 ///
 /// Source: this module.
@@ -281,6 +332,8 @@ pub struct CaseResult {
     pub study: Ensemble,
     /// The same realisations at the reference settings.
     pub reference: Ensemble,
+    /// The same realisations at the loose settings.
+    pub loose: Ensemble,
     /// max_i |ẍ(t_i) at the study's settings − ẍ(t_i) at the reference settings| of the
     /// paper's realisation over the last revolution, m/s².
     pub acc_tolerance_diff: f64,
@@ -328,8 +381,8 @@ pub struct Timing {
 /// The content of study.json.
 ///
 /// ```text
-/// { version, plan, cases[], claims[] (study settings), reference_claims[] (reference
-///   settings), verdicts_agree, figures[], timing }
+/// { version, plan, cases[], claims[] (study settings), reference_claims[],
+///   loose_claims[] (the other settings), verdicts_agree, figures[], timing }
 /// ```
 ///
 /// Source: this module.
@@ -345,7 +398,9 @@ pub struct StudyResult {
     pub claims: Vec<Claim>,
     /// The same claims judged on the reference settings.
     pub reference_claims: Vec<Claim>,
-    /// True when every claim has the same verdict at both settings.
+    /// The same claims judged on the loose settings.
+    pub loose_claims: Vec<Claim>,
+    /// True when every claim has the same verdict at the study's and the reference settings.
     pub verdicts_agree: bool,
     /// The figures written.
     pub figures: Vec<FigureRecord>,
@@ -359,14 +414,11 @@ impl StudyResult {
         self.cases.iter().find(|c| c.name == name)
     }
 
-    /// The ensembles at the study's (or the reference) settings, by case name.
-    pub fn ensembles(&self, reference: bool) -> claims::Cases {
+    /// The ensembles at one of the settings, by case name.
+    pub fn ensembles(&self, which: Setting) -> claims::Cases {
         self.cases
             .iter()
-            .map(|c| {
-                let e = if reference { &c.reference } else { &c.study };
-                (c.name.clone(), e.clone())
-            })
+            .map(|c| (c.name.clone(), c.ensemble(which).clone()))
             .collect()
     }
 }
@@ -698,7 +750,7 @@ struct Job<'a> {
     case: usize,
     name: &'a str,
     scene: &'a Scene,
-    reference: bool,
+    setting: Setting,
     member: usize,
 }
 
@@ -711,11 +763,7 @@ struct JobOut {
 }
 
 fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
-    let settings = if job.reference {
-        plan.reference
-    } else {
-        plan.settings
-    };
+    let settings = plan.get(job.setting);
     let scene = realisation(job.scene, job.member, plan.phase_step_rad);
     let r = run_case(job.name, &scene, &settings)?;
     let ideal = r.ideal.ok_or_else(|| {
@@ -725,7 +773,7 @@ fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
         ))
     })?;
     let dev = deviations(&r.last, &r.previous, &ideal)?;
-    let curves = (!job.reference && job.member == 0)
+    let curves = (job.setting == Setting::Study && job.member == 0)
         .then(|| curves(&r.last, &ideal))
         .transpose()?;
     let clearance = Mechanism::from_scene(&scene)
@@ -793,20 +841,25 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
         } else {
             plan.realisations
         };
-        for reference in [false, true] {
+        for setting in Setting::ALL {
             for member in 0..members {
                 jobs.push(Job {
                     case: i,
                     name,
                     scene: scenes[i],
-                    reference,
+                    setting,
                     member,
                 });
             }
         }
     }
     // Longest jobs (dry, reference) first so that the threads finish together.
-    jobs.sort_by_key(|j| (kind_of(j.name) != Kind::Dry, !j.reference));
+    jobs.sort_by_key(|j| {
+        (
+            kind_of(j.name) != Kind::Dry,
+            j.setting != Setting::Reference,
+        )
+    });
     let outs: Vec<JobOut> = jobs
         .par_iter()
         .map(|j| run_job(j, plan))
@@ -815,25 +868,32 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
     let mut cases = Vec::new();
     let mut all_curves = BTreeMap::new();
     for (i, name) in names.iter().enumerate() {
-        let mut study: Vec<(usize, &JobOut)> = Vec::new();
-        let mut refr: Vec<(usize, &JobOut)> = Vec::new();
-        for (j, o) in jobs.iter().zip(&outs) {
-            if j.case == i {
-                if j.reference {
-                    refr.push((j.member, o));
-                } else {
-                    study.push((j.member, o));
-                }
-            }
-        }
-        study.sort_by_key(|x| x.0);
-        refr.sort_by_key(|x| x.0);
+        let group = |setting: Setting| {
+            let mut v: Vec<(usize, &JobOut)> = jobs
+                .iter()
+                .zip(&outs)
+                .filter(|(j, _)| j.case == i && j.setting == setting)
+                .map(|(j, o)| (j.member, o))
+                .collect();
+            v.sort_by_key(|x| x.0);
+            v
+        };
+        let (study, refr, loose) = (
+            group(Setting::Study),
+            group(Setting::Reference),
+            group(Setting::Loose),
+        );
         let ensemble = |v: &[(usize, &JobOut)]| Ensemble {
             members: v.iter().map(|(_, o)| o.stats.clone()).collect(),
             acc_spread: spread(&v.iter().map(|(_, o)| &o.acc).collect::<Vec<_>>()),
         };
         let nominal = study[0].1;
-        let total: f64 = study.iter().chain(&refr).map(|(_, o)| o.solver.2).sum();
+        let total: f64 = study
+            .iter()
+            .chain(&refr)
+            .chain(&loose)
+            .map(|(_, o)| o.solver.2)
+            .sum();
         if let Some(c) = &nominal.curves {
             all_curves.insert(name.to_string(), c.clone());
         }
@@ -847,6 +907,7 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
             clearance_m: nominal.meta.1,
             study: ensemble(&study),
             reference: ensemble(&refr),
+            loose: ensemble(&loose),
             solver: SolverRecord {
                 stats: nominal.solver.0.clone(),
                 events: nominal.solver.1,
@@ -861,6 +922,7 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
         cases,
         claims: Vec::new(),
         reference_claims: Vec::new(),
+        loose_claims: Vec::new(),
         verdicts_agree: false,
         figures: Vec::new(),
         timing: Timing {
@@ -870,8 +932,9 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
             threads: rayon::current_num_threads(),
         },
     };
-    result.claims = claims::evaluate(&result.ensembles(false))?;
-    result.reference_claims = claims::evaluate(&result.ensembles(true))?;
+    result.claims = claims::evaluate(&result.ensembles(Setting::Study))?;
+    result.reference_claims = claims::evaluate(&result.ensembles(Setting::Reference))?;
+    result.loose_claims = claims::evaluate(&result.ensembles(Setting::Loose))?;
     result.verdicts_agree = result
         .claims
         .iter()

@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! # title · settings · verdict summary · metrics tables · claims · MODEL.md checks ·
-//! convergence (study vs reference settings) · solver work and timing · figures
+//! convergence (study and loose settings against the reference) · solver work and timing ·
+//! figures
 //! ```
 //!
 //! Source: the issue "`lash study paper`" (a metrics table per case, each claim: statement,
@@ -12,8 +13,13 @@
 use std::fmt::Write as _;
 
 use super::claims::{self, Claim, Origin};
-use super::{CaseResult, CaseStats, Ensemble, Kind, StudyResult};
+use super::{CaseResult, CaseStats, Ensemble, Kind, Setting, StudyResult};
 use crate::metrics::Metrics;
+
+/// Text for a table cell: `|` escaped.
+pub fn cell(s: &str) -> String {
+    s.replace('|', "\\|")
+}
 
 /// A statistic of one realisation.
 type Stat = fn(&CaseStats) -> Option<f64>;
@@ -180,7 +186,7 @@ fn deviations_table(out: &mut String, r: &StudyResult) {
     }
 }
 
-fn claim_section(out: &mut String, c: &Claim, reference: Option<&Claim>, ref_rtol: f64) {
+fn claim_section(out: &mut String, c: &Claim, others: &[(f64, &Claim)]) {
     let _ = writeln!(
         out,
         "### {} — {} ({})\n",
@@ -221,62 +227,56 @@ fn claim_section(out: &mut String, c: &Claim, reference: Option<&Claim>, ref_rto
         c.realisations_holding,
         c.realisations
     );
-    if let Some(rc) = reference {
+    for (rtol, o) in others {
         let _ = write!(
             out,
-            "; at rtol {}: {} ({} of {}).",
-            sig(ref_rtol),
-            rc.verdict.as_str(),
-            rc.realisations_holding,
-            rc.realisations
+            "; at rtol {}: {} ({} of {})",
+            sig(*rtol),
+            o.verdict.as_str(),
+            o.realisations_holding,
+            o.realisations
         );
-    } else {
-        out.push('.');
     }
-    out.push_str("\n\n");
+    out.push_str(".\n\n");
 }
 
-fn convergence(out: &mut String, r: &StudyResult) {
-    let (s, f) = (r.plan.settings.rtol, r.plan.reference.rtol);
+/// z of the dry cases between settings `a` and `b`; returns the largest |z|.
+fn z_table(out: &mut String, r: &StudyResult, a: Setting, b: Setting) -> f64 {
     let _ = writeln!(
         out,
-        "Every realisation was run again at rtol {} (atol {}). Values are ensemble means \
-         [min – max over the realisations]. `Δ pointwise` is max |ẍ(rtol {}) − ẍ(rtol {})| of \
-         the paper's realisation over the last revolution: large for the chaotic dry cases \
-         (MODEL.md §9), so those are compared through statistics only.\n",
-        sig(f),
-        sig(r.plan.reference.atol),
-        sig(s),
-        sig(f)
+        "| case | z slider_acc_rms_dev_ideal | z slider_acc_max | z slider_acc_min | z eps_max | \
+         z contact_force_max | z contact_onsets |"
     );
-    let _ = writeln!(
-        out,
-        "| case | RMS dev, rtol {0} | RMS dev, rtol {1} | eps_max, rtol {0} | eps_max, rtol {1} | \
-         penetration_max, rtol {0} | penetration_max, rtol {1} | contact_onsets, rtol {0} | \
-         contact_onsets, rtol {1} | Δ pointwise, m/s² |",
-        sig(s),
-        sig(f)
-    );
-    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
-    for c in &r.cases {
-        let (a, b) = (&c.study, &c.reference);
-        let _ = writeln!(
-            out,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            c.name,
-            mean_range(a, |s| s.metrics.slider_acc_rms_dev_ideal),
-            mean_range(b, |s| s.metrics.slider_acc_rms_dev_ideal),
-            mean_range(a, |s| s.metrics.eps_max),
-            mean_range(b, |s| s.metrics.eps_max),
-            mean_range(a, |s| s.metrics.penetration_max),
-            mean_range(b, |s| s.metrics.penetration_max),
-            mean_range(a, |s| s.metrics.contact_onsets.map(|n| n as f64)),
-            mean_range(b, |s| s.metrics.contact_onsets.map(|n| n as f64)),
-            sig(c.acc_tolerance_diff),
-        );
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|");
+    let mut z_max: f64 = 0.0;
+    for c in r.cases.iter().filter(|c| c.kind == Kind::Dry) {
+        let stats: [Stat; 6] = [
+            |s| s.metrics.slider_acc_rms_dev_ideal,
+            |s| s.metrics.slider_acc_max,
+            |s| s.metrics.slider_acc_min,
+            |s| s.metrics.eps_max,
+            |s| s.metrics.contact_force_max,
+            |s| s.metrics.contact_onsets.map(|n| n as f64),
+        ];
+        let zs: Vec<String> = stats
+            .iter()
+            .map(|f| match z_score(c.ensemble(a), c.ensemble(b), f) {
+                Some(z) => {
+                    z_max = z_max.max(z.abs());
+                    format!("{z:.2}")
+                }
+                None => "—".into(),
+            })
+            .collect();
+        let _ = writeln!(out, "| {} | {} |", c.name, zs.join(" | "));
     }
-    // Lubricated cases (not chaotic): relative change of the statistics between the settings.
-    let mut worst: (f64, String) = (0.0, String::new());
+    let _ = writeln!(out, "\nLargest |z|: {z_max:.2}.\n");
+    z_max
+}
+
+/// The largest relative change of the lubricated cases' statistics between `a` and `b`.
+fn lubricated_change(r: &StudyResult, a: Setting, b: Setting) -> (f64, String) {
+    let mut worst: (f64, String) = (0.0, "—".into());
     for c in r.cases.iter().filter(|c| c.kind == Kind::Lubricated) {
         let stats: [(&str, Stat); 6] = [
             ("slider_acc_max", |s| s.metrics.slider_acc_max),
@@ -289,7 +289,7 @@ fn convergence(out: &mut String, r: &StudyResult) {
             ("a_dev_max", |s| Some(s.dev.a_dev_max)),
         ];
         for (name, f) in stats {
-            if let (Some(x), Some(y)) = (mean_of(&c.study, f), mean_of(&c.reference, f)) {
+            if let (Some(x), Some(y)) = (mean_of(c.ensemble(a), f), mean_of(c.ensemble(b), f)) {
                 let d = if y != 0.0 {
                     (x - y).abs() / y.abs()
                 } else {
@@ -301,68 +301,112 @@ fn convergence(out: &mut String, r: &StudyResult) {
             }
         }
     }
+    worst
+}
+
+fn changed_verdicts(a: &[Claim], b: &[Claim]) -> String {
+    let changed: Vec<&str> = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| x.verdict != y.verdict)
+        .map(|(x, _)| x.id.as_str())
+        .collect();
+    if changed.is_empty() {
+        "identical for every claim".into()
+    } else {
+        format!("different for {}", changed.join(", "))
+    }
+}
+
+fn convergence(out: &mut String, r: &StudyResult) {
+    let p = &r.plan;
+    let (s, f, l) = (p.settings.rtol, p.reference.rtol, p.loose.rtol);
     let _ = writeln!(
         out,
-        "\nLubricated cases (not chaotic): the largest relative change of slider_acc_max, \
-         slider_acc_min, slider_acc_rms_dev_ideal, eps_max, film_force_max or a_dev_max (ensemble \
-         means) between the two settings is {} ({}).",
-        sig(worst.0),
-        if worst.1.is_empty() { "—" } else { &worst.1 }
-    );
-    // Dry cases (chaotic): the two ensembles are samples of one distribution if the settings
-    // are converged; z = difference of the means / its standard error.
-    let _ = writeln!(
-        out,
-        "\nDry cases (chaotic): z = (mean at rtol {} − mean at rtol {}) / sqrt(s₁²/n₁ + s₂²/n₂), \
-         s the realisations' standard deviation; |z| below about 3 is what two samples of one \
-         distribution give.\n",
+        "Every realisation was also run at rtol {} (atol {}, the reference) and at rtol {} \
+         (atol {}, loose). Values are ensemble means [min – max over the realisations]. \
+         `Δ pointwise` is max |ẍ(rtol {}) − ẍ(rtol {})| of the paper's realisation over the \
+         last revolution: large for the chaotic dry cases (MODEL.md §9), so those are compared \
+         through statistics only.\n",
+        sig(f),
+        sig(p.reference.atol),
+        sig(l),
+        sig(p.loose.atol),
         sig(s),
         sig(f)
     );
     let _ = writeln!(
         out,
-        "| case | z slider_acc_rms_dev_ideal | z slider_acc_max | z eps_max | z penetration_max | z contact_onsets |"
-    );
-    let _ = writeln!(out, "|---|---|---|---|---|---|");
-    let mut z_max: f64 = 0.0;
-    for c in r.cases.iter().filter(|c| c.kind == Kind::Dry) {
-        let stats: [Stat; 5] = [
-            |s| s.metrics.slider_acc_rms_dev_ideal,
-            |s| s.metrics.slider_acc_max,
-            |s| s.metrics.eps_max,
-            |s| s.metrics.penetration_max,
-            |s| s.metrics.contact_onsets.map(|n| n as f64),
-        ];
-        let zs: Vec<String> = stats
-            .iter()
-            .map(|f| match z_score(&c.study, &c.reference, f) {
-                Some(z) => {
-                    z_max = z_max.max(z.abs());
-                    format!("{z:.2}")
-                }
-                None => "—".into(),
-            })
-            .collect();
-        let _ = writeln!(out, "| {} | {} |", c.name, zs.join(" | "));
-    }
-    let _ = writeln!(out, "\nLargest |z|: {z_max:.2}.");
-    let changed: Vec<&str> = r
-        .claims
-        .iter()
-        .zip(&r.reference_claims)
-        .filter(|(a, b)| a.verdict != b.verdict)
-        .map(|(a, _)| a.id.as_str())
-        .collect();
-    let _ = writeln!(
-        out,
-        "\n**Verdicts at rtol {} and rtol {}: {}.**\n",
+        "| case | RMS dev, rtol {0} | RMS dev, rtol {1} | RMS dev, rtol {2} | eps_max, rtol {0} | \
+         eps_max, rtol {1} | eps_max, rtol {2} | contact_onsets, rtol {0} | contact_onsets, \
+         rtol {1} | Δ pointwise, m/s² |",
         sig(s),
         sig(f),
-        if changed.is_empty() {
-            "identical for every claim".to_string()
-        } else {
-            format!("different for {}", changed.join(", "))
-        }
+        sig(l)
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
+    for c in &r.cases {
+        let (a, b, lo) = (&c.study, &c.reference, &c.loose);
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            c.name,
+            mean_range(a, |s| s.metrics.slider_acc_rms_dev_ideal),
+            mean_range(b, |s| s.metrics.slider_acc_rms_dev_ideal),
+            mean_range(lo, |s| s.metrics.slider_acc_rms_dev_ideal),
+            mean_range(a, |s| s.metrics.eps_max),
+            mean_range(b, |s| s.metrics.eps_max),
+            mean_range(lo, |s| s.metrics.eps_max),
+            mean_range(a, |s| s.metrics.contact_onsets.map(|n| n as f64)),
+            mean_range(b, |s| s.metrics.contact_onsets.map(|n| n as f64)),
+            sig(c.acc_tolerance_diff),
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nDry cases (chaotic): the ensembles at two settings are samples of one distribution \
+         when the settings are converged. z = (mean₁ − mean₂) / sqrt(s₁²/n₁ + s₂²/n₂), s the \
+         realisations' standard deviation; |z| up to about 3 is what two samples of one \
+         distribution give, larger |z| is a systematic difference.\n"
+    );
+    let _ = writeln!(
+        out,
+        "rtol {} against rtol {} (the study's setting):\n",
+        sig(s),
+        sig(f)
+    );
+    let z_study = z_table(out, r, Setting::Study, Setting::Reference);
+    let _ = writeln!(
+        out,
+        "rtol {} against rtol {} (the loose setting):\n",
+        sig(l),
+        sig(f)
+    );
+    let z_loose = z_table(out, r, Setting::Loose, Setting::Reference);
+    let (ws, wsn) = lubricated_change(r, Setting::Study, Setting::Reference);
+    let (wl, wln) = lubricated_change(r, Setting::Loose, Setting::Reference);
+    let _ = writeln!(
+        out,
+        "Lubricated cases (not chaotic): the largest relative change of slider_acc_max, \
+         slider_acc_min, slider_acc_rms_dev_ideal, eps_max, film_force_max or a_dev_max \
+         (ensemble means) against rtol {}: {} at rtol {} ({wsn}), {} at rtol {} ({wln}).\n",
+        sig(f),
+        sig(ws),
+        sig(s),
+        sig(wl),
+        sig(l)
+    );
+    let _ = writeln!(
+        out,
+        "**Summary.** Against rtol {}: rtol {} has largest |z| {:.2} on the dry statistics and \
+         verdicts {}; rtol {} has largest |z| {:.2} and verdicts {}.\n",
+        sig(f),
+        sig(s),
+        z_study,
+        changed_verdicts(&r.claims, &r.reference_claims),
+        sig(l),
+        z_loose,
+        changed_verdicts(&r.loose_claims, &r.reference_claims),
     );
 }
 
@@ -383,13 +427,14 @@ pub fn report(r: &StudyResult) -> String {
     let _ = writeln!(
         out,
         "- Solver: {} at rtol {}, atol {}, {} event samples per step (an adaptive step can \
-         otherwise hold a whole contact and skip it); reference: rtol {}, atol {}.",
+         otherwise hold a whole contact and skip it); every run repeated at rtol {} (reference) \
+         and rtol {} (loose) for the convergence section.",
         p.settings.method.name(),
         sig(p.settings.rtol),
         sig(p.settings.atol),
         p.settings.event_samples,
         sig(p.reference.rtol),
-        sig(p.reference.atol)
+        sig(p.loose.rtol)
     );
     let _ = writeln!(
         out,
@@ -436,21 +481,29 @@ pub fn report(r: &StudyResult) -> String {
     let _ = writeln!(out, "## Verdicts\n");
     let _ = writeln!(
         out,
-        "| claim | figure | statement | verdict | realisations holding | verdict at rtol {} |",
-        sig(p.reference.rtol)
+        "| claim | figure | statement | verdict | realisations holding | verdict at rtol {} | \
+         verdict at rtol {} |",
+        sig(p.reference.rtol),
+        sig(p.loose.rtol)
     );
-    let _ = writeln!(out, "|---|---|---|---|---|---|");
-    for (c, rc) in r.claims.iter().zip(&r.reference_claims) {
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|");
+    for ((c, rc), lc) in r
+        .claims
+        .iter()
+        .zip(&r.reference_claims)
+        .zip(&r.loose_claims)
+    {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | **{}** | {} / {} | {} |",
+            "| {} | {} | {} | **{}** | {} / {} | {} | {} |",
             c.id,
-            c.figure,
-            c.statement,
+            cell(&c.figure),
+            cell(&c.statement),
             c.verdict.as_str(),
             c.realisations_holding,
             c.realisations,
-            rc.verdict.as_str()
+            rc.verdict.as_str(),
+            lc.verdict.as_str()
         );
     }
     let paper: Vec<&Claim> = r
@@ -496,19 +549,22 @@ pub fn report(r: &StudyResult) -> String {
     );
     deviations_table(&mut out, r);
 
-    let _ = writeln!(out, "\n## Claims of the paper\n");
-    for (c, rc) in r.claims.iter().zip(&r.reference_claims) {
-        if c.origin == Origin::Paper {
-            claim_section(&mut out, c, Some(rc), p.reference.rtol);
+    for (origin, title) in [
+        (Origin::Paper, "\n## Claims of the paper\n"),
+        (Origin::Model, "## MODEL.md cross-checks\n"),
+    ] {
+        let _ = writeln!(out, "{title}");
+        for ((c, rc), lc) in r
+            .claims
+            .iter()
+            .zip(&r.reference_claims)
+            .zip(&r.loose_claims)
+        {
+            if c.origin == origin {
+                claim_section(&mut out, c, &[(p.reference.rtol, rc), (p.loose.rtol, lc)]);
+            }
         }
     }
-    let _ = writeln!(out, "## MODEL.md cross-checks\n");
-    for (c, rc) in r.claims.iter().zip(&r.reference_claims) {
-        if c.origin == Origin::Model {
-            claim_section(&mut out, c, Some(rc), p.reference.rtol);
-        }
-    }
-
     let _ = writeln!(out, "## Convergence\n");
     convergence(&mut out, r);
 
@@ -516,7 +572,7 @@ pub fn report(r: &StudyResult) -> String {
     let _ = writeln!(
         out,
         "Paper's realisation at rtol {}: counters of `lash_solver::Stats`; `all runs` is the \
-         wall time of every realisation at both settings.\n",
+         wall time of every realisation at the three settings.\n",
         sig(p.settings.rtol)
     );
     let _ = writeln!(
@@ -544,7 +600,7 @@ pub fn report(r: &StudyResult) -> String {
     let runs: usize = r
         .cases
         .iter()
-        .map(|c| c.study.members.len() + c.reference.members.len())
+        .map(|c| c.study.members.len() + c.reference.members.len() + c.loose.members.len())
         .sum();
     let _ = writeln!(
         out,
