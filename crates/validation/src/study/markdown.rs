@@ -37,7 +37,14 @@ pub fn sig(v: f64) -> String {
         let digits = (3 - a.log10().floor() as i32).max(0) as usize;
         format!("{v:.digits$}")
     } else {
-        format!("{v:.3e}")
+        // 4 significant digits, trailing zeros of the mantissa dropped: 1e-10, 1.25e-4.
+        let t = format!("{v:.3e}");
+        match t.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => t,
+        }
     }
 }
 
@@ -628,4 +635,23 @@ pub fn report(r: &StudyResult) -> String {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_keep_four_significant_digits() {
+        assert_eq!(sig(0.0), "0");
+        assert_eq!(sig(2.0843), "2.084");
+        assert_eq!(sig(-12.2776), "-12.28");
+        assert_eq!(sig(33306.96), "33307");
+        assert_eq!(sig(0.07230111), "0.07230");
+        assert_eq!(sig(1e-10), "1e-10");
+        assert_eq!(sig(1.25e-4), "1.25e-4");
+        assert_eq!(sig(-9.39303e-5), "-9.393e-5");
+        assert_eq!(sig(123456.0), "1.235e5");
+        assert_eq!(cell("|e|/c"), "\\|e\\|/c");
+    }
 }
