@@ -286,6 +286,12 @@ pub struct Claim {
 }
 
 /// The runs by case name.
+///
+/// ```text
+/// case name → Ensemble { members[k] = statistics of realisation k, acc_spread }
+/// ```
+///
+/// Source: [`super::Ensemble`].
 pub type Cases = BTreeMap<String, Ensemble>;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
