@@ -68,9 +68,8 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         }
         Command::Study(a) => {
             let StudyName::Paper = a.study;
-            Err(Error::NotYetAvailable(
-                "lash study paper (the model is not wired in)".into(),
-            ))
+            let out = a.out.unwrap_or_else(|| default_out("study", "paper"));
+            crate::study::paper(&out).map(|_| ())
         }
         Command::Compare(a) => {
             Case::load(&a.case, None)?;

@@ -25,6 +25,7 @@ pub mod io;
 pub mod metrics;
 pub mod plot;
 pub mod report;
+pub mod study;
 pub mod summary;
 pub mod sweep;
 pub mod trajectory;
