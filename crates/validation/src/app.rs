@@ -16,8 +16,9 @@ use std::path::{Path, PathBuf};
 use lash_solver::SolverOptions;
 
 use crate::case::Case;
-use crate::cli::{self, Command, Parsed, StudyArgs, StudyName, SweepArgs};
+use crate::cli::{self, Command, Parsed, RunArgs, StudyArgs, StudyName, SweepArgs};
 use crate::error::{Error, EXIT_OK};
+use crate::simulate::{simulate, Prepared, RunRequest, RunResult};
 use crate::sweep::{self, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
@@ -58,14 +59,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         out: None,
     }));
     match command {
-        Command::Run(a) => {
-            let case = Case::load(&a.case, None)?;
-            let _opts = a.solver.apply(&SolverOptions::default())?;
-            let _out = a.out.unwrap_or_else(|| default_out("run", &case.name));
-            Err(Error::NotYetAvailable(
-                "lash run (the model is not wired in)".into(),
-            ))
-        }
+        Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) => {
             let StudyName::Paper = a.study;
             Err(Error::NotYetAvailable(
@@ -105,6 +99,70 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
             Ok(())
         }
     }
+}
+
+/// `lash run`: checks the case and the flags (the flags first, so that a usage error is
+/// reported before the scene is read), integrates, writes DIR/summary.json, DIR/trajectory.csv
+/// and the figures, and prints what it did. Returns the result and the output directory.
+pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
+    let case = Case::load(&a.case, None)?;
+    a.solver.apply(&SolverOptions::default())?;
+    let prepared = Prepared::load(case)?;
+    let opts = prepared.options(&a.solver)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("run", &prepared.case.name));
+    let mut req = RunRequest::new(opts);
+    req.t_end = a.t_end;
+    let r = simulate(&prepared, &req)?;
+    let files = r.write(&out)?;
+    print!("{}", describe_run(&r));
+    println!("wrote {} files to {}", files.len(), out.display());
+    Ok((r, out))
+}
+
+/// A few lines on what a run did: method, work, and the headline metrics.
+pub fn describe_run(r: &RunResult) -> String {
+    let s = &r.summary;
+    let setting = match (s.step, s.rtol) {
+        (Some(h), _) => format!("step {h:e} s"),
+        (None, Some(rt)) => format!("rtol {rt:e}"),
+        _ => String::new(),
+    };
+    let mut out = format!(
+        "{}: {} {}, t_end {} s: {} steps ({} rejected), {} RHS evaluations, {} events, {:.3} s\n",
+        s.case,
+        s.method,
+        setting,
+        s.t_end,
+        s.stats.accepted,
+        s.stats.rejected_error + s.stats.rejected_newton,
+        s.stats.rhs_evals,
+        s.events,
+        s.wall_time_s
+    );
+    if let Some(e) = s.reference_error {
+        out.push_str(&format!("  reference error {e:.3e}\n"));
+    }
+    if let Some(m) = &s.metrics {
+        let f = |v: Option<f64>| v.map_or("null".to_string(), |x| format!("{x:.6}"));
+        out.push_str(&format!(
+            "  metrics: slider acceleration [{}, {}] m/s², RMS deviation from ideal {} m/s², eps_max {}, contact onsets {}\n",
+            f(m.slider_acc_min),
+            f(m.slider_acc_max),
+            m.slider_acc_rms_dev_ideal.map_or("null".into(), |x| format!("{x:.3e}")),
+            f(m.eps_max),
+            m.contact_onsets.map_or("null".into(), |n| n.to_string()),
+        ));
+        if let Some(e) = &m.energy {
+            out.push_str(&format!(
+                "  energy: driver work {:.6} J, balance error {:.3e} J (quadrature error {:.1e} J)\n",
+                e.driver_work, e.balance_error, e.quadrature_error
+            ));
+        }
+    }
+    out
 }
 
 /// Default output directory of a command for a case: `out/COMMAND/NAME` (a `:` in a built-in

@@ -2,7 +2,8 @@
 //!
 //! ```text
 //! lash                                   the default study (= lash study paper)
-//! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C] [--out DIR]
+//! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
+//!              [--t-end S] [--out DIR]
 //! lash study paper [--out DIR]
 //! lash compare CASE [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
@@ -167,7 +168,7 @@ impl SolverFlags {
 /// Arguments of `lash run`.
 ///
 /// ```text
-/// lash run CASE [solver flags] [--out DIR]
+/// lash run CASE [solver flags] [--t-end S] [--out DIR]
 /// ```
 ///
 /// Source: the issue "The lash command".
@@ -178,6 +179,9 @@ pub struct RunArgs {
     /// Solver choice.
     #[command(flatten)]
     pub solver: SolverFlags,
+    /// End time override, s (scene cases only; default the scene's t_end or revolutions).
+    #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
     /// Output directory. Default `out/run/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -481,6 +485,15 @@ pub fn parse_atol(s: &str) -> Result<Atol, String> {
     } else {
         Atol::Vector(v)
     })
+}
+
+/// Parses an end-time override: finite and > 0 (s).
+pub fn parse_t_end(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "t-end")?;
+    if !(v > 0.0) {
+        return Err(format!("t-end must be > 0, got {s}"));
+    }
+    Ok(v)
 }
 
 /// Parses a fixed step: finite and > 0 (s).

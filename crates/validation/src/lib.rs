@@ -10,9 +10,10 @@
 //!
 //! Modules: [`cli`] (arguments), [`app`] (dispatch), [`error`] (exit codes), [`io`] (atomic
 //! writes), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
-//! (trajectory.csv), [`ideal`] (closed-form slider-crank), [`metrics`] (last-revolution
-//! metrics), [`plot`] (SVG + PNG figures), [`report`] (the files of one run), [`sweep`]
-//! (grids, shards, resume, merge), [`workprecision`] (error against cost, cheapest runs).
+//! (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG figures),
+//! [`report`] (the files of one run), [`simulate`] (running a case: the core of every
+//! command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against cost,
+//! cheapest runs).
 
 #![warn(missing_docs)]
 
@@ -20,11 +21,11 @@ pub mod app;
 pub mod case;
 pub mod cli;
 pub mod error;
-pub mod ideal;
 pub mod io;
 pub mod metrics;
 pub mod plot;
 pub mod report;
+pub mod simulate;
 pub mod summary;
 pub mod sweep;
 pub mod trajectory;
