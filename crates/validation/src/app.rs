@@ -13,13 +13,18 @@ use std::ffi::OsString;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-use lash_solver::SolverOptions;
+use lash_solver::{Method, SolverOptions};
 
 use crate::case::Case;
-use crate::cli::{self, Command, Parsed, RunArgs, StudyArgs, StudyName, SweepArgs};
+use crate::cli::{
+    self, Command, CompareArgs, Parsed, RunArgs, StudyArgs, StudyName, SweepArgs, WorkPrecisionArgs,
+};
+use crate::compare::{self, Compared, Comparison, Reference};
 use crate::error::{Error, EXIT_OK};
+use crate::headline;
 use crate::simulate::{simulate, Prepared, RunRequest, RunResult};
 use crate::sweep::{self, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
+use crate::workprecision::{WpRun, WpTable, DEFAULT_TARGETS};
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
 /// A panic (a bug) is caught and becomes exit code 1 (its message is printed by the panic hook).
@@ -52,33 +57,25 @@ pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
     }
 }
 
-/// Executes one command; `None` is the default study (`lash study paper`).
+/// Executes one command; `None` is the default run (module `headline`: the 150 rpm press,
+/// ideal vs dry vs lubricated, RK4 against the best adaptive method).
 pub fn execute(command: Option<Command>) -> Result<(), Error> {
-    let command = command.unwrap_or(Command::Study(StudyArgs {
-        study: StudyName::Paper,
-        out: None,
-    }));
+    let Some(command) = command else {
+        return headline::run(None).map(|_| ());
+    };
     match command {
         Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) => {
-            let StudyName::Paper = a.study;
+            let StudyArgs {
+                study: StudyName::Paper,
+                ..
+            } = a;
             Err(Error::NotYetAvailable(
                 "lash study paper (the model is not wired in)".into(),
             ))
         }
-        Command::Compare(a) => {
-            Case::load(&a.case, None)?;
-            Err(Error::NotYetAvailable(
-                "lash compare (the model is not wired in)".into(),
-            ))
-        }
-        Command::WorkPrecision(a) => {
-            Case::load(&a.case, None)?;
-            a.plan()?;
-            Err(Error::NotYetAvailable(
-                "lash work-precision (the model is not wired in)".into(),
-            ))
-        }
+        Command::Compare(a) => compare_command(&a).map(|_| ()),
+        Command::WorkPrecision(a) => work_precision_command(&a).map(|_| ()),
         Command::Sweep(a) => {
             let spec = sweep::SweepSpec::load(&a.file)?;
             let _points = spec.points()?;
@@ -120,6 +117,155 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
     print!("{}", describe_run(&r));
     println!("wrote {} files to {}", files.len(), out.display());
     Ok((r, out))
+}
+
+/// The RK4 steps of a comparison: the given ones, else the largest stable step h and h/2,
+/// h/4 (`halvings` + 1 steps) for scene cases with a crank, none for test problems.
+fn rk4_steps(
+    p: &Prepared,
+    given: &Option<Vec<f64>>,
+    t_end: Option<f64>,
+    halvings: usize,
+) -> Result<Vec<f64>, Error> {
+    match given {
+        Some(v) => Ok(v.clone()),
+        None if p.period().is_some() => {
+            let h = compare::stable_rk4_step(p, t_end)?;
+            eprintln!(
+                "{}: largest stable RK4 step {h:e} s (1-2-5 series from T/400, ‖Φ‖ < 1e-8)",
+                p.case.name
+            );
+            Ok((0..=halvings).map(|k| h / f64::from(1u32 << k)).collect())
+        }
+        None => Ok(Vec::new()),
+    }
+}
+
+/// `lash compare`: RK4 at several steps, every embedded pair and every stiff method at each
+/// tolerance, against the case's reference; writes compare.md and compare.json.
+pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
+    let p = Prepared::load_spec(&a.case, None)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("compare", &p.case.name));
+    let reference = Reference::compute(&p, a.t_end)?;
+    eprintln!("{}: reference {}", p.case.name, reference.how);
+    let steps = rk4_steps(&p, &a.steps, a.t_end, 2)?;
+    let tolerances = a
+        .tolerances
+        .clone()
+        .unwrap_or_else(|| cli::COMPARE_TOLERANCES.to_vec());
+    let mut runs = Vec::new();
+    for &h in &steps {
+        runs.push(compare::compare_one(&p, &reference, Method::Rk4, None, Some(h), None)?.0);
+    }
+    for m in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        for &r in &tolerances {
+            runs.push(compare::compare_one(&p, &reference, m, Some(r), None, None)?.0);
+        }
+    }
+    let c = Comparison {
+        case: p.case.name.clone(),
+        reference: reference.how.clone(),
+        reference_agreement: reference.agreement.clone(),
+        window: reference.window.clone(),
+        t_end: reference.t_end,
+        runs,
+    };
+    let files = c.write(&out)?;
+    print!("{}", c.to_markdown());
+    println!("wrote {} files to {}", files.len(), out.display());
+    Ok(c)
+}
+
+/// The method `lash work-precision` compares the controllers on when it is listed: the
+/// highest-order pair, whose steps are longest and so most sensitive to the controller.
+pub const CONTROLLER_METHOD: Method = Method::Dop853;
+
+/// `lash work-precision`: every method × tolerance and RK4 × step, and the controllers
+/// compared on one method of ours ([`CONTROLLER_METHOD`] if listed, else the first of ours in
+/// the list), against the case's reference;
+/// writes the markdown and JSON tables and the log–log figures.
+pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
+    let case = Case::load(&a.case, None)?;
+    let plan = a.plan()?;
+    let p = Prepared::load(case)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("work-precision", &p.case.name));
+    let wants_rk4 = plan.methods.iter().any(|m| m.is_fixed_step());
+    if wants_rk4 && plan.steps.is_none() && p.period().is_none() {
+        if a.methods.is_some() {
+            return Err(Error::Usage(format!(
+                "rk4 needs --steps for {} (no crank period to derive them from)",
+                p.case.name
+            )));
+        }
+        eprintln!("{}: rk4 left out (give --steps to include it)", p.case.name);
+    }
+    let reference = Reference::compute(&p, a.t_end)?;
+    eprintln!("{}: reference {}", p.case.name, reference.how);
+    let steps = if wants_rk4 {
+        rk4_steps(&p, &plan.steps, a.t_end, 3)?
+    } else {
+        Vec::new()
+    };
+    let ours = |m: &Method| !m.is_fixed_step() && !m.is_diffsol();
+    let ctl_method = if plan.methods.contains(&CONTROLLER_METHOD) {
+        Some(CONTROLLER_METHOD)
+    } else {
+        plan.methods.iter().copied().find(ours)
+    };
+    let mut runs = Vec::new();
+    let mut push = |c: Compared| {
+        eprintln!(
+            "  {} {}: error {}, {} RHS, {:.3} s",
+            c.label(),
+            c.setting(),
+            c.error.map_or("failed".into(), |e| format!("{e:.3e}")),
+            c.rhs_evals,
+            c.wall_time_s
+        );
+        runs.push(WpRun {
+            method: c.method,
+            controller: c.controller,
+            rtol: c.rtol,
+            step: c.step,
+            error: c.error,
+            rhs_evals: c.rhs_evals,
+            wall_time_s: c.wall_time_s,
+            failure: c.failure,
+        });
+    };
+    for &m in &plan.methods {
+        if m.is_fixed_step() {
+            for &h in &steps {
+                push(compare::compare_one(&p, &reference, m, None, Some(h), None)?.0);
+            }
+        } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
+            for &c in &plan.controllers {
+                for &r in &plan.tolerances {
+                    push(compare::compare_one(&p, &reference, m, Some(r), None, Some(c))?.0);
+                }
+            }
+        } else {
+            for &r in &plan.tolerances {
+                push(compare::compare_one(&p, &reference, m, Some(r), None, None)?.0);
+            }
+        }
+    }
+    let table = WpTable::new(&p.case.name, runs, &DEFAULT_TARGETS)?;
+    let files = table.write(&out)?;
+    print!("{}", table.to_markdown());
+    println!(
+        "reference: {}\nwrote {} files to {}",
+        reference.how,
+        files.len(),
+        out.display()
+    );
+    Ok(table)
 }
 
 /// A few lines on what a run did: method, work, and the headline metrics.

@@ -389,8 +389,8 @@ pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Resul
 
 struct OrbitFigure<'a> {
     title: &'a str,
-    ex: &'a [f64],
-    ey: &'a [f64],
+    /// (label, e_x/c, e_y/c) per orbit.
+    orbits: &'a [Series<'a>],
     r: f64,
 }
 
@@ -434,18 +434,17 @@ impl Figure for OrbitFigure<'_> {
             .map_err(|e| e.to_string())?
             .label("clearance circle, ε = 1")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2)));
-        let c = style_of(0);
-        let orbit: Vec<(f64, f64)> = self
-            .ex
-            .iter()
-            .copied()
-            .zip(self.ey.iter().copied())
-            .collect();
-        chart
-            .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
-            .map_err(|e| e.to_string())?
-            .label("journal centre, e / c")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2)));
+        for (k, o) in self.orbits.iter().enumerate() {
+            let c = style_of(k);
+            let orbit: Vec<(f64, f64)> = o.x.iter().copied().zip(o.y.iter().copied()).collect();
+            chart
+                .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(o.name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
+                });
+        }
         chart
             .configure_series_labels()
             .label_font((FAMILY, 15))
@@ -461,20 +460,28 @@ impl Figure for OrbitFigure<'_> {
 /// The view shows at least |e|/c ≤ 1.08, more if the journal penetrates further.
 /// Writes `stem.svg` and `stem.png`.
 pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Written, Error> {
-    let s = [Series {
-        name: "orbit",
-        x: ex,
-        y: ey,
-        style: SeriesStyle::Line,
-    }];
-    bounds(&s, false)?;
-    let r = ex
+    orbits_plot(
+        stem,
+        title,
+        &[Series {
+            name: "journal centre, e / c",
+            x: ex,
+            y: ey,
+            style: SeriesStyle::Line,
+        }],
+    )
+}
+
+/// Several orbits (series x = e_x/c, y = e_y/c, named in the legend) in one clearance circle,
+/// as [`orbit_plot`].
+pub fn orbits_plot(stem: &Path, title: &str, orbits: &[Series<'_>]) -> Result<Written, Error> {
+    bounds(orbits, false)?;
+    let r = orbits
         .iter()
-        .zip(ey)
-        .map(|(x, y)| x.hypot(*y))
+        .flat_map(|o| o.x.iter().zip(o.y).map(|(x, y)| x.hypot(*y)))
         .fold(1.0, f64::max)
         * 1.08;
-    render(stem, ORBIT_SIZE, &OrbitFigure { title, ex, ey, r })
+    render(stem, ORBIT_SIZE, &OrbitFigure { title, orbits, r })
 }
 
 #[cfg(test)]

@@ -15,8 +15,9 @@
 //!                   at once (so a contact law's stored impact velocity is the one in force)
 //!   energy        ∫ P dt of Mechanism::power over every accepted step: Boole's rule on five
 //!                   equally spaced nodes, error estimate |S₂ − S₁|/15 (S₁, S₂ Simpson on one
-//!                   and two panels); a fixed-step method groups four equal steps into one
-//!                   panel (nodes = step ends, one power evaluation per step)
+//!                   and two panels), panels no longer than T/400; a fixed-step method groups
+//!                   four equal steps into one panel (nodes = step ends, one power evaluation
+//!                   per step)
 //!   balance       W_driver − ΔT − ΔV − D_damping − D_friction − D_film
 //!   events        located hits; a run without event location (the paper's RK4) counts the
 //!                   sign changes of the event functions between consecutive step ends
@@ -26,8 +27,10 @@
 //! Defaults of a mechanism run (a scene), each overridable from the command line or the API:
 //!
 //! ```text
-//! method         dop853 (the cheapest method per accuracy in `lash work-precision` on the
-//!                paper's press: see DEFAULT_METHOD)
+//! method         bdf: the one method that is never far from the cheapest in `lash
+//!                work-precision` on the paper's press (the lubricated case, where the film
+//!                makes the explicit pairs stability-bound, 100–200× more RHS evaluations;
+//!                the dry and ideal cases, within 1.5–3× of the best explicit pair)
 //! rtol           1e-8
 //! atol_i         rtol · s_i, per state component y = (q, q̇), q = (x, y, φ) per integrated body:
 //!                  x, y      s = L                  (m)
@@ -40,7 +43,8 @@
 //!                with rtol, so tolerance proportionality holds down to rtol = 1e-13.
 //!                An --atol on the command line replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
-//! h_max          T/100 (T the crank period; ∞ without a crank driver): with 4 samples an
+//! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
+//!                joint, where nothing can be stepped over): with 4 samples an
 //!                interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot hide
 //!                inside a step. On dry_150rpm_c0.1 the shortest contact lasts 3.5 ms and the
 //!                shortest flight 1 ms; a step over a whole contact would miss both its onset
@@ -81,7 +85,7 @@ use crate::summary::Summary;
 use crate::trajectory::Extra;
 
 /// Default method of a mechanism run.
-pub const DEFAULT_METHOD: Method = Method::Dop853;
+pub const DEFAULT_METHOD: Method = Method::Bdf;
 /// Default relative tolerance of a mechanism run.
 pub const DEFAULT_RTOL: f64 = 1e-8;
 /// Interior event samples per step of a mechanism run.
@@ -92,6 +96,9 @@ pub const H_MAX_PER_PERIOD: f64 = 1.0 / 100.0;
 pub const DEFAULT_MAX_STEPS: usize = 50_000_000;
 /// Length scale L of the default atol for scenes without a clearance joint, m.
 pub const DEFAULT_LENGTH_SCALE: f64 = 1e-3;
+/// Longest energy-quadrature panel of a run with a crank, as a fraction of the period: long
+/// adaptive steps are split (the power terms oscillate at multiples of the crank frequency).
+pub const QUADRATURE_PANEL_PER_PERIOD: f64 = 1.0 / 400.0;
 /// Default method of a built-in test problem.
 pub const TESTSET_METHOD: Method = Method::Rodas5p;
 /// Default relative tolerance of a built-in test problem.
@@ -286,7 +293,10 @@ impl Prepared {
                 o.rtol = DEFAULT_RTOL;
                 o.atol = self.default_atol(DEFAULT_RTOL);
                 o.event_samples = DEFAULT_EVENT_SAMPLES;
-                o.h_max = i.period.map_or(f64::INFINITY, |t| t * H_MAX_PER_PERIOD);
+                o.h_max = match (i.period, i.clearance_min) {
+                    (Some(t), Some(_)) => t * H_MAX_PER_PERIOD,
+                    _ => f64::INFINITY,
+                };
                 o.max_steps = DEFAULT_MAX_STEPS;
                 o
             }
@@ -565,6 +575,7 @@ fn simulate_testset(
         &req.extra_times,
         true,
         None,
+        f64::INFINITY,
         &mut sink,
     )?;
     let mut traj = d.steps.unwrap_or_else(|| empty_solution(n));
@@ -756,6 +767,8 @@ fn simulate_mechanism(
         &times,
         false,
         if req.energy { Some(&power) } else { None },
+        info.period
+            .map_or(f64::INFINITY, |t| t * QUADRATURE_PANEL_PER_PERIOD),
         &mut sink,
     )?;
     for s in [&mut sol_w, &mut sol_t, &mut sol_x] {
@@ -858,6 +871,7 @@ fn drive<S: OdeSystem + ?Sized>(
     times: &[f64],
     record_steps: bool,
     power: Option<PowerFn<'_>>,
+    max_panel: f64,
     sink: &mut dyn FnMut(usize, f64, &[f64]) -> Result<(), Error>,
 ) -> Result<Drive, Error> {
     let n = y0.len();
@@ -887,6 +901,7 @@ fn drive<S: OdeSystem + ?Sized>(
     let mut quad = match power {
         Some(pw) => Some(Quadrature::new(
             opts.method.is_fixed_step(),
+            max_panel,
             t0,
             checked_power(pw, t0, y0)?,
         )),
@@ -988,7 +1003,8 @@ fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 4], Error> 
 /// panel of 5 equally spaced nodes f0..f4, spacing d:
 ///   S1 = 2d/3 (f0 + 4 f2 + f4),  S2 = d/3 (f0 + 4 f1 + 2 f2 + 4 f3 + f4)
 ///   value = S2 + (S2 − S1)/15 (Boole's rule),  error estimate |S2 − S1|/15
-/// adaptive step [a, b]: one panel with d = (b − a)/4 (3 interior nodes from dense output)
+/// adaptive step [a, b]: ⌈(b − a)/w⌉ panels (w = max_panel), each with 3 interior nodes from
+///   the dense output
 /// fixed-step method: four consecutive equal steps form one panel (nodes = step ends);
 ///   a partial group (at the end, or before an unequal or event-cut step) uses Simpson 3/8,
 ///   Simpson or the trapezoid, error estimated by the difference with the trapezoid
@@ -1000,6 +1016,7 @@ fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 4], Error> 
 #[derive(Clone, Debug)]
 pub struct Quadrature {
     fixed: bool,
+    max_panel: f64,
     group: Vec<(f64, [f64; 4])>,
     /// Integrals so far of (driver, contact damping, friction, film), J.
     pub total: [f64; 4],
@@ -1010,10 +1027,12 @@ pub struct Quadrature {
 }
 
 impl Quadrature {
-    /// Starts at (t0, P(t0)); `fixed` groups equal steps.
-    pub fn new(fixed: bool, t0: f64, p0: [f64; 4]) -> Quadrature {
+    /// Starts at (t0, P(t0)); `fixed` groups equal steps; a step longer than `max_panel`
+    /// (> 0, may be ∞) is split into panels no longer than it.
+    pub fn new(fixed: bool, max_panel: f64, t0: f64, p0: [f64; 4]) -> Quadrature {
         Quadrature {
             fixed,
+            max_panel,
             group: vec![(t0, p0)],
             total: [0.0; 4],
             err: [0.0; 4],
@@ -1057,15 +1076,33 @@ impl Quadrature {
             }
         }
         self.flush();
-        let a = self.last();
-        let mut nodes = [a; 5];
-        for (j, nd) in nodes.iter_mut().enumerate().skip(1) {
-            let t = if j == 4 { tb } else { ta + h * j as f64 / 4.0 };
-            *nd = (t, node(t)?);
+        let panels = if self.max_panel.is_finite() {
+            ((h / self.max_panel).ceil() as usize).max(1)
+        } else {
+            1
+        };
+        let w = h / panels as f64;
+        for k in 0..panels {
+            let a = self.last();
+            let pa = a.0;
+            let pb = if k + 1 == panels {
+                tb
+            } else {
+                ta + w * (k + 1) as f64
+            };
+            let mut nodes = [a; 5];
+            for (j, nd) in nodes.iter_mut().enumerate().skip(1) {
+                let t = if j == 4 {
+                    pb
+                } else {
+                    pa + (pb - pa) * j as f64 / 4.0
+                };
+                *nd = (t, node(t)?);
+            }
+            self.evals += 4;
+            self.group = nodes.to_vec();
+            self.boole();
         }
-        self.evals += 4;
-        self.group = nodes.to_vec();
-        self.boole();
         Ok(())
     }
 
@@ -1144,7 +1181,7 @@ mod tests {
 
     #[test]
     fn boole_panels_integrate_quintics_exactly_on_uneven_steps() {
-        let mut q = Quadrature::new(false, 0.0, poly(0.0));
+        let mut q = Quadrature::new(false, f64::INFINITY, 0.0, poly(0.0));
         let ts = [0.0, 0.1, 0.35, 0.4, 1.0, 1.7];
         for w in ts.windows(2) {
             q.step(w[0], w[1], false, &mut |t| Ok(poly(t))).unwrap();
@@ -1165,11 +1202,32 @@ mod tests {
     }
 
     #[test]
+    fn long_steps_are_split_into_panels() {
+        // One step over [0, 3] of cos(2t): one panel vs 12 panels (max_panel 0.25).
+        let integrate = |max_panel: f64| {
+            let mut q = Quadrature::new(false, max_panel, 0.0, poly(0.0));
+            q.step(0.0, 3.0, false, &mut |t| Ok(poly(t))).unwrap();
+            q.finish();
+            (q.total[3], q.err[3], q.evals)
+        };
+        let ex = exact(0.0, 3.0)[3];
+        let (one, est_one, n1) = integrate(f64::INFINITY);
+        let (many, est_many, n12) = integrate(0.25);
+        assert_eq!((n1, n12), (5, 1 + 4 * 12));
+        assert!(
+            (one - ex).abs() > 1e-3,
+            "one panel is coarse: {one} vs {ex}"
+        );
+        assert!((many - ex).abs() < 1e-8 && (many - ex).abs() <= est_many);
+        assert!(est_many < 1e-3 * est_one);
+    }
+
+    #[test]
     fn fixed_steps_group_into_fours_and_converge_at_order_six() {
         // ∫₀^1 cos(2t) with n equal steps: Boole panels of 4 steps, error O(h⁶).
         let run = |n: usize| {
             let h = 1.0 / n as f64;
-            let mut q = Quadrature::new(true, 0.0, poly(0.0));
+            let mut q = Quadrature::new(true, f64::INFINITY, 0.0, poly(0.0));
             for k in 0..n {
                 let (a, b) = (k as f64 * h, (k + 1) as f64 * h);
                 q.step(a, b, false, &mut |t| Ok(poly(t))).unwrap();
@@ -1190,7 +1248,7 @@ mod tests {
 
     #[test]
     fn event_cut_steps_flush_the_group() {
-        let mut q = Quadrature::new(true, 0.0, poly(0.0));
+        let mut q = Quadrature::new(true, f64::INFINITY, 0.0, poly(0.0));
         let h = 0.01;
         for k in 0..6 {
             q.step(k as f64 * h, (k + 1) as f64 * h, false, &mut |t| {
