@@ -78,10 +78,9 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::WorkPrecision(a) => work_precision_command(&a).map(|_| ()),
         Command::Sweep(a) => {
             let spec = sweep::SweepSpec::load(&a.file)?;
-            let _points = spec.points()?;
-            Err(Error::NotYetAvailable(
-                "lash sweep (the point runner needs the model)".into(),
-            ))
+            spec.points()?;
+            let base = Prepared::load(spec.case.clone())?;
+            sweep_command(&a, |p, dir| sweep_point(&base, p, dir)).map(|_| ())
         }
         Command::Merge(a) => {
             let out = a.out.unwrap_or_else(|| a.dirs[0].clone());
@@ -317,6 +316,64 @@ pub fn default_out(command: &str, name: &str) -> PathBuf {
     PathBuf::from("out")
         .join(command)
         .join(name.replace(':', "_"))
+}
+
+/// The point runner of `lash sweep`: the base case with the point's physical parameters laid
+/// over its scene ([`sweep::apply_params`]) and its solver choice over the case's defaults;
+/// writes DIR/summary.json and returns the summary, flattened, for the merged table. A
+/// solver failure is returned as such (the sweep records it as a finished point).
+pub fn sweep_point(base: &Prepared, point: &SweepPoint, dir: &Path) -> Result<PointResult, Error> {
+    let pp = &point.params;
+    let physical = pp.speed_rpm.is_some()
+        || pp.clearance.is_some()
+        || pp.viscosity.is_some()
+        || pp.stiffness.is_some();
+    let prepared = match base.scene() {
+        Some(scene) if physical => {
+            let mut s = scene.clone();
+            sweep::apply_params(&mut s, pp)?;
+            Prepared::with_scene(base.case.clone(), s)?
+        }
+        None if physical => {
+            return Err(Error::Input(format!(
+                "sweep: speed_rpm, clearance, viscosity and stiffness need a scene case, not {}",
+                base.case.name
+            )))
+        }
+        _ => base.clone(),
+    };
+    let flags = cli::SolverFlags {
+        method: pp.method,
+        rtol: pp.rtol,
+        atol: None,
+        step: pp.step,
+        controller: pp.controller,
+    };
+    let mut req = RunRequest::new(prepared.options(&flags)?);
+    req.trajectory_points = Some(0);
+    let r = simulate(&prepared, &req)?;
+    r.summary.write(dir)?;
+    let v = serde_json::to_value(&r.summary)
+        .map_err(|e| Error::Internal(format!("summary of point {}: {e}", point.id)))?;
+    Ok(point_values(v))
+}
+
+/// A point's summary as merged-table values: `case` and `scene_sha256` dropped (the point's
+/// parameters hold them), the solver settings actually used renamed `used.method`,
+/// `used.controller`, `used.rtol`, `used.step` (the parameters say what was asked for), `atol`
+/// left in the point's summary.json only.
+pub fn point_values(mut summary: serde_json::Value) -> PointResult {
+    if let Some(o) = summary.as_object_mut() {
+        for k in ["case", "scene_sha256", "atol"] {
+            o.remove(k);
+        }
+        for k in ["method", "controller", "rtol", "step"] {
+            if let Some(v) = o.remove(k) {
+                o.insert(format!("used.{k}"), v);
+            }
+        }
+    }
+    PointResult::flatten(&summary)
 }
 
 /// `lash sweep` with a point runner: loads and checks the sweep file, runs the shard's

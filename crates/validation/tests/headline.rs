@@ -14,7 +14,11 @@ fn default_run_compares_rk4_with_the_best_adaptive_method() {
         // RK4 runs without event location (MODEL.md §7).
         assert_eq!(rk4.events, 0);
         // The adaptive method reached RK4's accuracy.
-        assert!(c.matched, "{}: {:?} vs {:?}", c.case, c.adaptive.error, rk4.error);
+        assert!(
+            c.matched,
+            "{}: {:?} vs {:?}",
+            c.case, c.adaptive.error, rk4.error
+        );
         assert!(c.adaptive.error.unwrap() <= rk4.error.unwrap());
         // The reference is converged far below the errors it measures.
         let agree = c.reference_agreement.as_ref().unwrap().headline();

