@@ -292,14 +292,25 @@ pub fn describe_run(r: &RunResult) -> String {
     }
     if let Some(m) = &s.metrics {
         let f = |v: Option<f64>| v.map_or("null".to_string(), |x| format!("{x:.6}"));
-        out.push_str(&format!(
-            "  metrics: slider acceleration [{}, {}] m/s², RMS deviation from ideal {} m/s², eps_max {}, contact onsets {}\n",
-            f(m.slider_acc_min),
-            f(m.slider_acc_max),
-            m.slider_acc_rms_dev_ideal.map_or("null".into(), |x| format!("{x:.3e}")),
-            f(m.eps_max),
-            m.contact_onsets.map_or("null".into(), |n| n.to_string()),
-        ));
+        let mut parts = Vec::new();
+        if m.slider_acc_min.is_some() {
+            parts.push(format!(
+                "slider acceleration [{}, {}] m/s²",
+                f(m.slider_acc_min),
+                f(m.slider_acc_max)
+            ));
+        }
+        if let Some(d) = m.slider_acc_rms_dev_ideal {
+            parts.push(format!("RMS deviation from ideal {d:.3e} m/s²"));
+        }
+        if let Some(e) = m.eps_max {
+            parts.push(format!("eps_max {e:.6}"));
+        }
+        if let Some(n) = m.contact_onsets {
+            parts.push(format!("contact onsets {n}"));
+        }
+        parts.push(format!("max ‖Φ‖ {:.1e}", m.constraint_violation_max));
+        out.push_str(&format!("  metrics: {}\n", parts.join(", ")));
         if let Some(e) = &m.energy {
             out.push_str(&format!(
                 "  energy: driver work {:.6} J, balance error {:.3e} J (quadrature error {:.1e} J)\n",
