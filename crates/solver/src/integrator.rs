@@ -160,6 +160,13 @@ impl<'a, S: OdeSystem + ?Sized> Integrator<'a, S> {
         self.stepper.stats()
     }
 
+    /// Counters so far including the RHS evaluations a stepper made lazily for the dense
+    /// output of the last step (what [`solve`] returns at the end). Call it after the last
+    /// [`Integrator::interpolate`] of a run for exact counts.
+    pub fn final_stats(&mut self) -> Stats {
+        self.stepper.stats_mut().clone()
+    }
+
     /// Dense output of the last step: y(t) for t in [t_prev, t] (the left limit at an event).
     pub fn interpolate(&self, t: f64, out: &mut [f64]) {
         if t >= self.seg_end && self.pending_restart.is_none() {

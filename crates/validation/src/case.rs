@@ -19,9 +19,9 @@ use crate::error::Error;
 /// Prefix of built-in test problems.
 pub const BUILTIN_PREFIX: &str = "testset:";
 
-/// Names (after the prefix) of the built-in test problems this build knows. Empty until the
-/// test problems are wired in.
-pub const BUILTIN_NAMES: &[&str] = &[];
+/// Names (after the prefix) of the built-in test problems: the stiff problems of the IVP Test
+/// Set in `lash_solver::testset` (rober, vdpolm, hires, orego).
+pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 
 /// Where a case comes from.
 ///

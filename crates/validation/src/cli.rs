@@ -1,12 +1,14 @@
 //! The command line of `lash` (clap derive) and the checks clap cannot express.
 //!
 //! ```text
-//! lash                                   the default study (= lash study paper)
-//! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C] [--out DIR]
+//! lash                                   the default run: the 150 rpm press, ideal vs dry vs
+//!                                        lubricated, RK4 against the best adaptive method
+//! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
+//!              [--t-end S] [--out DIR]
 //! lash study paper [--out DIR]
-//! lash compare CASE [--out DIR]
+//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
-//!                          [--controllers C,..] [--out DIR]
+//!                          [--controllers C,..] [--t-end S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
 //! lash merge DIR... [--out DIR]
 //! ```
@@ -31,7 +33,7 @@ pub const RTOL_MIN: f64 = 1e-14;
 /// The `lash` command line.
 ///
 /// ```text
-/// lash [COMMAND]      no command = `lash study paper`
+/// lash [COMMAND]      no command = the default run (module `headline`)
 /// ```
 ///
 /// Source: the issue "The lash command"; names from INTERFACES.md.
@@ -43,7 +45,8 @@ pub const RTOL_MIN: f64 = 1e-14;
     about = "Planar mechanisms with revolute clearance joints: runs, studies, comparisons, work-precision, sweeps"
 )]
 pub struct Cli {
-    /// What to do; without one, the default study (`lash study paper`).
+    /// What to do; without one, the default run: the 150 rpm press, ideal vs dry vs
+    /// lubricated, the paper's RK4 against the best adaptive method.
     #[command(subcommand)]
     pub command: Option<Command>,
 }
@@ -167,7 +170,7 @@ impl SolverFlags {
 /// Arguments of `lash run`.
 ///
 /// ```text
-/// lash run CASE [solver flags] [--out DIR]
+/// lash run CASE [solver flags] [--t-end S] [--out DIR]
 /// ```
 ///
 /// Source: the issue "The lash command".
@@ -178,6 +181,9 @@ pub struct RunArgs {
     /// Solver choice.
     #[command(flatten)]
     pub solver: SolverFlags,
+    /// End time override, s (scene cases only; default the scene's t_end or revolutions).
+    #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
     /// Output directory. Default `out/run/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -216,7 +222,7 @@ pub struct StudyArgs {
 /// Arguments of `lash compare`.
 ///
 /// ```text
-/// lash compare CASE [--out DIR]
+/// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 /// ```
 ///
 /// Source: the issue "The lash command".
@@ -224,15 +230,31 @@ pub struct StudyArgs {
 pub struct CompareArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
     pub case: String,
+    /// Relative tolerances of the adaptive methods, comma-separated. Default 1e-6,1e-9.
+    #[arg(long, value_name = "R,..", value_delimiter = ',', value_parser = parse_rtol,
+          allow_hyphen_values = true)]
+    pub tolerances: Option<Vec<f64>>,
+    /// RK4 steps, s, comma-separated. Default: the largest stable step h of the case and h/2,
+    /// h/4 (scene cases with a crank); none for test problems.
+    #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
+          allow_hyphen_values = true)]
+    pub steps: Option<Vec<f64>>,
+    /// End time override, s (scene cases only).
+    #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
     /// Output directory. Default `out/compare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
 }
 
+/// Default tolerances of `lash compare`.
+pub const COMPARE_TOLERANCES: [f64; 2] = [1e-6, 1e-9];
+
 /// Arguments of `lash work-precision`.
 ///
 /// ```text
 /// lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..] [--controllers C,..]
+///                          [--t-end S] [--out DIR]
 /// ```
 ///
 /// Source: INTERFACES.md (comma-separated lists).
@@ -255,6 +277,9 @@ pub struct WorkPrecisionArgs {
     /// Controllers compared on one adaptive method, comma-separated. Default: all.
     #[arg(long, value_name = "C,..", value_delimiter = ',', value_parser = parse_controller)]
     pub controllers: Option<Vec<ControllerKind>>,
+    /// End time override, s (scene cases only).
+    #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
     /// Output directory. Default `out/work-precision/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -483,6 +508,15 @@ pub fn parse_atol(s: &str) -> Result<Atol, String> {
     })
 }
 
+/// Parses an end-time override: finite and > 0 (s).
+pub fn parse_t_end(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "t-end")?;
+    if !(v > 0.0) {
+        return Err(format!("t-end must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
 /// Parses a fixed step: finite and > 0 (s).
 pub fn parse_step(s: &str) -> Result<f64, String> {
     let v = parse_number(s, "step")?;
@@ -536,7 +570,7 @@ mod tests {
     }
 
     #[test]
-    fn no_subcommand_is_the_default_study() {
+    fn no_subcommand_is_the_default_run() {
         assert!(cli(&[]).unwrap().command.is_none());
     }
 

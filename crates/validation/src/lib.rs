@@ -8,23 +8,27 @@
 //! SWEEP.json ──sweep──▶ points × runner ──▶ one result.json per point ──merge──▶ table
 //! ```
 //!
-//! Modules: [`cli`] (arguments), [`app`] (dispatch), [`error`] (exit codes), [`io`] (atomic
-//! writes), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
-//! (trajectory.csv), [`ideal`] (closed-form slider-crank), [`metrics`] (last-revolution
-//! metrics), [`plot`] (SVG + PNG figures), [`report`] (the files of one run), [`sweep`]
-//! (grids, shards, resume, merge), [`workprecision`] (error against cost, cheapest runs).
+//! Modules: [`cli`] (arguments), [`app`] (dispatch), [`compare`] (errors against a
+//! reference), [`error`] (exit codes), [`io`] (atomic
+//! writes), [`headline`] (the default run), [`case`] (case references), [`summary`] (summary.json), [`trajectory`]
+//! (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG figures),
+//! [`report`] (the files of one run), [`simulate`] (running a case: the core of every
+//! command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against cost,
+//! cheapest runs).
 
 #![warn(missing_docs)]
 
 pub mod app;
 pub mod case;
 pub mod cli;
+pub mod compare;
 pub mod error;
-pub mod ideal;
+pub mod headline;
 pub mod io;
 pub mod metrics;
 pub mod plot;
 pub mod report;
+pub mod simulate;
 pub mod study;
 pub mod summary;
 pub mod sweep;

@@ -5,6 +5,10 @@
 //! loglog_plot(stem, axes, series)   y against x, log10 axes (x, y > 0)
 //! orbit_plot(stem, title, ex, ey)   (e_x/c, e_y/c) inside the unit clearance circle ε = 1,
 //!                                   equal aspect: x_span / width_px = y_span / height_px
+//! orbits_plot(stem, title, series)  several orbits in one circle
+//! PNG: 8-bit palette of the 256 most frequent colours of the rendered image, every other
+//!      colour (anti-aliasing shades) mapped to its nearest palette entry (RGB distance);
+//!      deflate at best compression: a quarter of the true-colour file or less
 //! ```
 //!
 //! Text is drawn with DejaVu Sans, shipped in `assets/` (Bitstream Vera licence, see
@@ -147,12 +151,57 @@ fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Result<Written, 
         root.present().map_err(|e| plot_err(&svg, e.to_string()))?;
     }
     io::write_atomic(&svg, text.as_bytes())?;
-    io::write_atomic_with(&png, |tmp| {
-        let root = BitMapBackend::new(tmp, size).into_drawing_area();
+    let mut rgb = vec![0u8; 3 * size.0 as usize * size.1 as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
         fig.draw(&root).map_err(|e| plot_err(&png, e))?;
-        root.present().map_err(|e| plot_err(&png, e.to_string()))
-    })?;
+        root.present().map_err(|e| plot_err(&png, e.to_string()))?;
+    }
+    let bytes = palette_png(&rgb, size).map_err(|e| plot_err(&png, e))?;
+    io::write_atomic(&png, &bytes)?;
     Ok(Written { svg, png })
+}
+
+/// Encodes an RGB image as an 8-bit palette PNG (module doc).
+pub fn palette_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
+    use std::collections::HashMap;
+    let mut counts: HashMap<[u8; 3], u32> = HashMap::new();
+    for px in rgb.chunks_exact(3) {
+        *counts.entry([px[0], px[1], px[2]]).or_default() += 1;
+    }
+    let mut colours: Vec<([u8; 3], u32)> = counts.into_iter().collect();
+    colours.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let palette: Vec<[u8; 3]> = colours.iter().take(256).map(|c| c.0).collect();
+    let dist = |a: [u8; 3], b: [u8; 3]| -> u32 {
+        (0..3)
+            .map(|k| (i32::from(a[k]) - i32::from(b[k])).pow(2) as u32)
+            .sum()
+    };
+    let index: HashMap<[u8; 3], u8> = colours
+        .iter()
+        .map(|&(c, _)| {
+            let i = (0..palette.len())
+                .min_by_key(|&i| dist(c, palette[i]))
+                .unwrap_or(0);
+            (c, i as u8)
+        })
+        .collect();
+    let data: Vec<u8> = rgb
+        .chunks_exact(3)
+        .map(|px| index[&[px[0], px[1], px[2]]])
+        .collect();
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, size.0, size.1);
+        enc.set_color(png::ColorType::Indexed);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_palette(palette.concat());
+        enc.set_compression(png::Compression::Best);
+        enc.set_filter(png::FilterType::NoFilter);
+        let mut w = enc.write_header().map_err(|e| e.to_string())?;
+        w.write_image_data(&data).map_err(|e| e.to_string())?;
+    }
+    Ok(out)
 }
 
 fn plot_err(path: &Path, e: String) -> Error {
@@ -389,8 +438,8 @@ pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Resul
 
 struct OrbitFigure<'a> {
     title: &'a str,
-    ex: &'a [f64],
-    ey: &'a [f64],
+    /// (label, e_x/c, e_y/c) per orbit.
+    orbits: &'a [Series<'a>],
     r: f64,
 }
 
@@ -434,18 +483,17 @@ impl Figure for OrbitFigure<'_> {
             .map_err(|e| e.to_string())?
             .label("clearance circle, ε = 1")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2)));
-        let c = style_of(0);
-        let orbit: Vec<(f64, f64)> = self
-            .ex
-            .iter()
-            .copied()
-            .zip(self.ey.iter().copied())
-            .collect();
-        chart
-            .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
-            .map_err(|e| e.to_string())?
-            .label("journal centre, e / c")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2)));
+        for (k, o) in self.orbits.iter().enumerate() {
+            let c = style_of(k);
+            let orbit: Vec<(f64, f64)> = o.x.iter().copied().zip(o.y.iter().copied()).collect();
+            chart
+                .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(o.name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
+                });
+        }
         chart
             .configure_series_labels()
             .label_font((FAMILY, 15))
@@ -461,20 +509,28 @@ impl Figure for OrbitFigure<'_> {
 /// The view shows at least |e|/c ≤ 1.08, more if the journal penetrates further.
 /// Writes `stem.svg` and `stem.png`.
 pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Written, Error> {
-    let s = [Series {
-        name: "orbit",
-        x: ex,
-        y: ey,
-        style: SeriesStyle::Line,
-    }];
-    bounds(&s, false)?;
-    let r = ex
+    orbits_plot(
+        stem,
+        title,
+        &[Series {
+            name: "journal centre, e / c",
+            x: ex,
+            y: ey,
+            style: SeriesStyle::Line,
+        }],
+    )
+}
+
+/// Several orbits (series x = e_x/c, y = e_y/c, named in the legend) in one clearance circle,
+/// as [`orbit_plot`].
+pub fn orbits_plot(stem: &Path, title: &str, orbits: &[Series<'_>]) -> Result<Written, Error> {
+    bounds(orbits, false)?;
+    let r = orbits
         .iter()
-        .zip(ey)
-        .map(|(x, y)| x.hypot(*y))
+        .flat_map(|o| o.x.iter().zip(o.y).map(|(x, y)| x.hypot(*y)))
         .fold(1.0, f64::max)
         * 1.08;
-    render(stem, ORBIT_SIZE, &OrbitFigure { title, ex, ey, r })
+    render(stem, ORBIT_SIZE, &OrbitFigure { title, orbits, r })
 }
 
 #[cfg(test)]
@@ -483,12 +539,52 @@ mod tests {
 
     /// Decodes a PNG; returns (width, height, RGB(A) bytes, bytes per pixel).
     fn decode(p: &Path) -> (u32, u32, Vec<u8>, usize) {
-        let dec = png::Decoder::new(std::fs::File::open(p).unwrap());
+        let mut dec = png::Decoder::new(std::fs::File::open(p).unwrap());
+        dec.set_transformations(png::Transformations::EXPAND);
         let mut r = dec.read_info().unwrap();
         let mut buf = vec![0; r.output_buffer_size()];
         let info = r.next_frame(&mut buf).unwrap();
         buf.truncate(info.buffer_size());
         (info.width, info.height, buf, info.color_type.samples())
+    }
+
+    #[test]
+    fn palette_png_keeps_the_frequent_colours_exactly() {
+        // 60 frequent colours (10 pixels each) and 300 rare shades one step off them (more
+        // colours than a palette holds): the frequent ones survive exactly, each rare one maps
+        // to a colour at most one step away.
+        let (w, h) = (900u32, 1u32);
+        let base = |k: usize| [(4 * k) as u8, (255 - 4 * k) as u8, 100];
+        let mut rgb = Vec::new();
+        for k in 0..60 {
+            for _ in 0..10 {
+                rgb.extend_from_slice(&base(k));
+            }
+        }
+        for j in 0..300 {
+            let mut c = base(j % 60);
+            c[2] = 101 + (j / 60) as u8 % 2;
+            c[0] += (j / 120) as u8;
+            rgb.extend_from_slice(&c);
+        }
+        assert_eq!(rgb.len(), (3 * w * h) as usize);
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("p.png");
+        std::fs::write(&p, palette_png(&rgb, (w, h)).unwrap()).unwrap();
+        let img = decode(&p);
+        assert_eq!((img.0, img.1, img.3), (w, h, 3));
+        assert_eq!(&img.2[..1800], &rgb[..1800], "frequent colours exact");
+        let worst = img.2[1800..]
+            .chunks(3)
+            .zip(rgb[1800..].chunks(3))
+            .map(|(a, b)| {
+                (0..3)
+                    .map(|k| (i32::from(a[k]) - i32::from(b[k])).abs())
+                    .sum::<i32>()
+            })
+            .max()
+            .unwrap();
+        assert!(worst <= 3, "{worst}");
     }
 
     /// Number of pixels darker than light grey in rows [y0, y1).

@@ -17,8 +17,9 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
+use lash_model::IdealSliderCrank;
+
 use crate::error::Error;
-use crate::ideal::IdealSliderCrank;
 use crate::io;
 use crate::metrics::Sample;
 use crate::plot::{self, Axes, Series, SeriesStyle};
@@ -92,27 +93,31 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
             "Slider position",
             "x, m",
             |s| s.slider_x,
-            IdealSliderCrank::x,
+            IdealSliderCrank::x_at,
         ),
         (
             "slider_v",
             "Slider velocity",
             "ẋ, m/s",
             |s| s.slider_v,
-            IdealSliderCrank::v,
+            IdealSliderCrank::v_at,
         ),
         (
             "slider_a",
             "Slider acceleration",
             "ẍ, m/s²",
             |s| s.slider_a,
-            IdealSliderCrank::a,
+            IdealSliderCrank::a_at,
         ),
     ];
     for (stem, title, y_label, get, ideal_fn) in slider {
         let Some(y) = col(w, get) else { continue };
         let ideal: Option<Vec<f64>> = match (out.ideal, &theta) {
-            (Some(m), Some(th)) => Some(th.iter().map(|&t| ideal_fn(m, t)).collect()),
+            (Some(m), Some(th)) => Some(
+                th.iter()
+                    .map(|&phi| ideal_fn(m, m.theta_of_crank_angle(phi)))
+                    .collect(),
+            ),
             _ if stem == "slider_a" => col(w, |s| s.ideal_slider_a),
             _ => None,
         };
@@ -201,6 +206,17 @@ mod tests {
         )
     }
 
+    /// The paper's press at 150 rpm (MODEL.md §5): r = 15 mm, l = 350 mm, θ = φ_crank.
+    fn press_ideal() -> IdealSliderCrank {
+        IdealSliderCrank {
+            r: 0.015,
+            l: 0.35,
+            omega: 5.0 * PI,
+            theta0: 0.0,
+            offset: 0.0,
+        }
+    }
+
     fn press_window(m: &IdealSliderCrank) -> Vec<Sample> {
         grid(0.8, 0.4)
             .into_iter()
@@ -208,9 +224,9 @@ mod tests {
                 let th = m.omega * t;
                 Sample {
                     crank_angle: Some(th),
-                    slider_x: Some(m.x(th)),
-                    slider_v: Some(m.v(th)),
-                    slider_a: Some(m.a(th) + 0.05 * (7.0 * th).sin()),
+                    slider_x: Some(m.x_at(th)),
+                    slider_v: Some(m.v_at(th)),
+                    slider_a: Some(m.a_at(th) + 0.05 * (7.0 * th).sin()),
                     ex_over_c: Some(0.5 * th.cos()),
                     ey_over_c: Some(-0.7 + 0.1 * th.sin()),
                     eps: Some(0.7),
@@ -228,7 +244,7 @@ mod tests {
     #[test]
     fn full_press_run_writes_every_file_and_no_temporary() {
         let d = tempfile::tempdir().unwrap();
-        let m = IdealSliderCrank::from_rpm(0.015, 0.35, 150.0).unwrap();
+        let m = press_ideal();
         let w = press_window(&m);
         let s = summary();
         let files = write_run(
@@ -282,7 +298,7 @@ mod tests {
     #[test]
     fn a_bad_row_writes_nothing() {
         let d = tempfile::tempdir().unwrap();
-        let m = IdealSliderCrank::from_rpm(0.015, 0.35, 150.0).unwrap();
+        let m = press_ideal();
         let mut w = press_window(&m);
         w[10].delta = Some(f64::INFINITY);
         let s = summary();

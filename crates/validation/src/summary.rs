@@ -149,6 +149,7 @@ impl Summary {
             nums.push(("metrics", m.constraint_violation_max));
             if let Some(e) = &m.energy {
                 nums.push(("metrics.energy", e.balance_error));
+                nums.push(("metrics.energy", e.quadrature_error));
             }
         }
         match nums.iter().find(|(_, v)| !v.is_finite()) {

@@ -26,6 +26,8 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Mutex;
 
+use lash_model::scene::{JointSpec, NormalSpec};
+use lash_model::Scene;
 use lash_solver::{ControllerKind, Method};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -440,6 +442,86 @@ fn check_file(f: &SweepFile) -> Result<(), Error> {
                 return bad(
                     "without 'method', give either 'step' or 'rtol'/'controller', not both".into(),
                 );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Lays a point's physical parameters over a scene (its typed serde structure).
+///
+/// ```text
+/// speed_rpm  → the crank_driver role's driver: rpm = v (omega dropped)
+/// clearance  → every clearance joint (the clearance_joint role's only, if declared):
+///              journal radius R_J = R_B − c
+/// viscosity  → the film viscosity μ of those joints that have a film
+/// stiffness  → the contact stiffness K of their normal law (materials dropped)
+/// ```
+///
+/// A parameter the scene cannot take (no crank driver, no clearance joint, no film) is an
+/// input error; the scene is validated again when the point's mechanism is built.
+/// Source: INTERFACES.md ("Scene roles"), docs/scene-format.md.
+pub fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
+    let bad = |m: &str| Err(Error::Input(format!("sweep: {m}")));
+    if let Some(rpm) = p.speed_rpm {
+        let Some(name) = scene.roles.crank_driver.clone() else {
+            return bad("speed_rpm needs the scene's crank_driver role");
+        };
+        let driver = scene.joints.iter_mut().find_map(|j| match j {
+            JointSpec::Driver(d) if d.name == name => Some(d),
+            _ => None,
+        });
+        let Some(d) = driver else {
+            return bad(&format!("the crank_driver role '{name}' is not a driver"));
+        };
+        d.rpm = Some(rpm);
+        d.omega = None;
+    }
+    if p.clearance.is_none() && p.viscosity.is_none() && p.stiffness.is_none() {
+        return Ok(());
+    }
+    let role = scene.roles.clearance_joint.clone();
+    let mut joints: Vec<&mut lash_model::scene::ClearanceSpec> = scene
+        .joints
+        .iter_mut()
+        .filter_map(|j| match j {
+            JointSpec::Clearance(c) if role.as_ref().is_none_or(|r| *r == c.name) => Some(c),
+            _ => None,
+        })
+        .collect();
+    if joints.is_empty() {
+        return bad("clearance, viscosity and stiffness need a clearance joint in the scene");
+    }
+    if let Some(c) = p.clearance {
+        for j in joints.iter_mut() {
+            j.journal.radius = j.bearing.radius - c;
+        }
+    }
+    if let Some(mu) = p.viscosity {
+        let mut any = false;
+        for j in joints.iter_mut() {
+            if let Some(f) = j.film.as_mut() {
+                f.viscosity = mu;
+                any = true;
+            }
+        }
+        if !any {
+            return bad("viscosity needs a lubricated clearance joint (one with a film)");
+        }
+    }
+    if let Some(k) = p.stiffness {
+        for j in joints.iter_mut() {
+            match &mut j.normal {
+                NormalSpec::Impact(s) => {
+                    s.k = Some(k);
+                    s.materials = None;
+                }
+                NormalSpec::LankaraniNikravesh(s)
+                | NormalSpec::Flores(s)
+                | NormalSpec::HuntCrossley(s) => {
+                    s.k = Some(k);
+                    s.materials = None;
+                }
             }
         }
     }
@@ -1117,6 +1199,91 @@ mod tests {
             t.to_markdown(),
             "| a | b |\n|---|---|\n| x,y | say \"hi\" \\| there |\n"
         );
+    }
+
+    fn params() -> PointParams {
+        PointParams {
+            case: "x".into(),
+            scene_sha256: None,
+            speed_rpm: None,
+            clearance: None,
+            viscosity: None,
+            stiffness: None,
+            method: None,
+            rtol: None,
+            step: None,
+            controller: None,
+        }
+    }
+
+    #[test]
+    fn point_parameters_land_in_the_scene() {
+        use lash_model::cases::{press_scene, PressJoint};
+        let mut s = press_scene(PressJoint::Lubricated, 150.0, 1e-4);
+        let p = PointParams {
+            speed_rpm: Some(180.0),
+            clearance: Some(3e-4),
+            viscosity: Some(0.2),
+            stiffness: Some(1e10),
+            ..params()
+        };
+        apply_params(&mut s, &p).unwrap();
+        let mut seen = 0;
+        for j in &s.joints {
+            match j {
+                JointSpec::Driver(d) => {
+                    assert_eq!((d.rpm, d.omega), (Some(180.0), None));
+                    seen += 1;
+                }
+                JointSpec::Clearance(c) => {
+                    assert!((c.bearing.radius - c.journal.radius - 3e-4).abs() < 1e-15);
+                    assert_eq!(c.film.as_ref().unwrap().viscosity, 0.2);
+                    let NormalSpec::Impact(i) = &c.normal else {
+                        panic!()
+                    };
+                    assert_eq!(i.k, Some(1e10));
+                    seen += 1;
+                }
+                _ => {}
+            }
+        }
+        assert_eq!(seen, 2);
+        s.validate().unwrap();
+        // A dry scene has no film to take a viscosity; an ideal one no clearance joint.
+        let mut dry = press_scene(PressJoint::Dry, 150.0, 1e-4);
+        let e = apply_params(
+            &mut dry,
+            &PointParams {
+                viscosity: Some(0.2),
+                ..params()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("viscosity needs a lubricated"),
+            "{e}"
+        );
+        let mut ideal = press_scene(PressJoint::Ideal, 150.0, 0.0);
+        assert!(apply_params(
+            &mut ideal,
+            &PointParams {
+                clearance: Some(1e-4),
+                ..params()
+            }
+        )
+        .is_err());
+        // Solver parameters leave the scene alone.
+        let before = ideal.clone();
+        apply_params(
+            &mut ideal,
+            &PointParams {
+                method: Some(Method::Bdf),
+                rtol: Some(1e-6),
+                ..params()
+            },
+        )
+        .unwrap();
+        assert_eq!(ideal, before);
     }
 
     #[test]

@@ -1,0 +1,421 @@
+//! End-to-end: every command of the built `lash` binary on small cases — exit codes, the files
+//! written, and the contents of summary.json, trajectory.csv and the comparison tables
+//! (INTERFACES.md).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use lash_model::cases::{press_scene, PressJoint};
+use serde_json::Value;
+
+fn lash(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lash"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("run lash")
+}
+
+fn ok(args: &[&str], cwd: &Path) -> String {
+    let o = lash(args, cwd);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn json(p: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+fn press_case(dir: &Path) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../cases/press/{}", dir.display()))
+}
+
+/// A press scene cut short (t_end in s) in `dir/NAME.json`.
+fn short_press(dir: &Path, name: &str, joint: PressJoint, c: f64, t_end: f64) -> PathBuf {
+    let mut s = press_scene(joint, 150.0, c);
+    s.revolutions = None;
+    s.t_end = Some(t_end);
+    let p = dir.join(format!("{name}.json"));
+    std::fs::write(&p, s.to_json_pretty()).unwrap();
+    p
+}
+
+const SUMMARY_KEYS: [&str; 15] = [
+    "atol",
+    "case",
+    "controller",
+    "events",
+    "final_state",
+    "method",
+    "metrics",
+    "reference_error",
+    "rtol",
+    "scene_sha256",
+    "stats",
+    "step",
+    "t_end",
+    "version",
+    "wall_time_s",
+];
+
+#[test]
+fn run_writes_summary_trajectory_and_figures() {
+    let d = tempfile::tempdir().unwrap();
+    let case = short_press(d.path(), "ideal_short", PressJoint::Ideal, 0.0, 0.1);
+    let out = ok(&["run", case.to_str().unwrap(), "--out", "o"], d.path());
+    assert!(out.contains("ideal_short: bdf rtol 1e-8"), "{out}");
+    let o = d.path().join("o");
+    let s = json(&o.join("summary.json"));
+    let mut keys: Vec<&str> = s.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+    keys.sort();
+    assert_eq!(keys, SUMMARY_KEYS);
+    assert_eq!(s["case"], "ideal_short");
+    assert_eq!(s["scene_sha256"].as_str().unwrap().len(), 64);
+    assert_eq!(
+        (s["method"].as_str(), s["rtol"].as_f64()),
+        (Some("bdf"), Some(1e-8))
+    );
+    // bdf is diffsol's: no controller of ours; adaptive: no step; atol one per component.
+    assert!(s["controller"].is_null() && s["step"].is_null());
+    assert_eq!(s["atol"].as_array().unwrap().len(), 12);
+    assert_eq!(s["t_end"], 0.1);
+    let m = &s["metrics"];
+    // The ideal mechanism is its closed form; it has no clearance joint.
+    assert!(
+        m["slider_acc_rms_dev_ideal"].as_f64().unwrap() < 1e-6,
+        "{m}"
+    );
+    assert!(m["eps_max"].is_null() && m["contact_onsets"].is_null());
+    // A quarter turn: the driver's work goes into T + V; the balance closes to the
+    // integration error (bdf at rtol 1e-8: about 1e-7 of the work).
+    let e = &m["energy"];
+    let w = e["driver_work"].as_f64().unwrap();
+    assert!(w > 100.0, "{e}");
+    assert!(e["balance_error"].as_f64().unwrap().abs() < 1e-6 * w, "{e}");
+    assert!(s["final_state"].is_null() && s["reference_error"].is_null());
+    // trajectory.csv: the header of INTERFACES.md; 2000 rows per revolution (T = 0.4 s) + 1.
+    let csv = std::fs::read_to_string(o.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,crank_angle,slider_x,slider_v,slider_a,ex_over_c,ey_over_c,delta,contact_force,friction_force,film_force,constraint_violation,driver_torque"
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 501);
+    let last: Vec<&str> = rows[500].split(',').collect();
+    assert_eq!(last[0], "0.1");
+    assert!((last[1].parse::<f64>().unwrap() - 0.5 * std::f64::consts::PI).abs() < 1e-12);
+    assert_eq!(last[5], "", "no clearance joint: empty e/c");
+    for f in ["slider_x", "slider_v", "slider_a"] {
+        assert!(o.join(format!("{f}.png")).is_file() && o.join(format!("{f}.svg")).is_file());
+    }
+    assert!(!o.join("orbit.png").exists());
+}
+
+#[test]
+fn run_lubricated_and_dry_cases() {
+    let d = tempfile::tempdir().unwrap();
+    let lub = press_case(Path::new("lubricated_150rpm_c0.1.json"));
+    ok(&["run", lub.to_str().unwrap(), "--out", "lub"], d.path());
+    let m = &json(&d.path().join("lub/summary.json"))["metrics"];
+    // MODEL.md §9: the film keeps the journal off the bearing.
+    assert!(m["eps_max"].as_f64().unwrap() < 1.0);
+    assert_eq!(m["contact_onsets"], 0);
+    assert!(m["film_thickness_min"].as_f64().unwrap() > 0.0);
+    for f in ["orbit.png", "joint_forces.svg", "slider_a.png"] {
+        assert!(d.path().join("lub").join(f).is_file(), "{f}");
+    }
+    // The paper's RK4 on the dry case, a quarter revolution: crossings counted, none located.
+    let dry = short_press(d.path(), "dry_short", PressJoint::Dry, 1e-4, 0.1);
+    ok(
+        &[
+            "run",
+            dry.to_str().unwrap(),
+            "--method",
+            "rk4",
+            "--step",
+            "2e-4",
+            "--out",
+            "dry",
+        ],
+        d.path(),
+    );
+    let s = json(&d.path().join("dry/summary.json"));
+    assert_eq!(
+        (s["method"].as_str(), s["step"].as_f64()),
+        (Some("rk4"), Some(2e-4))
+    );
+    assert!(s["rtol"].is_null() && s["atol"].is_null() && s["controller"].is_null());
+    assert_eq!(s["events"], 0);
+    assert!(s["metrics"]["contact_onsets"].as_u64().unwrap() >= 1);
+    // Four stages per step and the initial evaluation.
+    let acc = s["stats"]["accepted"].as_u64().unwrap();
+    assert!(acc == 500 || acc == 501, "{acc}");
+    assert_eq!(s["stats"]["rhs_evals"].as_u64().unwrap(), 4 * acc + 1);
+}
+
+#[test]
+fn run_testset_reports_the_reference_error() {
+    let d = tempfile::tempdir().unwrap();
+    ok(
+        &[
+            "run",
+            "testset:hires",
+            "--method",
+            "rodas5p",
+            "--rtol",
+            "1e-8",
+            "--out",
+            "h",
+        ],
+        d.path(),
+    );
+    let s = json(&d.path().join("h/summary.json"));
+    assert_eq!(s["case"], "testset:hires");
+    assert!(s["scene_sha256"].is_null() && s["metrics"].is_null());
+    assert!(s["reference_error"].as_f64().unwrap() < 1e-5);
+    assert_eq!(s["final_state"].as_array().unwrap().len(), 8);
+    assert_eq!(s["controller"], "gustafsson");
+    let csv = std::fs::read_to_string(d.path().join("h/trajectory.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with(",driver_torque,y0,y1,y2,y3,y4,y5,y6,y7"));
+    // A built-in problem's reference holds at its own end time.
+    let o = lash(&["run", "testset:hires", "--t-end", "1"], d.path());
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--t-end does not apply"));
+}
+
+#[test]
+fn solver_failure_exits_3_and_writes_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let lub = press_case(Path::new("lubricated_150rpm_c0.1.json"));
+    // An existing output directory keeps exactly what it had.
+    let out = d.path().join("o");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), b"x").unwrap();
+    // RK4 at 1e-4 s is far beyond the film's stability limit (2e-6 s): the state diverges.
+    let o = lash(
+        &[
+            "run",
+            lub.to_str().unwrap(),
+            "--method",
+            "rk4",
+            "--step",
+            "1e-4",
+            "--out",
+            "o",
+        ],
+        d.path(),
+    );
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert!(lines[0].starts_with("error: solver failed: non-finite or diverging state at t = "));
+    assert!(lines[1].starts_with("  at t = ") && lines[1].contains("state = ["));
+    let names: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("keep.txt")]);
+    // A scene that fails validation is bad input, one line.
+    std::fs::write(d.path().join("empty.json"), b"{\"bodies\": []}").unwrap();
+    let o = lash(&["run", "empty.json"], d.path());
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: case empty.json: bodies"), "{err}");
+    // An atol array of the wrong length is a usage error, not a solver failure.
+    let o = lash(
+        &["run", lub.to_str().unwrap(), "--atol", "1e-9,1e-9"],
+        d.path(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("atol has 2 entries, the system 12"));
+}
+
+#[test]
+fn compare_lists_every_method_against_the_reference() {
+    let d = tempfile::tempdir().unwrap();
+    let case = short_press(d.path(), "ideal_rev", PressJoint::Ideal, 0.0, 0.4);
+    let out = ok(
+        &[
+            "compare",
+            case.to_str().unwrap(),
+            "--steps",
+            "1e-3,5e-4",
+            "--tolerances",
+            "1e-8",
+            "--out",
+            "c",
+        ],
+        d.path(),
+    );
+    assert!(out.contains("Reference: dop853 at rtol 1e-12"), "{out}");
+    let c = json(&d.path().join("c/compare.json"));
+    let runs = c["runs"].as_array().unwrap();
+    // 2 RK4 steps + 4 explicit pairs + 4 stiff methods.
+    assert_eq!(runs.len(), 10);
+    let err = |i: usize| runs[i]["error"].as_f64().unwrap();
+    // RK4 is order 4: halving the step divides the error by about 16.
+    let ratio = err(0) / err(1);
+    assert!((12.0..20.0).contains(&ratio), "{ratio}");
+    for r in runs {
+        assert!(r["failure"].is_null(), "{r}");
+        assert!(r["error"].as_f64().unwrap() < 1e-5, "{r}");
+        assert!(r["rhs_evals"].as_u64().unwrap() > 0);
+        assert!(r["norms"]["orbit_max"].is_null(), "no clearance joint");
+    }
+    assert_eq!(c["window"]["label"], "last revolution");
+    assert!(d.path().join("c/compare.md").is_file());
+    // A built-in problem: no RK4 by default, errors are reference errors.
+    ok(
+        &[
+            "compare",
+            "testset:hires",
+            "--tolerances",
+            "1e-6",
+            "--out",
+            "h",
+        ],
+        d.path(),
+    );
+    let h = json(&d.path().join("h/compare.json"));
+    let runs = h["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 8);
+    let rodas = runs.iter().find(|r| r["method"] == "rodas5p").unwrap();
+    assert!(rodas["error"].as_f64().unwrap() < 1e-5);
+}
+
+#[test]
+fn work_precision_tables_and_the_cheapest_runs() {
+    let d = tempfile::tempdir().unwrap();
+    ok(
+        &[
+            "work-precision",
+            "testset:hires",
+            "--methods",
+            "rodas5p,bdf,dopri54",
+            "--tolerances",
+            "1e-4,1e-6,1e-8",
+            "--controllers",
+            "pi,h211",
+            "--out",
+            "w",
+        ],
+        d.path(),
+    );
+    let w = json(&d.path().join("w/work_precision.json"));
+    let runs = w["runs"].as_array().unwrap();
+    // rodas5p × 3, bdf × 3, dopri54 × 2 controllers × 3.
+    assert_eq!(runs.len(), 12);
+    let errs: Vec<f64> = runs
+        .iter()
+        .filter(|r| r["method"] == "rodas5p")
+        .map(|r| r["error"].as_f64().unwrap())
+        .collect();
+    // Tolerance proportionality: each 100× tighter rtol gives a smaller error.
+    assert!(errs[0] > errs[1] && errs[1] > errs[2], "{errs:?}");
+    assert!(runs.iter().any(|r| r["controller"] == "h211"));
+    let cheapest = w["cheapest"].as_array().unwrap();
+    assert_eq!(cheapest.len(), 5);
+    // Somebody reaches 1e-4.
+    assert!(!cheapest[1]["by_rhs_evals"].is_null());
+    for f in ["work_precision.md", "wp_rhs.png", "wp_time.svg"] {
+        assert!(d.path().join("w").join(f).is_file(), "{f}");
+    }
+    // rk4 on a test problem needs explicit steps.
+    let o = lash(
+        &["work-precision", "testset:hires", "--methods", "rk4"],
+        d.path(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("rk4 needs --steps"));
+}
+
+#[test]
+fn sweep_runs_real_points_resumes_and_merges() {
+    let d = tempfile::tempdir().unwrap();
+    short_press(d.path(), "lub_short", PressJoint::Lubricated, 1e-4, 0.1);
+    std::fs::write(
+        d.path().join("grid.json"),
+        br#"{"case": "lub_short.json", "speed_rpm": [120, 150], "viscosity": [0.2, 0.4],
+            "method": ["bdf"], "rtol": [1e-6]}"#,
+    )
+    .unwrap();
+    // "Interrupted": only shard 0 of 2 runs first.
+    ok(
+        &["sweep", "grid.json", "--shard", "0/2", "--out", "s"],
+        d.path(),
+    );
+    let dirs = |p: &Path| -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.is_dir())
+            .collect();
+        v.sort();
+        v
+    };
+    let first = dirs(&d.path().join("s"));
+    assert_eq!(first.len(), 2);
+    let stamp: Vec<Vec<u8>> = first
+        .iter()
+        .map(|p| std::fs::read(p.join("result.json")).unwrap())
+        .collect();
+    // The rerun over the whole grid skips the two finished points.
+    let o = lash(&["sweep", "grid.json", "--out", "s"], d.path());
+    assert_eq!(o.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("2 ran, 0 solver failures, 2 already done"),
+        "{err}"
+    );
+    for (p, s) in first.iter().zip(&stamp) {
+        assert_eq!(
+            &std::fs::read(p.join("result.json")).unwrap(),
+            s,
+            "rewritten"
+        );
+    }
+    assert_eq!(dirs(&d.path().join("s")).len(), 4);
+    ok(&["merge", "s"], d.path());
+    let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 5);
+    let head: Vec<&str> = lines[0].split(',').collect();
+    let col = |n: &str| {
+        head.iter()
+            .position(|h| *h == n)
+            .unwrap_or_else(|| panic!("{n}"))
+    };
+    let (eps, speed, visc) = (col("metrics.eps_max"), col("speed_rpm"), col("viscosity"));
+    assert_eq!(head.iter().filter(|h| **h == "case").count(), 1);
+    for l in &lines[1..] {
+        let c: Vec<&str> = l.split(',').collect();
+        let e: f64 = c[eps].parse().unwrap();
+        assert!(e > 0.0 && e < 1.0, "{l}");
+        assert!(["120.0", "150.0"].contains(&c[speed]) && ["0.2", "0.4"].contains(&c[visc]));
+    }
+    // Thinner oil lets the journal move further off centre (same speed).
+    let eps_of = |s: &str, v: &str| -> f64 {
+        lines[1..]
+            .iter()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|c| c[speed] == s && c[visc] == v)
+            .unwrap()[eps]
+            .parse()
+            .unwrap()
+    };
+    assert!(eps_of("150.0", "0.2") > eps_of("150.0", "0.4"));
+    // Each point wrote its summary with the point's speed.
+    let s = json(&first[0].join("summary.json"));
+    assert_eq!(s["case"], "lub_short");
+}
