@@ -10,26 +10,6 @@ use common::*;
 use lash_model::cases::press_catalogue;
 use lash_model::{Mechanism, Scene};
 use lash_solver::Output;
-use std::path::PathBuf;
-
-fn cases_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/press")
-}
-
-/// The RK4 step used for a case.
-fn step_of(stem: &str) -> f64 {
-    if stem.starts_with("ideal") {
-        1e-3
-    } else if stem.starts_with("dry") {
-        2e-4
-    } else if stem.ends_with("c0.2") {
-        2e-7
-    } else if stem.ends_with("c0.3") {
-        5e-7
-    } else {
-        2e-6
-    }
-}
 
 struct RunStats {
     phi_max: f64,
@@ -52,7 +32,7 @@ fn run_case(stem: &str) -> RunStats {
         .collect();
     times.retain(|&t| t < last[0]);
     times.extend_from_slice(&last);
-    let mut opts = rk4(step_of(stem), false, Output::Times(times.clone()));
+    let mut opts = rk4(rk4_step(stem), false, Output::Times(times.clone()));
     opts.max_steps = 100_000_000;
     let t0 = std::time::Instant::now();
     let sol = run(&m, &opts);
@@ -87,7 +67,7 @@ fn run_case(stem: &str) -> RunStats {
     println!(
         "{stem:26} h = {:.0e} s: wall {:.3} s, max ‖Φ‖ {:.2e}, last revolution: ε_max {:.3}, \
          F_N max {:.0} N, RMS(ẍ − ẍ_ideal) {:.3e} m/s²",
-        step_of(stem),
+        rk4_step(stem),
         s.wall,
         s.phi_max,
         s.eps_max,

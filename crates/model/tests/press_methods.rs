@@ -9,29 +9,11 @@
 //! whole contact (onset and loss), and sampling two interior points of each step is what keeps
 //! such an impact from being skipped.
 
+mod common;
+use common::{cases_dir, rk4_step};
 use lash_model::{Mechanism, Scene};
 use lash_solver::{solve, Atol, Method, Output, SolverOptions};
-use std::path::PathBuf;
 use std::time::Instant;
-
-fn cases_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/press")
-}
-
-/// RK4 steps found stable for each kind of case (see press_cases.rs).
-fn rk4_step(stem: &str) -> f64 {
-    if stem.starts_with("ideal") {
-        1e-3
-    } else if stem.starts_with("dry") {
-        2e-4
-    } else if stem.ends_with("c0.2") {
-        2e-7
-    } else if stem.ends_with("c0.3") {
-        5e-7
-    } else {
-        2e-6
-    }
-}
 
 fn options(method: Method, stem: &str) -> SolverOptions {
     let mut o = SolverOptions::with_method(method);

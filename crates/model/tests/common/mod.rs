@@ -31,3 +31,28 @@ pub fn rk4(step: f64, events: bool, output: Output) -> SolverOptions {
 pub fn run(m: &Mechanism, opts: &SolverOptions) -> Solution {
     solve(m, (m.t_start(), m.t_end()), &m.initial_state(), opts).expect("integration succeeds")
 }
+
+/// The folder of the press scenes (cases/press).
+#[allow(dead_code)]
+pub fn cases_dir() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/press")
+}
+
+/// The RK4 step used for a press case: the largest step found stable *and* keeping
+/// ‖Φ‖ < 1e-8 (`rk4_scan` example): ideal 1e-3 s; dry 2e-4 s; lubricated c = 0.1 and 0.5 mm
+/// 2e-6 s; c = 0.3 mm 5e-7 s; c = 0.2 mm 2e-7 s (the film's radial damping grows as
+/// (1 − ε²)^{−3/2} up to ε_cap = 0.99, which bounds the RK4 step).
+#[allow(dead_code)]
+pub fn rk4_step(stem: &str) -> f64 {
+    if stem.starts_with("ideal") {
+        1e-3
+    } else if stem.starts_with("dry") {
+        2e-4
+    } else if stem.ends_with("c0.2") {
+        2e-7
+    } else if stem.ends_with("c0.3") {
+        5e-7
+    } else {
+        2e-6
+    }
+}
