@@ -626,8 +626,10 @@ fn empty_solution(dim: usize) -> Solution {
     }
 }
 
-/// The role-based view of one mechanism evaluation.
-struct Sampler<'a> {
+/// The role-based view of one mechanism evaluation: maps `Mechanism::outputs` to a metrics
+/// [`Sample`] through the scene's roles (slider, crank driver, clearance joint), with the ideal
+/// closed-form slider acceleration beside. Used by every command that samples a run.
+pub struct Sampler<'a> {
     mech: &'a Mechanism,
     ideal: Option<IdealSliderCrank>,
     clearance_index: Option<usize>,
@@ -635,7 +637,8 @@ struct Sampler<'a> {
 }
 
 impl<'a> Sampler<'a> {
-    fn new(mech: &'a Mechanism, scene: &Scene) -> Sampler<'a> {
+    /// The sampler of `mech`, built from `scene` (the scene the mechanism was made from).
+    pub fn new(mech: &'a Mechanism, scene: &Scene) -> Sampler<'a> {
         let roles = mech.roles();
         let driver_pos = roles.crank_driver.map(|j| {
             scene.joints[..j]
@@ -651,7 +654,8 @@ impl<'a> Sampler<'a> {
         }
     }
 
-    fn sample(&self, t: f64, y: &[f64]) -> Sample {
+    /// One sample at (t, y).
+    pub fn sample(&self, t: f64, y: &[f64]) -> Sample {
         let o = self.mech.outputs(t, y);
         let c = self.clearance_index.and_then(|k| o.clearance.get(k));
         let ideal_a = match (&self.ideal, o.crank_angle, o.slider_a) {

@@ -444,40 +444,6 @@ struct Run {
     ideal: Option<IdealSliderCrank>,
 }
 
-fn sample(m: &Mechanism, ideal: Option<&IdealSliderCrank>, t: f64, y: &[f64]) -> Sample {
-    let o = m.outputs(t, y);
-    let roles = m.roles();
-    let clr = roles.clearance_index.and_then(|k| o.clearance.get(k));
-    // Driver torques are reported in the scene order of the driver joints.
-    let driver_torque = roles.crank_driver.and_then(|j| {
-        let k = m.scene().joints[..j]
-            .iter()
-            .filter(|s| matches!(s, JointSpec::Driver(_)))
-            .count();
-        o.driver_torques.get(k).copied()
-    });
-    Sample {
-        t,
-        crank_angle: o.crank_angle,
-        slider_x: o.slider_x,
-        slider_v: o.slider_v,
-        slider_a: o.slider_a,
-        ex_over_c: clr.map(|c| c.ex_over_c),
-        ey_over_c: clr.map(|c| c.ey_over_c),
-        eps: clr.map(|c| c.eps),
-        delta: clr.map(|c| c.delta),
-        contact_force: clr.map(|c| c.contact_force),
-        friction_force: clr.map(|c| c.friction_force),
-        film_force: clr.map(|c| c.film_force),
-        constraint_violation: o.constraint_violation,
-        driver_torque,
-        ideal_slider_a: match (ideal, o.crank_angle) {
-            (Some(i), Some(phi)) => Some(i.a_at(i.theta_of_crank_angle(phi))),
-            _ => None,
-        },
-    }
-}
-
 fn joint_info(m: &Mechanism) -> Option<JointInfo> {
     let j = m.roles().clearance_joint?;
     match &m.scene().joints[j] {
@@ -521,8 +487,9 @@ fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error
         )));
     }
     let ideal = m.ideal_slider_crank();
+    let sampler = crate::simulate::Sampler::new(&m, m.scene());
     let all: Vec<Sample> = (0..sol.len())
-        .map(|k| sample(&m, ideal.as_ref(), sol.t[k], sol.state(k)))
+        .map(|k| sampler.sample(sol.t[k], sol.state(k)))
         .collect();
     let previous = all[..n].to_vec();
     let mut last = all[n - 1..].to_vec();
