@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! Prepared::load(case)        scene file → checked Scene (SceneError → exit 2) | testset:NAME
+//!                             | a catalogue scene (Case::catalogue)
 //! Prepared::options(flags)    the defaults below, the command-line flags laid over them
 //! simulate(prepared, request) → RunResult { summary, window samples (2001-point metrics grid of
 //!                               the last revolution), trajectory samples, extra samples,
@@ -168,7 +169,7 @@ pub struct Prepared {
 fn scene_error(case: &Case, e: impl std::fmt::Display) -> Error {
     let what = match &case.source {
         CaseSource::File { path, .. } => path.display().to_string(),
-        CaseSource::BuiltIn(_) => case.name.clone(),
+        CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => case.name.clone(),
     };
     Error::Input(format!("case {what}: {e}"))
 }
@@ -199,6 +200,13 @@ impl Prepared {
             CaseSource::File { bytes, .. } => {
                 let text = std::str::from_utf8(bytes).map_err(|e| scene_error(&case, e))?;
                 let scene = Scene::from_json_str(text).map_err(|e| scene_error(&case, e))?;
+                Prepared::with_scene(case, scene)
+            }
+            CaseSource::Catalogue(name) => {
+                let scene = lash_model::cases::press_catalogue()
+                    .into_iter()
+                    .find_map(|(n, s)| (&n == name).then_some(s))
+                    .ok_or_else(|| scene_error(&case, "not in the press catalogue"))?;
                 Prepared::with_scene(case, scene)
             }
         }
