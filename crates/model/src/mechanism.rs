@@ -252,7 +252,10 @@ pub struct Mechanism {
 impl Mechanism {
     /// Validates the scene, finds the prescribed bodies, builds the constraint equations,
     /// checks their rank and assembles the initial state (Newton on positions, then the
-    /// velocity constraints; clearance joints held at their initial eccentricity, ė = 0).
+    /// velocity constraints; clearance joints held at their initial eccentricity, ė = 0), then
+    /// evaluates the equations of motion there once: a right-hand side or Jacobian that is not
+    /// finite, or a KKT system singular in f64, is a [`SceneError::Dynamics`] naming the body
+    /// or joint (docs/scene-format.md, "Initial check").
     pub fn from_scene(scene: &Scene) -> Result<Mechanism, SceneError> {
         scene.validate()?;
         let nb = scene.bodies.len();
@@ -482,6 +485,7 @@ impl Mechanism {
             (None, None) => unreachable!("validated"),
         };
         mech.y0 = crate::assembly::assemble(&mech)?;
+        crate::initial_check::check(&mech)?;
         Ok(mech)
     }
 
