@@ -249,6 +249,34 @@ fn rk4_search(
     rk4_run(ctx, m, t_end, times, reference, k_hi, false)
 }
 
+/// Every adaptive method over rtol 1e-4 … 1e-11 (each run printed); the cheapest run of each
+/// that meets [`TARGET`].
+fn cheapest_adaptive(
+    ctx: &Ctx,
+    m: &Mechanism,
+    t_end: f64,
+    times: &[f64],
+    reference: &[f64],
+) -> Vec<Run> {
+    let mut best = Vec::new();
+    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        let runs = scan(
+            ctx,
+            method,
+            m,
+            t_end,
+            times,
+            reference,
+            &tolerances(4, 11),
+            true,
+        );
+        if let Some(r) = cheapest(&runs, TARGET) {
+            best.push(r.clone());
+        }
+    }
+    best
+}
+
 fn section_a(ctx: &Ctx) {
     println!("\n(a) one right-hand side of the press, 150 rpm, c = 0.1 mm");
     for stem in ["dry_150rpm_c0.1", "lubricated_150rpm_c0.1"] {
@@ -288,22 +316,7 @@ fn section_b(ctx: &Ctx) {
     let t_end = m.t_end();
     let reference = reference(&m, t_end, &times);
     print_header();
-    let mut best: Vec<Run> = Vec::new();
-    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
-        let runs = scan(
-            ctx,
-            method,
-            &m,
-            t_end,
-            &times,
-            &reference,
-            &tolerances(4, 11),
-            true,
-        );
-        if let Some(r) = cheapest(&runs, TARGET) {
-            best.push(r.clone());
-        }
-    }
+    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
     // RK4: h = Δ/k, Δ the grid spacing (grid times are step ends); k = 100 is the stable step
     // of the tests (2e-6 s). Below it RK4 is unstable; search k in (50, 800].
     let delta = times[1] - times[0];
@@ -336,22 +349,7 @@ fn section_c(ctx: &Ctx) {
     let t_end = m.t_end();
     let reference = reference(&m, t_end, &times);
     print_header();
-    let mut best: Vec<Run> = Vec::new();
-    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
-        let runs = scan(
-            ctx,
-            method,
-            &m,
-            t_end,
-            &times,
-            &reference,
-            &tolerances(4, 11),
-            true,
-        );
-        if let Some(r) = cheapest(&runs, TARGET) {
-            best.push(r.clone());
-        }
-    }
+    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
     println!(
         "  rk4 without events, h = Δ/k (Δ = {:.1e} s):",
         times[1] - times[0]
