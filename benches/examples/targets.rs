@@ -249,6 +249,17 @@ fn rk4_search(
     rk4_run(ctx, m, t_end, times, reference, k_hi, false)
 }
 
+/// The press `stem` run for two revolutions, the grid of the second (N_GRID points), the end
+/// time and the reference slider acceleration on the grid.
+fn second_revolution(stem: &str) -> (Mechanism, Vec<f64>, f64, Vec<f64>) {
+    let m = press(stem, 2.0);
+    let per = crank_period(&m);
+    let times = grid(per, 2.0 * per, N_GRID);
+    let t_end = m.t_end();
+    let reference = reference(&m, t_end, &times);
+    (m, times, t_end, reference)
+}
+
 /// Every adaptive method over rtol 1e-4 … 1e-11 (each run printed); the cheapest run of each
 /// that meets [`TARGET`].
 fn cheapest_adaptive(
@@ -310,11 +321,7 @@ fn section_a(ctx: &Ctx) {
 fn section_b(ctx: &Ctx) {
     let stem = "lubricated_150rpm_c0.1";
     println!("\n(b) {stem}, two revolutions, error over the second (target {TARGET:.0e} m/s²)");
-    let m = press(stem, 2.0);
-    let per = crank_period(&m);
-    let times = grid(per, 2.0 * per, N_GRID);
-    let t_end = m.t_end();
-    let reference = reference(&m, t_end, &times);
+    let (m, times, t_end, reference) = second_revolution(stem);
     print_header();
     let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
     // RK4: h = Δ/k, Δ the grid spacing (grid times are step ends); k = 100 is the stable step
@@ -388,11 +395,7 @@ fn section_d(ctx: &Ctx) {
         "lubricated_200rpm_c0.1",
     ] {
         println!(" {stem}");
-        let m = press(stem, 2.0);
-        let per = crank_period(&m);
-        let times = grid(per, 2.0 * per, N_GRID);
-        let t_end = m.t_end();
-        let reference = reference(&m, t_end, &times);
+        let (m, times, t_end, reference) = second_revolution(stem);
         print_header();
         let tols = tolerances(3, 10);
         let rodas = scan(

@@ -10,7 +10,7 @@
 //!                     1 + m|s'|²/I must stay below 1/PIVOT_TOL                → bodies[k].inertia
 //! 2. at (t_start, y0), the first failure in this order:
 //!    prescribed motion   pose, velocity, acceleration of every driven body finite → joints[driver]
-//!    clearance forces    δ, δ̇, v_T, F_N, F_T, film (F_r, F_t) finite            → joints[k]
+//!    clearance forces    δ, δ̇, v_T, F_N, F_T, film F_r, F_t finite              → joints[k]
 //!    applied forces      (F_x, F_y, M) of every integrated body finite            → bodies[k]
 //!    constraints         Φ, Φ̇, r = γ − 2αΦ̇ − β²Φ and the row of Φ_q finite       → joints[k]
 //!    KKT                 S = Φ_q M⁻¹ Φ_qᵀ = L Lᵀ with every pivot d_j = L_jj² above
@@ -186,31 +186,27 @@ fn check_evaluation(
     }
     mech.applied_forces(sc, false);
     for (k, c) in mech.clr.iter().enumerate() {
-        let ev = sc.clr[k];
-        let st = ev.st;
-        if !finite(&[
-            st.delta,
-            st.delta_dot,
-            st.v_t,
-            ev.f_n,
-            ev.f_t,
-            ev.f_r,
-            ev.f_tf,
-        ]) {
+        let (ev, st) = (sc.clr[k], sc.clr[k].st);
+        let quantities = [
+            ("δ", st.delta, "m"),
+            ("δ̇", st.delta_dot, "m/s"),
+            ("v_T", st.v_t, "m/s"),
+            ("F_N", ev.f_n, "N"),
+            ("F_T", ev.f_t, "N"),
+            ("film F_r", ev.f_r, "N"),
+            ("film F_t", ev.f_tf, "N"),
+        ];
+        if quantities.iter().any(|(_, v, _)| !v.is_finite()) {
+            let listed: Vec<String> = quantities
+                .iter()
+                .map(|(name, v, unit)| format!("{name} = {v:e} {unit}"))
+                .collect();
             return Err(fail(
                 format!("joints[{}]", c.joint),
                 format!(
-                    "the forces of {} are not finite: δ = {:e} m, δ̇ = {:e} m/s, \
-                     v_T = {:e} m/s, F_N = {:e} N, F_T = {:e} N, film (F_r, F_t) = \
-                     ({:e}, {:e}) N",
+                    "the forces of {} are not finite: {}",
                     mech.scene.joints[c.joint],
-                    st.delta,
-                    st.delta_dot,
-                    st.v_t,
-                    ev.f_n,
-                    ev.f_t,
-                    ev.f_r,
-                    ev.f_tf
+                    listed.join(", ")
                 ),
             ));
         }
