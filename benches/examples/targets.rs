@@ -249,6 +249,45 @@ fn rk4_search(
     rk4_run(ctx, m, t_end, times, reference, k_hi, false)
 }
 
+/// The press `stem` run for two revolutions, the grid of the second (N_GRID points), the end
+/// time and the reference slider acceleration on the grid.
+fn second_revolution(stem: &str) -> (Mechanism, Vec<f64>, f64, Vec<f64>) {
+    let m = press(stem, 2.0);
+    let per = crank_period(&m);
+    let times = grid(per, 2.0 * per, N_GRID);
+    let t_end = m.t_end();
+    let reference = reference(&m, t_end, &times);
+    (m, times, t_end, reference)
+}
+
+/// Every adaptive method over rtol 1e-4 … 1e-11 (each run printed); the cheapest run of each
+/// that meets [`TARGET`].
+fn cheapest_adaptive(
+    ctx: &Ctx,
+    m: &Mechanism,
+    t_end: f64,
+    times: &[f64],
+    reference: &[f64],
+) -> Vec<Run> {
+    let mut best = Vec::new();
+    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        let runs = scan(
+            ctx,
+            method,
+            m,
+            t_end,
+            times,
+            reference,
+            &tolerances(4, 11),
+            true,
+        );
+        if let Some(r) = cheapest(&runs, TARGET) {
+            best.push(r.clone());
+        }
+    }
+    best
+}
+
 fn section_a(ctx: &Ctx) {
     println!("\n(a) one right-hand side of the press, 150 rpm, c = 0.1 mm");
     for stem in ["dry_150rpm_c0.1", "lubricated_150rpm_c0.1"] {
@@ -282,28 +321,9 @@ fn section_a(ctx: &Ctx) {
 fn section_b(ctx: &Ctx) {
     let stem = "lubricated_150rpm_c0.1";
     println!("\n(b) {stem}, two revolutions, error over the second (target {TARGET:.0e} m/s²)");
-    let m = press(stem, 2.0);
-    let per = crank_period(&m);
-    let times = grid(per, 2.0 * per, N_GRID);
-    let t_end = m.t_end();
-    let reference = reference(&m, t_end, &times);
+    let (m, times, t_end, reference) = second_revolution(stem);
     print_header();
-    let mut best: Vec<Run> = Vec::new();
-    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
-        let runs = scan(
-            ctx,
-            method,
-            &m,
-            t_end,
-            &times,
-            &reference,
-            &tolerances(4, 11),
-            true,
-        );
-        if let Some(r) = cheapest(&runs, TARGET) {
-            best.push(r.clone());
-        }
-    }
+    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
     // RK4: h = Δ/k, Δ the grid spacing (grid times are step ends); k = 100 is the stable step
     // of the tests (2e-6 s). Below it RK4 is unstable; search k in (50, 800].
     let delta = times[1] - times[0];
@@ -336,22 +356,7 @@ fn section_c(ctx: &Ctx) {
     let t_end = m.t_end();
     let reference = reference(&m, t_end, &times);
     print_header();
-    let mut best: Vec<Run> = Vec::new();
-    for method in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
-        let runs = scan(
-            ctx,
-            method,
-            &m,
-            t_end,
-            &times,
-            &reference,
-            &tolerances(4, 11),
-            true,
-        );
-        if let Some(r) = cheapest(&runs, TARGET) {
-            best.push(r.clone());
-        }
-    }
+    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
     println!(
         "  rk4 without events, h = Δ/k (Δ = {:.1e} s):",
         times[1] - times[0]
@@ -390,11 +395,7 @@ fn section_d(ctx: &Ctx) {
         "lubricated_200rpm_c0.1",
     ] {
         println!(" {stem}");
-        let m = press(stem, 2.0);
-        let per = crank_period(&m);
-        let times = grid(per, 2.0 * per, N_GRID);
-        let t_end = m.t_end();
-        let reference = reference(&m, t_end, &times);
+        let (m, times, t_end, reference) = second_revolution(stem);
         print_header();
         let tols = tolerances(3, 10);
         let rodas = scan(

@@ -38,22 +38,6 @@ pub fn crank_period(m: &Mechanism) -> f64 {
     2.0 * std::f64::consts::PI / m.crank_speed().expect("a press declares its crank").abs()
 }
 
-/// The RK4 steps the tests found stable for each kind of press case
-/// (crates/model/tests/press_methods.rs, press_cases.rs).
-pub fn rk4_step(stem: &str) -> f64 {
-    if stem.starts_with("ideal") {
-        1e-3
-    } else if stem.starts_with("dry") {
-        2e-4
-    } else if stem.ends_with("c0.2") {
-        2e-7
-    } else if stem.ends_with("c0.3") {
-        5e-7
-    } else {
-        2e-6
-    }
-}
-
 /// Options of an adaptive run at (rtol, atol), with the two interior event samples per step
 /// that the press tests use (an adaptive step can hold a whole contact); RK4 takes `step`.
 pub fn options(method: Method, rtol: f64, atol: f64, step: f64, output: Output) -> SolverOptions {
@@ -71,9 +55,12 @@ pub fn options(method: Method, rtol: f64, atol: f64, step: f64, output: Output) 
 }
 
 /// The options of the press tests: rtol 1e-6, atol 1e-9, 2 event samples; RK4 at its stable
-/// step ([`rk4_step`]); final state only.
+/// step (`lash_model::cases::rk4_step`); final state only. Panics for a stem outside the
+/// catalogue.
 pub fn test_options(method: Method, stem: &str) -> SolverOptions {
-    options(method, 1e-6, 1e-9, rk4_step(stem), Output::Final)
+    let step = lash_model::cases::rk4_step(stem)
+        .unwrap_or_else(|| panic!("{stem} is not a press case of the catalogue"));
+    options(method, 1e-6, 1e-9, step, Output::Final)
 }
 
 /// `n` equally spaced times from `a` to `b`, both included.

@@ -31,7 +31,7 @@
 use faer::MatMut;
 
 use crate::geometry::{ClearanceInput, ClearanceState};
-use crate::mechanism::{perp, rot, Mechanism, Owner, Scratch, TermKind};
+use crate::mechanism::{cholesky_solve, perp, rot, Mechanism, Owner, Scratch, TermKind};
 
 /// Relative finite-difference step of the position columns (constraint geometry).
 pub const FD_STEP: f64 = 1e-8;
@@ -89,7 +89,7 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
         if lam.iter().all(|&v| v == 0.0) {
             continue;
         }
-        solve_s(&sc.smat, m, &mut lam);
+        cholesky_solve(&sc.smat, m, &mut lam);
         for i in 0..nq {
             let mut s = 0.0;
             for a in 0..m {
@@ -129,24 +129,6 @@ fn frozen_kkt(mech: &Mechanism, t: f64, y: &[f64], g: &[f64], sc: &mut Scratch) 
     mech.solve_kkt(sc)
 }
 
-/// Solves S x = b in place with the Cholesky factor L (lower, row-major m × m) in `smat`.
-fn solve_s(smat: &[f64], m: usize, b: &mut [f64]) {
-    for i in 0..m {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= smat[i * m + k] * b[k];
-        }
-        b[i] = s / smat[i * m + i];
-    }
-    for i in (0..m).rev() {
-        let mut s = b[i];
-        for k in i + 1..m {
-            s -= smat[k * m + i] * b[k];
-        }
-        b[i] = s / smat[i * m + i];
-    }
-}
-
 /// out = A v = M⁻¹ (v − Φ_qᵀ S⁻¹ Φ_q M⁻¹ v) (after an evaluation: Φ_q in `sc.jac`, the
 /// Cholesky factor of S in `sc.smat`).
 fn project(mech: &Mechanism, sc: &Scratch, v: &[f64], lam: &mut [f64], out: &mut [f64]) {
@@ -161,7 +143,7 @@ fn project(mech: &Mechanism, sc: &Scratch, v: &[f64], lam: &mut [f64], out: &mut
         }
         lam[a] = s;
     }
-    solve_s(&sc.smat, m, lam);
+    cholesky_solve(&sc.smat, m, lam);
     for j in 0..nq {
         let mut s = v[j];
         for a in 0..m {

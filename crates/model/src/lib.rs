@@ -4,7 +4,8 @@
 //! into an index-1 ODE `y' = f(t, y)` with y = (q, q̇) for the integrators of `lash-solver`.
 //!
 //! ```text
-//! Scene (JSON, validated) → Mechanism::from_scene (prescribed bodies, constraints, assembly)
+//! Scene (JSON, validated) → Mechanism::from_scene (prescribed bodies, constraints, assembly,
+//!   the equations checked once at the initial state)
 //!   → impl OdeSystem (rhs: KKT of MODEL.md §1; events δ, ε − ε_cap; FD Jacobian)
 //!   → Mechanism::outputs / power / point_kinematics / ideal_slider_crank
 //! ```
@@ -18,6 +19,7 @@
 mod assembly;
 pub mod cases;
 pub mod geometry;
+mod initial_check;
 pub mod jacobian;
 pub mod laws;
 pub mod mechanism;

@@ -252,7 +252,10 @@ pub struct Mechanism {
 impl Mechanism {
     /// Validates the scene, finds the prescribed bodies, builds the constraint equations,
     /// checks their rank and assembles the initial state (Newton on positions, then the
-    /// velocity constraints; clearance joints held at their initial eccentricity, ė = 0).
+    /// velocity constraints; clearance joints held at their initial eccentricity, ė = 0), then
+    /// evaluates the equations of motion there once: a right-hand side or Jacobian that is not
+    /// finite, or a KKT system singular in f64, is a [`SceneError::Dynamics`] naming the body
+    /// or joint (docs/scene-format.md, "Initial check").
     pub fn from_scene(scene: &Scene) -> Result<Mechanism, SceneError> {
         scene.validate()?;
         let nb = scene.bodies.len();
@@ -482,6 +485,7 @@ impl Mechanism {
             (None, None) => unreachable!("validated"),
         };
         mech.y0 = crate::assembly::assemble(&mech)?;
+        crate::initial_check::check(&mech)?;
         Ok(mech)
     }
 
@@ -844,43 +848,10 @@ impl Mechanism {
                 *sab = s;
             }
         }
-        // Cholesky S = L Lᵀ in place (lower).
-        for j in 0..m {
-            let (row_j, rest) = smat[j * m..].split_at_mut(m);
-            let mut d = row_j[j];
-            for &v in &row_j[..j] {
-                d -= v * v;
-            }
-            if !(d > 0.0) {
-                return false;
-            }
-            let d = d.sqrt();
-            row_j[j] = d;
-            let lj = &row_j[..j];
-            for row_i in rest.chunks_exact_mut(m) {
-                let mut s = row_i[j];
-                for (&x, &y) in row_i[..j].iter().zip(lj) {
-                    s -= x * y;
-                }
-                row_i[j] = s / d;
-            }
+        if cholesky_in_place(smat, m).is_err() {
+            return false;
         }
-        // Forward and back substitution.
-        for i in 0..m {
-            let li = &smat[i * m..i * m + i];
-            let mut s = lam[i];
-            for (&x, &y) in li.iter().zip(&lam[..i]) {
-                s -= x * y;
-            }
-            lam[i] = s / smat[i * m + i];
-        }
-        for i in (0..m).rev() {
-            let mut s = lam[i];
-            for k in i + 1..m {
-                s -= smat[k * m + i] * lam[k];
-            }
-            lam[i] = s / smat[i * m + i];
-        }
+        cholesky_solve(smat, m, lam);
         // q̈ = M⁻¹ (g − Jᵀ λ).
         for j in 0..nq {
             let mut s = g[j];
@@ -932,6 +903,56 @@ impl Mechanism {
         if let Some(c) = self.clr.get(k) {
             c.impact_velocity.set(v);
         }
+    }
+}
+
+/// Cholesky factorisation S = L Lᵀ in place: the lower triangle of the row-major m × m
+/// `smat` (holding S) becomes L. `Err(j)` when the pivot d_j = S_jj − Σ_{k<j} L_jk² of row j
+/// is not a positive number (S is not positive definite in f64); d_j is then left at (j, j).
+#[inline]
+pub(crate) fn cholesky_in_place(smat: &mut [f64], m: usize) -> Result<(), usize> {
+    for j in 0..m {
+        let (row_j, rest) = smat[j * m..m * m].split_at_mut(m);
+        let mut d = row_j[j];
+        for &v in &row_j[..j] {
+            d -= v * v;
+        }
+        if !(d > 0.0) {
+            row_j[j] = d;
+            return Err(j);
+        }
+        let d = d.sqrt();
+        row_j[j] = d;
+        let lj = &row_j[..j];
+        for row_i in rest.chunks_exact_mut(m) {
+            let mut s = row_i[j];
+            for (&x, &y) in row_i[..j].iter().zip(lj) {
+                s -= x * y;
+            }
+            row_i[j] = s / d;
+        }
+    }
+    Ok(())
+}
+
+/// Solves L Lᵀ x = b in place (forward, then back substitution), L the lower triangle of the
+/// row-major m × m `l` from [`cholesky_in_place`].
+#[inline]
+pub(crate) fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
+    for i in 0..m {
+        let li = &l[i * m..i * m + i];
+        let mut s = b[i];
+        for (&x, &y) in li.iter().zip(&b[..i]) {
+            s -= x * y;
+        }
+        b[i] = s / l[i * m + i];
+    }
+    for i in (0..m).rev() {
+        let mut s = b[i];
+        for k in i + 1..m {
+            s -= l[k * m + i] * b[k];
+        }
+        b[i] = s / l[i * m + i];
     }
 }
 

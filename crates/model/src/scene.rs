@@ -34,6 +34,8 @@ pub const GROUND: &str = "ground";
 /// Invalid     <path>: <reason>                    (a value out of range, a missing name, …)
 /// Redundant   <path>: redundant or contradictory constraints: …
 /// Assembly    <path>: initial assembly did not converge: equation …, residual …
+/// Dynamics    <path>: the equations of motion fail at the initial state: … (not finite, or
+///             Φ_q M⁻¹ Φ_qᵀ singular in f64)
 /// Unknown     unknown body 'x' / unknown point 'p' on body 'x'   (output look-ups)
 /// ```
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -78,6 +80,15 @@ pub enum SceneError {
         /// JSON path of the joint with the largest residual.
         path: String,
         /// Which equation and by how much.
+        reason: String,
+    },
+    /// The equations of motion are not finite, or their KKT system is singular in f64, at the
+    /// assembled initial state (numbers each finite, but beyond what f64 can combine).
+    #[error("{path}: the equations of motion fail at the initial state: {reason}")]
+    Dynamics {
+        /// JSON path of the body or joint to blame.
+        path: String,
+        /// Which quantity, its value, and the numbers of the scene behind it.
         reason: String,
     },
     /// An output asked for a body or point the scene does not have.
@@ -859,15 +870,41 @@ fn strip_position(msg: &str) -> String {
 // Validation
 // ---------------------------------------------------------------------------------------------
 
+/// Largest magnitude of a number in a scene.
+///
+/// ```text
+/// every number x of a scene:  x = 0  or  MIN_MAGNITUDE ≤ |x| ≤ MAX_MAGNITUDE
+/// MAX_MAGNITUDE = 1e150, MIN_MAGNITUDE = 1e-150:  x·y and x/y of any two such numbers are
+/// finite, normal f64 numbers (1e300 < f64::MAX ≈ 1.8e308, 1e-300 > f64::MIN_POSITIVE ≈ 2.2e-308)
+/// ```
+///
+/// The equations square and multiply scene values (m g, ω² r, β² Φ, K δ^1.5, |s'|²/I), so a
+/// value outside the range overflows or underflows in the first evaluation; the range is far
+/// beyond any physical scene in SI units. Products of three or more values can still overflow
+/// inside the range: [`crate::Mechanism::from_scene`] evaluates the equations once at the
+/// initial state and rejects what is not finite ([`SceneError::Dynamics`]).
+/// Source: IEEE 754-2008 binary64 range.
+pub const MAX_MAGNITUDE: f64 = 1e150;
+/// Smallest non-zero magnitude of a number in a scene; see [`MAX_MAGNITUDE`].
+pub const MIN_MAGNITUDE: f64 = 1e-150;
+
 struct Checker;
 
 impl Checker {
     fn finite(path: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() {
-            Ok(())
-        } else {
-            Err(invalid(path, format!("must be a finite number, got {v}")))
+        if !v.is_finite() {
+            return Err(invalid(path, format!("must be a finite number, got {v}")));
         }
+        if v != 0.0 && !(MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&v.abs()) {
+            return Err(invalid(
+                path,
+                format!(
+                    "must be 0 or of magnitude between {MIN_MAGNITUDE:e} and {MAX_MAGNITUDE:e} \
+                     (squares and products of scene values must be normal f64 numbers), got {v:e}"
+                ),
+            ));
+        }
+        Ok(())
     }
     fn finite2(path: &str, v: [f64; 2]) -> Result<(), SceneError> {
         Checker::finite(&format!("{path}[0]"), v[0])?;
@@ -1216,8 +1253,9 @@ impl Scene {
                                 ));
                             }
                         }
-                        // Extreme moduli (1e308, 5e-324) pass the checks above but give an
-                        // infinite or zero K.
+                        // Within the magnitude range K stays finite and positive (c ≥ ulp(R_B)
+                        // bounds K by about E·√(R_B/(2ε)) < 1e233); the check guards the
+                        // formula should the range ever be widened.
                         let k = crate::laws::hertz_stiffness(
                             b.radius,
                             j.radius,

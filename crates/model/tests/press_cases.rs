@@ -80,13 +80,7 @@ fn run_case(stem: &str) -> RunStats {
 
 #[test]
 fn case_files_match_their_generator_and_declare_their_roles() {
-    let mut stems: Vec<String> = std::fs::read_dir(cases_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
-        .collect();
-    stems.sort();
+    let stems = case_stems();
     let mut catalogue = press_catalogue();
     catalogue.sort_by(|a, b| a.0.cmp(&b.0));
     assert_eq!(
@@ -94,6 +88,11 @@ fn case_files_match_their_generator_and_declare_their_roles() {
         catalogue.iter().map(|c| c.0.clone()).collect::<Vec<_>>()
     );
     assert_eq!(stems.len(), 18);
+    // Every case has its RK4 step (the runs below use it); other names have none.
+    assert!(stems
+        .iter()
+        .all(|s| lash_model::cases::rk4_step(s).is_some()));
+    assert_eq!(lash_model::cases::rk4_step("dry_150rpm_c9"), None);
     for (stem, generated) in &catalogue {
         let scene = Scene::from_path(cases_dir().join(format!("{stem}.json"))).unwrap();
         assert_eq!(

@@ -10,7 +10,7 @@
 //! such an impact from being skipped.
 
 mod common;
-use common::{cases_dir, rk4_step};
+use common::{case_stems, cases_dir, rk4_step};
 use lash_model::{Mechanism, Scene};
 use lash_solver::{solve, Atol, Method, Output, SolverOptions};
 use std::time::Instant;
@@ -72,13 +72,7 @@ fn headline_cases_with_every_method() {
 #[test]
 #[ignore = "minutes: the whole catalogue with all nine methods"]
 fn all_press_cases_with_every_method() {
-    let mut stems: Vec<String> = std::fs::read_dir(cases_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
-        .collect();
-    stems.sort();
+    let stems = case_stems();
     for stem in &stems {
         for method in Method::ALL {
             run(stem, method);

@@ -2,6 +2,7 @@
 //! (docs/scene-format.md, "Errors").
 mod common;
 use common::*;
+use lash_model::scene::{MAX_MAGNITUDE, MIN_MAGNITUDE};
 use lash_model::{Mechanism, Scene, SceneError};
 use serde_json::json;
 
@@ -307,4 +308,137 @@ fn output_lookups_name_the_unknown_body_or_point() {
             .to_string(),
         "unknown point 'Q' on body 'rod'"
     );
+}
+
+/// The paper's press with ideal joints (the rod pinned to the crank and to the slider).
+fn ideal_press_value() -> serde_json::Value {
+    use lash_model::cases::{press_scene, PressJoint};
+    serde_json::from_str(&press_scene(PressJoint::Ideal, 150.0, 1e-4).to_json_pretty()).unwrap()
+}
+
+fn dynamics(v: &serde_json::Value) -> (String, String) {
+    let e = err(v);
+    let shown = e.to_string();
+    match e {
+        SceneError::Dynamics { path, reason } => {
+            assert_eq!(
+                shown,
+                format!("{path}: the equations of motion fail at the initial state: {reason}")
+            );
+            (path, reason)
+        }
+        e => panic!("expected a Dynamics error, got {e:?}"),
+    }
+}
+
+#[test]
+fn magnitudes_outside_the_scene_range_are_rejected_with_their_path() {
+    // An inertia of 1e-182 used to pass validation and fail at the first right-hand side (its
+    // inverse times a squared lever overflows); now every number is 0 or within
+    // [1e-150, 1e150], where squares and products of two scene values stay normal f64 numbers.
+    for (ptr, path, value) in [
+        ("/bodies/1/inertia", "bodies[1].inertia", 1e-182),
+        ("/bodies/2/mass", "bodies[2].mass", 1e200),
+        ("/bodies/2/position/0", "bodies[2].position[0]", -1e-151),
+        ("/joints/4/normal/k", "joints[4].normal.k", 1.5e150),
+        ("/gravity/1", "gravity[1]", -1e300),
+    ] {
+        let mut v = dry_press_value();
+        *v.pointer_mut(ptr).unwrap() = json!(value);
+        // As the scene parser reads it (serde_json's parser is not correctly rounded:
+        // 1e-182 reads as 9.999999999999999e-183).
+        let value: f64 = serde_json::from_str(&json!(value).to_string()).unwrap();
+        assert_eq!(
+            invalid(&v),
+            (
+                path.to_string(),
+                format!(
+                    "must be 0 or of magnitude between 1e-150 and 1e150 (squares and products \
+                     of scene values must be normal f64 numbers), got {value:e}"
+                )
+            )
+        );
+    }
+    // The ends of the range, and 0, are valid numbers.
+    for value in [MAX_MAGNITUDE, -MAX_MAGNITUDE, MIN_MAGNITUDE, 0.0] {
+        let mut v = dry_press_value();
+        v["bodies"][2]["velocity"][1] = json!(value);
+        Scene::from_json_str(&v.to_string())
+            .unwrap()
+            .validate()
+            .unwrap_or_else(|e| panic!("{value:e}: {e}"));
+    }
+}
+
+#[test]
+fn a_radius_of_gyration_too_small_for_a_held_point_names_the_inertia() {
+    // The rod (m = 412.53 kg) is held by the crank at its point A, |s'| = l/2 = 0.175 m. The
+    // inverse mass seen at A has eigenvalues 1/m and 1/m + |s'|²/I: their ratio
+    // 1 + m|s'|²/I must stay below 1e14 (1/PIVOT_TOL), i.e. I > m|s'|²/(1e14 − 1) = 1.263e-13.
+    let limit = 412.53 * 0.175f64.powi(2) / (1e14 - 1.0);
+    let mut v = dry_press_value();
+    v["bodies"][1]["inertia"] = json!(0.99 * limit);
+    let (path, reason) = dynamics(&v);
+    assert_eq!(path, "bodies[1].inertia");
+    let gyration = (0.99 * limit / 412.53f64).sqrt();
+    assert!(
+        reason.starts_with(&format!(
+            "the radius of gyration √(I/m) = {gyration:e} m of body 'rod' (mass 4.1253e2 kg"
+        )),
+        "{reason}"
+    );
+    assert!(
+        reason.contains("its point 'A' at 1.75e-1 m from the centre of mass that revolute joint 'crank_rod' holds"),
+        "{reason}"
+    );
+    assert!(reason.contains("is 1.010e14 times 1/m"), "{reason}");
+    v["bodies"][1]["inertia"] = json!(1.01 * limit);
+    build(&v).expect("just inside the limit");
+}
+
+#[test]
+fn a_constraint_system_singular_in_f64_names_the_joint_and_bodies() {
+    // The ideal press's rod between the crank and a 2700 kg slider: at 1e-12 kg the pivot of the
+    // rod–slider pin in Φ_q M⁻¹ Φ_qᵀ is about m_rod/m_slider = 4e-16 of its diagonal, below the
+    // 1e-14 that f64 resolves; at 1e-8 kg (4e-12) it is solved.
+    let mut v = ideal_press_value();
+    v["bodies"][1]["mass"] = json!(1e-12);
+    let (path, reason) = dynamics(&v);
+    assert_eq!(path, "joints[4]");
+    assert!(
+        reason.starts_with(
+            "Φ_q M⁻¹ Φ_qᵀ is singular in f64: equation 'x' of revolute joint 'rod_slider', \
+             weighted by the inverse masses and inertias, is a combination of the equations \
+             before it (Cholesky pivot d/S_jj = "
+        ),
+        "{reason}"
+    );
+    assert!(
+        reason.ends_with(
+            "it acts on body 'rod' (mass 1e-12 kg, inertia 4.21124375e0 kg·m²) and body \
+             'slider' (mass 2.70071e3 kg, inertia 1e0 kg·m²): masses and inertias too far \
+             apart to be solved together"
+        ),
+        "{reason}"
+    );
+    v["bodies"][1]["mass"] = json!(1e-8);
+    build(&v).expect("a light rod that f64 still solves");
+}
+
+#[test]
+fn forces_that_overflow_at_the_initial_state_name_the_joint() {
+    // K = 1e150 N/m^1.5 and a journal held δ = 1e110 m into its bearing: K δ^1.5 = 1e315.
+    // Each number is inside the range; their product is not.
+    let mut v = dry_press_value();
+    v["joints"][4]["normal"]["k"] = json!(1e150);
+    v["joints"][4]["initial_eccentricity"] = json!([1e110, 0.0]);
+    let (path, reason) = dynamics(&v);
+    assert_eq!(path, "joints[4]");
+    assert!(
+        reason.starts_with(
+            "the forces of clearance joint 'rod_slider' are not finite: δ = 1e110 m, δ̇ = 0e0 m/s"
+        ),
+        "{reason}"
+    );
+    assert!(reason.contains("F_N = inf N"), "{reason}");
 }

@@ -9,36 +9,6 @@ mod common;
 use common::*;
 use lash_solver::*;
 
-/// Free fall with bounces: y = (height, velocity), g = 9.81, restitution e.
-struct Ball {
-    e: f64,
-}
-impl OdeSystem for Ball {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
-        dy[0] = y[1];
-        dy[1] = -9.81;
-    }
-    fn n_events(&self) -> usize {
-        1
-    }
-    fn event_spec(&self, _i: usize) -> EventSpec {
-        EventSpec {
-            direction: Direction::Falling,
-            action: EventAction::Continue,
-        }
-    }
-    fn events(&self, _t: f64, y: &[f64], g: &mut [f64]) {
-        g[0] = y[0];
-    }
-    fn on_event(&self, _hit: &EventHit, y: &mut [f64]) -> EventAction {
-        y[1] *= -self.e;
-        EventAction::Continue
-    }
-}
-
 fn adaptive(method: Method, rtol: f64) -> SolverOptions {
     SolverOptions {
         method,
@@ -57,15 +27,9 @@ fn bouncing_ball_bounce_times_with_every_pair() {
     // Because the steps grow freely on an exactly integrated problem, a whole flight (0.72 s
     // down to 0.24 s) could fit in one step, and g would be negative at both of its ends;
     // h_max = 0.05 keeps at least 4 step ends in every flight.
-    let (g, e, h0) = (9.81f64, 0.8f64, 1.0f64);
-    let t1 = (2.0 * h0 / g).sqrt();
-    let mut expected = vec![t1];
-    let mut v = g * t1;
-    for _ in 0..5 {
-        v *= e;
-        let last = *expected.last().unwrap();
-        expected.push(last + 2.0 * v / g);
-    }
+    let (g, e, h0) = (Ball::G, 0.8f64, 1.0f64);
+    let expected = Ball { e }.bounce_times(h0, 6);
+    let t1 = expected[0];
     let t_end = expected[5] + 0.1;
     for (m, _) in PAIRS {
         let o = SolverOptions {

@@ -1,5 +1,7 @@
 //! RK4 and the event driver on problems with closed forms.
 
+mod common;
+use common::Ball;
 use lash_solver::*;
 
 /// y' = λ y, y(0) = 1: exact solution e^{λt}.
@@ -10,36 +12,6 @@ impl OdeSystem for Exp {
     }
     fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
         dy[0] = self.0 * y[0];
-    }
-}
-
-/// Free fall with bounces: y = (height, velocity), g = 9.81, restitution e.
-struct Ball {
-    e: f64,
-}
-impl OdeSystem for Ball {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
-        dy[0] = y[1];
-        dy[1] = -9.81;
-    }
-    fn n_events(&self) -> usize {
-        1
-    }
-    fn event_spec(&self, _i: usize) -> EventSpec {
-        EventSpec {
-            direction: Direction::Falling,
-            action: EventAction::Continue,
-        }
-    }
-    fn events(&self, _t: f64, y: &[f64], g: &mut [f64]) {
-        g[0] = y[0];
-    }
-    fn on_event(&self, _hit: &EventHit, y: &mut [f64]) -> EventAction {
-        y[1] *= -self.e;
-        EventAction::Continue
     }
 }
 
@@ -88,16 +60,8 @@ fn rk4_beyond_stability_limit_is_a_typed_error() {
 fn bouncing_ball_bounce_times_with_rk4() {
     // Dropped from h0 = 1 m at rest: first impact at t1 = sqrt(2 h0 / g); each later flight
     // lasts 2 e v_k / g with v_k the impact speed, reduced by e at each bounce.
-    let (g, e, h0) = (9.81f64, 0.8f64, 1.0f64);
-    let t1 = (2.0 * h0 / g).sqrt();
-    let v1 = g * t1;
-    let mut expected = vec![t1];
-    let mut v = v1;
-    for _ in 0..3 {
-        v *= e;
-        let last = *expected.last().unwrap();
-        expected.push(last + 2.0 * v / g);
-    }
+    let (e, h0) = (0.8f64, 1.0f64);
+    let expected = Ball { e }.bounce_times(h0, 4);
     // A quadratic trajectory is integrated exactly by RK4; the Hermite dense output is exact
     // for cubics, so event location is limited only by the root-finder tolerance.
     let s = solve(&Ball { e }, (0.0, 2.5), &[h0, 0.0], &rk4(0.01)).unwrap();

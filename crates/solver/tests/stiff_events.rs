@@ -1,10 +1,12 @@
 //! Every stiff method on problems with closed forms, through the event-locating driver:
 //! the bouncing ball (events + restarts), a stiff linear system, Prothero–Robinson.
 
+mod common;
 mod stiff_problems;
 
+use common::Ball;
 use lash_solver::*;
-use stiff_problems::{opts, Ball, ProtheroRobinson, StiffLinear, STIFF};
+use stiff_problems::{opts, ProtheroRobinson, StiffLinear, STIFF};
 
 /// Bounce times of the ball dropped from 1 m, e = 0.8, over [0, 2.5] (4 bounces).
 fn bounces(o: &SolverOptions) -> Vec<EventHit> {

@@ -5,6 +5,9 @@
 //!                         scene_sha256 = null)
 //!      | PATH             a JSON scene file (summary.case = file stem,
 //!                         scene_sha256 = hex sha256 of the file's bytes)
+//! Case::catalogue(NAME)   (API only) a press scene built in code by
+//!                         lash_model::cases::press_catalogue (summary.case = NAME, the stem of
+//!                         its file in cases/press/; scene_sha256 = null)
 //! ```
 //!
 //! Source: INTERFACES.md (`summary.json` fields `case`, `scene_sha256`). Loading checks that
@@ -26,7 +29,7 @@ pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 /// Where a case comes from.
 ///
 /// ```text
-/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME)
+/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME) | Catalogue(NAME)
 /// ```
 ///
 /// Source: INTERFACES.md (`case`, `scene_sha256`).
@@ -45,6 +48,9 @@ pub enum CaseSource {
     },
     /// A built-in test problem, by its name after `testset:`.
     BuiltIn(String),
+    /// A press scene of `lash_model::cases::press_catalogue`, by its name (the file stem of
+    /// the same scene in `cases/press/`).
+    Catalogue(String),
 }
 
 /// A loaded case reference.
@@ -123,11 +129,28 @@ impl Case {
         })
     }
 
-    /// The scene's sha256 (hex), None for built-ins.
+    /// A press scene of the catalogue (`lash_model::cases::press_catalogue`) by its name,
+    /// e.g. `dry_150rpm_c0.1`; an unknown name is an input error.
+    pub fn catalogue(name: &str) -> Result<Case, Error> {
+        if !lash_model::cases::press_catalogue()
+            .iter()
+            .any(|(n, _)| n == name)
+        {
+            return Err(Error::Input(format!(
+                "unknown catalogue case '{name}' (the press scenes of cases/press/)"
+            )));
+        }
+        Ok(Case {
+            name: name.to_string(),
+            source: CaseSource::Catalogue(name.to_string()),
+        })
+    }
+
+    /// The scene's sha256 (hex), None for built-ins and catalogue scenes.
     pub fn sha256(&self) -> Option<&str> {
         match &self.source {
             CaseSource::File { sha256, .. } => Some(sha256),
-            CaseSource::BuiltIn(_) => None,
+            CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => None,
         }
     }
 }
@@ -179,5 +202,20 @@ mod tests {
             .to_string()
             .starts_with("unknown built-in case 'testset:nosuch'"));
         assert!(Case::load("", None).is_err());
+    }
+
+    #[test]
+    fn catalogue_cases_are_named_like_their_files_and_have_no_hash() {
+        let c = Case::catalogue("dry_150rpm_c0.1").unwrap();
+        assert_eq!(c.name, "dry_150rpm_c0.1");
+        assert_eq!(c.sha256(), None);
+        // The catalogue writes cases/press/NAME.json: the same stem.
+        let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../cases/press")
+            .join(format!("{}.json", c.name));
+        assert!(file.is_file(), "{}", file.display());
+        let e = Case::catalogue("dry_150rpm_c9").unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("'dry_150rpm_c9'"), "{e}");
     }
 }

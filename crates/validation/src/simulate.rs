@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! Prepared::load(case)        scene file → checked Scene (SceneError → exit 2) | testset:NAME
+//!                             | a catalogue scene (Case::catalogue)
 //! Prepared::options(flags)    the defaults below, the command-line flags laid over them
 //! simulate(prepared, request) → RunResult { summary, window samples (2001-point metrics grid of
 //!                               the last revolution), trajectory samples, extra samples,
@@ -168,7 +169,7 @@ pub struct Prepared {
 fn scene_error(case: &Case, e: impl std::fmt::Display) -> Error {
     let what = match &case.source {
         CaseSource::File { path, .. } => path.display().to_string(),
-        CaseSource::BuiltIn(_) => case.name.clone(),
+        CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => case.name.clone(),
     };
     Error::Input(format!("case {what}: {e}"))
 }
@@ -199,6 +200,13 @@ impl Prepared {
             CaseSource::File { bytes, .. } => {
                 let text = std::str::from_utf8(bytes).map_err(|e| scene_error(&case, e))?;
                 let scene = Scene::from_json_str(text).map_err(|e| scene_error(&case, e))?;
+                Prepared::with_scene(case, scene)
+            }
+            CaseSource::Catalogue(name) => {
+                let scene = lash_model::cases::press_catalogue()
+                    .into_iter()
+                    .find_map(|(n, s)| (&n == name).then_some(s))
+                    .ok_or_else(|| scene_error(&case, "not in the press catalogue"))?;
                 Prepared::with_scene(case, scene)
             }
         }
@@ -566,7 +574,7 @@ fn simulate_testset(
         extra_states.y.extend_from_slice(y);
         Ok(())
     };
-    let d = drive(
+    let mut d = drive(
         &*prob.system,
         t0,
         t_end,
@@ -578,21 +586,11 @@ fn simulate_testset(
         f64::INFINITY,
         &mut sink,
     )?;
-    let mut traj = d.steps.unwrap_or_else(|| empty_solution(n));
+    let mut traj = d.steps.take().unwrap_or_else(|| empty_solution(n));
     for s in [&mut traj, &mut extra_states] {
-        s.stats = d.stats.clone();
-        s.events = d.hits.clone();
-        s.t_final = d.t_final;
-        s.y_final = d.y_final.clone();
+        d.finish(s);
     }
-    let mut summary = Summary::new(
-        &p.case,
-        &req.opts,
-        t_end,
-        d.stats.clone(),
-        d.wall,
-        d.hits.len(),
-    );
+    let mut summary = d.summary(p, &req.opts, t_end);
     let err = testset::reference_error(&d.y_final, &prob.reference, prob.atol);
     if !err.is_finite() {
         return Err(Error::Internal(format!(
@@ -776,10 +774,7 @@ fn simulate_mechanism(
         &mut sink,
     )?;
     for s in [&mut sol_w, &mut sol_t, &mut sol_x] {
-        s.stats = d.stats.clone();
-        s.events = d.hits.clone();
-        s.t_final = d.t_final;
-        s.y_final = d.y_final.clone();
+        d.finish(s);
     }
     let role_joint = sampler
         .clearance_index
@@ -824,14 +819,7 @@ fn simulate_mechanism(
     };
     let energy_evals = d.energy.as_ref().map_or(0, |q| q.evals);
     let metrics = metrics::compute(&s_w, window, info.joint, &events, energy)?;
-    let mut summary = Summary::new(
-        &p.case,
-        &req.opts,
-        t_end,
-        d.stats.clone(),
-        d.wall,
-        d.hits.len(),
-    );
+    let mut summary = d.summary(p, &req.opts, t_end);
     summary.metrics = Some(metrics);
     Ok(RunResult {
         summary,
@@ -859,6 +847,28 @@ struct Drive {
     t_final: f64,
     y_final: Vec<f64>,
     energy: Option<Quadrature>,
+}
+
+impl Drive {
+    /// Copies the end of the run (stats, located events, final time and state) into `s`.
+    fn finish(&self, s: &mut Solution) {
+        s.stats = self.stats.clone();
+        s.events = self.hits.clone();
+        s.t_final = self.t_final;
+        s.y_final = self.y_final.clone();
+    }
+
+    /// summary.json of the run, without metrics or test-problem fields.
+    fn summary(&self, p: &Prepared, opts: &SolverOptions, t_end: f64) -> Summary {
+        Summary::new(
+            &p.case,
+            opts,
+            t_end,
+            self.stats.clone(),
+            self.wall,
+            self.hits.len(),
+        )
+    }
 }
 
 type PowerFn<'a> = &'a dyn Fn(f64, &[f64]) -> [f64; 4];

@@ -5,8 +5,10 @@
 //!              c = 0.1, 0.2, 0.3, 0.5 mm; the ideal mechanism at the four speeds (18 cases)
 //! realisation  k = 0..N−1 (N = 8): the case with the crank's initial angle θ₀ = k·Δθ,
 //!              Δθ = 1e-6 rad (k = 0 is the paper's case; the ideal cases run once)
-//! run          BDF, rtol 1e-10, atol 1e-12, 2 event samples per step; two revolutions;
-//!              samples on metrics::grid of each revolution (2 × 2001 points)
+//! run          BDF, rtol 1e-10, atol 1e-12, 2 event samples per step, no h_max; two
+//!              revolutions through the shared runner (simulate::simulate, no energy
+//!              accounting); samples on metrics::grid of each revolution (2 × 2001 points:
+//!              the run's metrics window and, as extra output times, the revolution before)
 //! reference    every realisation again at rtol 1e-12, atol 1e-14 (convergence check), and
 //! loose        at rtol 1e-8, atol 1e-10 (to show what a looser tolerance changes)
 //! statistics   INTERFACES.md metrics of the last revolution + [`Deviations`]
@@ -35,13 +37,15 @@ use std::path::Path;
 use std::time::Instant;
 
 use lash_model::scene::JointSpec;
-use lash_model::{IdealSliderCrank, Mechanism, Scene};
-use lash_solver::{solve, Atol, Method, Output, SolverOptions, Stats};
+use lash_model::{IdealSliderCrank, Scene};
+use lash_solver::{Atol, Method, SolverOptions, Stats};
 use rayon::prelude::*;
 
+use crate::case::Case;
 use crate::error::Error;
 use crate::io;
-use crate::metrics::{self, EventQuantity, EventRecord, JointInfo, Metrics, Sample, Window};
+use crate::metrics::{self, Metrics, Sample};
+use crate::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
 
 pub use claims::{Claim, Number, Origin, Quantity, Verdict};
 
@@ -98,13 +102,14 @@ pub struct Settings {
 }
 
 impl Settings {
-    fn options(&self, times: Vec<f64>) -> SolverOptions {
+    /// The solver options of a study run: these settings, event location on, no h_max, the
+    /// runner's step limit (`simulate::DEFAULT_MAX_STEPS`).
+    fn options(&self) -> SolverOptions {
         let mut o = SolverOptions::with_method(self.method);
         o.rtol = self.rtol;
         o.atol = Atol::Scalar(self.atol);
         o.event_samples = self.event_samples;
-        o.max_steps = 50_000_000;
-        o.output = Output::Times(times);
+        o.max_steps = DEFAULT_MAX_STEPS;
         o
     }
 }
@@ -424,10 +429,9 @@ impl StudyResult {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Running one case. PROVISIONAL: a small stand-in for `simulate.rs` (written on another
-// branch); replace `run_case` by the shared runner once it lands. It builds the mechanism,
-// runs `solve` with `Output::Times` on the two revolutions' grids, maps `Mechanism::outputs`
-// to `metrics::Sample` and calls `metrics::compute` (energy left null).
+// Running one case: through the shared runner, `simulate::simulate`, with the study's own solver
+// options, the metrics grid of the last revolution (RunResult::window) and that of the
+// revolution before it as extra output times; no trajectory, no energy accounting.
 // ---------------------------------------------------------------------------------------------
 
 /// One finished run: the samples of the last two revolutions and what the solver did.
@@ -442,87 +446,62 @@ struct Run {
     wall_time_s: f64,
     events: usize,
     ideal: Option<IdealSliderCrank>,
+    /// |ω| of the crank driver, rpm.
+    rpm: f64,
+    /// Radial clearance of the clearance-joint role, m.
+    clearance: Option<f64>,
 }
 
-fn joint_info(m: &Mechanism) -> Option<JointInfo> {
-    let j = m.roles().clearance_joint?;
-    match &m.scene().joints[j] {
-        JointSpec::Clearance(c) => Some(JointInfo {
-            clearance: c.bearing.radius - c.journal.radius,
-            lubricated: c.film.is_some(),
-        }),
-        _ => None,
-    }
-}
-
-/// Runs a press scene over its span; samples its last two revolutions.
+/// Runs the press scene `scene` (the catalogue case `name`, or one of its realisations) over
+/// its span through [`simulate`]; samples its last two revolutions.
 fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error> {
-    let m = Mechanism::from_scene(scene).map_err(|e| Error::Input(format!("case {name}: {e}")))?;
-    let omega = m
-        .crank_speed()
+    let p = Prepared::with_scene(Case::catalogue(name)?, scene.clone())?;
+    let info = p
+        .info
+        .as_ref()
+        .ok_or_else(|| Error::Internal(format!("case {name}: no mechanism")))?;
+    let (period, omega) = info
+        .period
+        .zip(info.crank_speed)
         .ok_or_else(|| Error::Input(format!("case {name}: no crank_driver role")))?;
-    let period = 2.0 * PI / omega.abs();
-    let (t0, t_end) = (m.t_start(), m.t_end());
+    let (t0, t_end) = (info.t_start, info.t_end);
     if !(t_end - 2.0 * period >= t0 - 1e-9 * period) {
         return Err(Error::Input(format!(
             "case {name}: the study needs two crank revolutions, the scene runs {:.3}",
             (t_end - t0) / period
         )));
     }
-    let g_prev = metrics::grid(t_end - period, period);
-    let g_last = metrics::grid(t_end, period);
-    let mut times = g_prev.clone();
-    times.extend_from_slice(&g_last[1..]);
-    let opts = settings.options(times);
-    let y0 = m.initial_state();
-    let clock = Instant::now();
-    let sol = solve(&m, (t0, t_end), &y0, &opts)?;
-    let wall_time_s = clock.elapsed().as_secs_f64();
+    let mut req = RunRequest::new(settings.options());
+    req.trajectory_points = Some(0);
+    req.energy = false;
+    // The grid may start a few ulps before t0 (t_end = 2T): clamp into the run.
+    req.extra_times = metrics::grid(t_end - period, period)
+        .into_iter()
+        .map(|t| t.max(t0))
+        .collect();
+    let r = simulate(&p, &req)?;
     let n = metrics::GRID_POINTS;
-    if sol.len() != 2 * n - 1 {
+    if r.window.len() != n || r.extra.len() != n {
         return Err(Error::Internal(format!(
-            "case {name}: {} output points, expected {}",
-            sol.len(),
-            2 * n - 1
+            "case {name}: {} and {} samples of the last two revolutions, expected {n}",
+            r.extra.len(),
+            r.window.len()
         )));
     }
-    let ideal = m.ideal_slider_crank();
-    let sampler = crate::simulate::Sampler::new(&m, m.scene());
-    let all: Vec<Sample> = (0..sol.len())
-        .map(|k| sampler.sample(sol.t[k], sol.state(k)))
-        .collect();
-    let previous = all[..n].to_vec();
-    let mut last = all[n - 1..].to_vec();
-    // The point t_end − T ends one grid and starts the other; give it the last grid's value.
-    last[0].t = g_last[0];
-    let events: Vec<EventRecord> = sol
-        .events
-        .iter()
-        .map(|h| EventRecord {
-            t: h.t,
-            quantity: match m.event_name(h.index) {
-                Some(("contact", _)) => EventQuantity::Penetration,
-                Some(("eps_cap", _)) => EventQuantity::FilmCap,
-                _ => EventQuantity::Other,
-            },
-            rising: h.rising,
-        })
-        .collect();
-    let metrics = metrics::compute(
-        &last,
-        Window { t_end, period },
-        joint_info(&m),
-        &events,
-        None,
-    )?;
+    let metrics = r
+        .summary
+        .metrics
+        .ok_or_else(|| Error::Internal(format!("case {name}: no metrics")))?;
     Ok(Run {
-        previous,
-        last,
+        previous: r.extra,
+        last: r.window,
         metrics,
-        stats: sol.stats.clone(),
-        wall_time_s,
-        events: sol.events.len(),
-        ideal,
+        stats: r.summary.stats,
+        wall_time_s: r.summary.wall_time_s,
+        events: r.summary.events,
+        ideal: r.ideal,
+        rpm: omega * 30.0 / PI,
+        clearance: info.joint.map(|j| j.clearance),
     })
 }
 
@@ -743,10 +722,6 @@ fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
     let curves = (job.setting == Setting::Study && job.member == 0)
         .then(|| curves(&r.last, &ideal))
         .transpose()?;
-    let clearance = Mechanism::from_scene(&scene)
-        .ok()
-        .and_then(|m| joint_info(&m))
-        .map(|j| j.clearance);
     Ok(JobOut {
         acc: need(&r.last, "slider_a", |s| s.slider_a)?,
         stats: CaseStats {
@@ -755,7 +730,7 @@ fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
         },
         curves,
         solver: (r.stats, r.events, r.wall_time_s),
-        meta: (ideal.omega.abs() * 30.0 / PI, clearance),
+        meta: (r.rpm, r.clearance),
     })
 }
 

@@ -216,3 +216,17 @@ fn hires_reference_error_at_rtol_1e8() {
     assert_eq!(r.trajectory.len(), s.stats.accepted + 1);
     assert!(p.t_span(Some(1.0)).is_err());
 }
+
+#[test]
+fn catalogue_case_prepares_the_scene_of_its_file() {
+    // Case::catalogue builds the scene in code; the file in cases/press/ was written from the
+    // same generator, so both prepare to the same scene and mechanism facts.
+    use lash_validation::case::Case;
+    let name = "lubricated_150rpm_c0.2";
+    let from_code = Prepared::load(Case::catalogue(name).unwrap()).unwrap();
+    let from_file = case(name);
+    assert_eq!(from_code.scene(), from_file.scene());
+    assert_eq!(from_code.info, from_file.info);
+    assert_eq!(from_code.case.name, from_file.case.name);
+    assert_eq!(from_code.case.sha256(), None);
+}

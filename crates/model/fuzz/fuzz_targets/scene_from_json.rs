@@ -23,7 +23,8 @@ fuzz_target!(|data: &[u8]| {
             ref e @ (SceneError::Schema { ref path, .. }
             | SceneError::Invalid { ref path, .. }
             | SceneError::Redundant { ref path, .. }
-            | SceneError::Assembly { ref path, .. }),
+            | SceneError::Assembly { ref path, .. }
+            | SceneError::Dynamics { ref path, .. }),
         ) => {
             assert!(!path.is_empty() || text.contains("\"\""), "{e:?}");
             assert!(e.to_string().starts_with(&format!("{path}: ")), "{e:?}");

@@ -38,21 +38,20 @@ pub fn cases_dir() -> std::path::PathBuf {
     std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/press")
 }
 
-/// The RK4 step used for a press case: the largest step found stable *and* keeping
-/// ‖Φ‖ < 1e-8 (`rk4_scan` example): ideal 1e-3 s; dry 2e-4 s; lubricated c = 0.1 and 0.5 mm
-/// 2e-6 s; c = 0.3 mm 5e-7 s; c = 0.2 mm 2e-7 s (the film's radial damping grows as
-/// (1 − ε²)^{−3/2} up to ε_cap = 0.99, which bounds the RK4 step).
-#[allow(dead_code)]
+/// The RK4 step of a press case (`lash_model::cases::rk4_step`; the stems here are the
+/// catalogue's).
 pub fn rk4_step(stem: &str) -> f64 {
-    if stem.starts_with("ideal") {
-        1e-3
-    } else if stem.starts_with("dry") {
-        2e-4
-    } else if stem.ends_with("c0.2") {
-        2e-7
-    } else if stem.ends_with("c0.3") {
-        5e-7
-    } else {
-        2e-6
-    }
+    lash_model::cases::rk4_step(stem).unwrap_or_else(|| panic!("{stem} is not a press case"))
+}
+
+/// The file stems of cases/press/*.json, sorted.
+pub fn case_stems() -> Vec<String> {
+    let mut stems: Vec<String> = std::fs::read_dir(cases_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    stems.sort();
+    stems
 }

@@ -1,4 +1,5 @@
-//! Test problems with closed forms or published reference values, shared by the ERK tests.
+//! Test problems with closed forms or published reference values, shared by the solver tests
+//! (the explicit pairs, RK4, and the bouncing ball of the stiff methods' event tests).
 #![allow(dead_code)]
 // Published values are kept with all their printed digits.
 #![allow(clippy::excessive_precision)]
@@ -167,4 +168,57 @@ pub fn dist(a: &[f64], b: &[f64]) -> f64 {
         .zip(b)
         .map(|(x, y)| (x - y).abs())
         .fold(0.0, f64::max)
+}
+
+/// Free fall with bounces: y = (height, velocity), g = 9.81 m/s², restitution e; the event
+/// g = height (falling) reverses the velocity times e.
+///
+/// ```text
+/// bounce times from h0 at rest: t₁ = √(2 h0 / g), t_{k+1} = t_k + 2 e^k v₁ / g, v₁ = g t₁
+/// ```
+pub struct Ball {
+    pub e: f64,
+}
+
+impl Ball {
+    pub const G: f64 = 9.81;
+    /// The first `n` bounce times from height h0 at rest: t1 = √(2 h0 / g), then each flight
+    /// lasts 2 e v_k / g with the impact speed reduced by e at each bounce.
+    pub fn bounce_times(&self, h0: f64, n: usize) -> Vec<f64> {
+        let t1 = (2.0 * h0 / Self::G).sqrt();
+        let mut times = vec![t1];
+        let mut v = Self::G * t1;
+        while times.len() < n {
+            v *= self.e;
+            let last = *times.last().unwrap();
+            times.push(last + 2.0 * v / Self::G);
+        }
+        times
+    }
+}
+
+impl OdeSystem for Ball {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = -Self::G;
+    }
+    fn n_events(&self) -> usize {
+        1
+    }
+    fn event_spec(&self, _i: usize) -> EventSpec {
+        EventSpec {
+            direction: Direction::Falling,
+            action: EventAction::Continue,
+        }
+    }
+    fn events(&self, _t: f64, y: &[f64], g: &mut [f64]) {
+        g[0] = y[0];
+    }
+    fn on_event(&self, _hit: &EventHit, y: &mut [f64]) -> EventAction {
+        y[1] *= -self.e;
+        EventAction::Continue
+    }
 }

@@ -34,6 +34,17 @@ struct Set {
     one_speed: bool,
 }
 
+impl Set {
+    /// The condition the panels of one case share, as a title suffix.
+    fn fixed(&self) -> &'static str {
+        if self.one_speed {
+            ", 150 rpm"
+        } else {
+            ", c = 0.1 mm"
+        }
+    }
+}
+
 const SETS: [Set; 4] = [
     Set {
         first_figure: 5,
@@ -214,11 +225,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
                         "Fig. {}({p}) Slider acceleration, {}, {l}{}",
                         n + 1,
                         set.condition,
-                        if set.one_speed {
-                            ", 150 rpm"
-                        } else {
-                            ", c = 0.1 mm"
-                        }
+                        set.fixed()
                     ),
                     &[case],
                 ),
@@ -238,11 +245,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
                         "Fig. {}({p}) Journal centre, {}, {l}{}",
                         n + 2,
                         set.condition,
-                        if set.one_speed {
-                            ", 150 rpm"
-                        } else {
-                            ", c = 0.1 mm"
-                        }
+                        set.fixed()
                     ),
                     &[case],
                 ),
