@@ -305,7 +305,7 @@ pub fn poincare_command(
     let case = Case::load(&a.case, None)?;
     a.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
-    let opts = prepared.options(&a.solver)?;
+    let opts = crate::poincare::options(&prepared, &a.solver)?;
     let d = PoincareSettings::default();
     let settings = PoincareSettings {
         revolutions: a.revolutions.unwrap_or(d.revolutions),

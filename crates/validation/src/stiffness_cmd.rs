@@ -35,17 +35,16 @@ use std::time::Instant;
 
 use lash_model::Mechanism;
 use lash_solver::analysis::stiffness::{
-    analyze, measure_rk4_limit, verdict, Eigenvalue, MeasuredLimit, Rk4ProbeOptions,
-    StiffnessOptions, StiffnessSummary, Verdict,
+    analyze, measure_rk4_limit_where, verdict, Eigenvalue, MeasuredLimit, Rk4ProbeOptions,
+    StateCheck, StiffnessOptions, StiffnessSummary, Verdict,
 };
 use lash_solver::analysis::AnalysisError;
 use lash_solver::{Integrator, Method, OdeSystem, SolverOptions, Stats, StepOutcome};
 
-use crate::compare::STABLE_PHI_MAX;
 use crate::error::Error;
 use crate::io;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
-use crate::simulate::{uniform_grid, Model, Prepared, Sampler};
+use crate::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
 use crate::summary::effective_controller;
 use crate::trajectory::fmt_num;
 
@@ -60,6 +59,20 @@ pub const MIN_SAMPLES: usize = 2;
 pub const MAX_PROBE_STEPS: f64 = 2e7;
 /// Most bracket attempts of the measurement (each widens the bracket by a factor 4).
 pub const MAX_BRACKET_ATTEMPTS: usize = 8;
+/// Largest constraint violation ‖Φ(q, t)‖₂ of a stable RK4 run of a mechanism, as a fraction
+/// of its length scale L (the smallest clearance, else 1e-3 m): Φ_max = L/100.
+///
+/// Why: beyond its RK4 limit the clearance joint's fast mode (the oil film's squeeze damping,
+/// the contact stiffness) does not always blow the state up. The nonlinear film and contact
+/// forces keep the journal within about a clearance, so max ‖y‖∞ (0.4 m of slider travel) never
+/// grows tenfold while the run is garbage: on the lubricated press at 150 rpm RK4 at 6 µs and
+/// 8 µs ends finite with ‖Φ‖ ≈ 1e-4 m and an energy balance off by kJ, while 5 µs diverges (the
+/// bare criterion is not even monotonic in h). Stable runs keep ‖Φ‖ at the Baumgarte and
+/// truncation level: ≤ 1e-12 m lubricated at 2–4 µs, ≤ 6e-8 m dry up to 1 ms (growing as h⁴).
+/// The check sees the accepted states only: an RK4 stage state y_n + (h/2)k moves pinned points
+/// along tangents and violates Φ by about |a| h²/8 (1e-8 m at 0.15 ms on the press) without any
+/// instability.
+pub const PHI_MAX_PER_LENGTH: f64 = 1e-2;
 /// Stems of the files written.
 pub const FILES: [&str; 4] = [
     "stiffness.csv",
@@ -179,7 +192,7 @@ fn median(v: &[f64]) -> Option<f64> {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     let n = s.len();
-    Some(if n % 2 == 1 {
+    Some(if !n.is_multiple_of(2) {
         s[n / 2]
     } else {
         0.5 * (s[n / 2 - 1] + s[n / 2])
@@ -289,7 +302,8 @@ pub struct Measurement {
 /// [guess/2, 2·guess] and widening it by a factor 4 towards the side that failed, at most
 /// [`MAX_BRACKET_ATTEMPTS`] times. `base` holds the other options of the RK4 runs (events,
 /// `max_steps`). A bracket whose lower end needs more than [`MAX_PROBE_STEPS`] steps, or whose
-/// upper end exceeds a quarter of the span, ends the search with a note.
+/// upper end exceeds a quarter of the span, ends the search with a note. `valid` must hold at
+/// every accepted state of a stable run ([`measure_rk4_limit_where`]).
 pub fn measure_limit<S: OdeSystem + ?Sized>(
     sys: &S,
     t_span: (f64, f64),
@@ -297,6 +311,7 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
     base: &SolverOptions,
     guess: f64,
     probe: &Rk4ProbeOptions,
+    valid: StateCheck<'_>,
 ) -> Result<Measurement, Error> {
     let clock = Instant::now();
     let span = t_span.1 - t_span.0;
@@ -333,7 +348,7 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
                 attempt - 1,
             ));
         }
-        match measure_rk4_limit(sys, t_span, y0, (lo, hi), base, probe) {
+        match measure_rk4_limit_where(sys, t_span, y0, (lo, hi), base, probe, valid) {
             Ok(m) => return Ok(done(Some(m), None, attempt)),
             Err(AnalysisError::NoBracket { stable: false, .. }) => {
                 hi = lo;
@@ -354,58 +369,6 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
         )),
         MAX_BRACKET_ATTEMPTS,
     ))
-}
-
-/// A mechanism whose right-hand side is non-finite wherever its position constraints are
-/// violated by more than `phi_max`: the domain in which an RK4 run counts as stable.
-///
-/// ```text
-/// f_guard(t, y) = f(t, y)   if ‖Φ(q, t)‖₂ ≤ Φ_max,   NaN otherwise
-/// ```
-///
-/// Why: an RK4 step beyond the stability limit of the clearance joint's fast mode (the oil
-/// film's squeeze damping, or the contact stiffness) does not always blow the state up. The
-/// nonlinear film and contact forces bound the journal's motion to about a clearance, so
-/// max ‖y‖∞ (0.4 m of slider travel) never grows tenfold, while the run is garbage: on the
-/// lubricated press at 150 rpm RK4 at 6 µs and 8 µs ends finite with ‖Φ‖ ≈ 1e-4 m and an
-/// energy balance off by kJ, and 5 µs diverges (so the bare criterion is not even monotonic
-/// in h). A stable run keeps ‖Φ‖ at the Baumgarte level (≈ 1e-12 m at 2–4 µs); Φ_max is the
-/// threshold of `lash compare`'s stable step ([`crate::compare::STABLE_PHI_MAX`]). RK4 never
-/// runs event hooks here (fixed-step runs locate no events), so the guard sees the
-/// mechanism's initial hook state throughout, as the unguarded run would.
-pub struct Guarded<'a> {
-    /// The mechanism.
-    pub mech: &'a Mechanism,
-    /// Φ_max, m.
-    pub phi_max: f64,
-}
-
-impl OdeSystem for Guarded<'_> {
-    fn dim(&self) -> usize {
-        self.mech.dim()
-    }
-    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        self.mech.rhs(t, y, dy);
-        let phi = self.mech.outputs(t, y).constraint_violation;
-        if !(phi <= self.phi_max) {
-            dy.iter_mut().for_each(|v| *v = f64::NAN);
-        }
-    }
-    fn is_autonomous(&self) -> bool {
-        self.mech.is_autonomous()
-    }
-    fn n_events(&self) -> usize {
-        self.mech.n_events()
-    }
-    fn event_spec(&self, i: usize) -> lash_solver::EventSpec {
-        self.mech.event_spec(i)
-    }
-    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
-        self.mech.events(t, y, g);
-    }
-    fn on_event(&self, hit: &lash_solver::EventHit, y: &mut [f64]) -> lash_solver::EventAction {
-        self.mech.on_event(hit, y)
-    }
 }
 
 /// A value and where along the run it occurs.
@@ -504,17 +467,26 @@ pub struct StiffnessResult {
     pub points: Vec<StiffnessPoint>,
 }
 
-/// The stability criterion of the measurement in words (stiffness.json and .md); `mechanism`
-/// adds the constraint guard ([`Guarded`]).
-pub fn criterion_text(probe: &Rk4ProbeOptions, mechanism: bool) -> String {
+/// Φ_max of a mechanism case ([`PHI_MAX_PER_LENGTH`]), m.
+pub fn phi_max(p: &Prepared) -> f64 {
+    let l = p
+        .info
+        .as_ref()
+        .and_then(|i| i.clearance_min)
+        .unwrap_or(DEFAULT_LENGTH_SCALE);
+    PHI_MAX_PER_LENGTH * l
+}
+
+/// The stability criterion of the measurement in words (stiffness.json and .md); `phi_max`
+/// is the constraint check of a mechanism case ([`PHI_MAX_PER_LENGTH`]).
+pub fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
     format!(
         "fixed-step RK4 over the whole run without event location is stable at h when no state \
          is non-finite{} and max ‖y‖∞ ≤ {} × that of the run at the bracket's lower end (itself \
          checked against h/2); bisection on ln h until h_unstable/h_stable ≤ 1 + {:e}",
-        if mechanism {
-            format!(", ‖Φ(q, t)‖ ≤ {STABLE_PHI_MAX:e} m at every right-hand-side evaluation")
-        } else {
-            String::new()
+        match phi_max {
+            Some(m) => format!(", ‖Φ(q, t)‖₂ ≤ {m:e} m (c/100) at every accepted step"),
+            None => String::new(),
         },
         probe.growth_bound,
         probe.rel_tol
@@ -548,20 +520,19 @@ pub fn analyse(
             let angle = |t: f64, y: &[f64]| sampler.sample(t, y).crank_angle;
             let sampled = sample_along(&mech, t_span, &y0, opts, &times, &sopts, &angle)?;
             let analytic = mech.has_jacobian();
+            let phi_max = phi_max(p);
             let m = measure(&sampled, settings, |guess| {
                 // A fresh mechanism: the probe runs start from the scene's initial hook state.
                 let fresh = build()?;
-                let guarded = Guarded {
-                    mech: &fresh,
-                    phi_max: STABLE_PHI_MAX,
-                };
+                let valid = |t: f64, y: &[f64]| fresh.outputs(t, y).constraint_violation <= phi_max;
                 measure_limit(
-                    &guarded,
+                    &fresh,
                     t_span,
                     &y0,
                     &rk4_base(guess)?,
                     guess,
                     &settings.probe,
+                    &valid,
                 )
             })?;
             (sampled, m, analytic)
@@ -581,6 +552,7 @@ pub fn analyse(
                     &rk4_base(guess)?,
                     guess,
                     &settings.probe,
+                    &|_, _| true,
                 )
             })?;
             (sampled, m, sys.has_jacobian())
@@ -724,7 +696,7 @@ fn build_report(
         rk4_limit_measured: measurement.limit,
         measurement_note: measurement.note,
         measured_over_predicted: ratio,
-        stability_criterion: criterion_text(&settings.probe, p.scene().is_some()),
+        stability_criterion: criterion_text(&settings.probe, p.scene().map(|_| phi_max(p))),
         accuracy_step: h_acc,
         stiffness_ratio_max: pts
             .iter()
