@@ -825,3 +825,92 @@ impl PoincareResult {
         Ok(written)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An estimate from log growths g over intervals of 0.5 s (two per revolution of 1 s).
+    fn est(g: &[f64]) -> LyapunovEstimate {
+        let t: Vec<f64> = (1..=g.len()).map(|k| 0.5 * k as f64).collect();
+        let mut sum = 0.0;
+        let running = g
+            .iter()
+            .zip(&t)
+            .map(|(g, t)| {
+                sum += g;
+                sum / t
+            })
+            .collect();
+        LyapunovEstimate {
+            t_start: 0.0,
+            t,
+            log_growth: g.to_vec(),
+            running,
+            exponent: 0.0,
+            ..Default::default()
+        }
+    }
+
+    /// Four revolutions: the late half is revolutions 2–4, t ∈ [2, 4] s. With late growths
+    /// (3, 3 | 2, 2) the per-revolution rates are 6 and 4 1/s: λ = 10/2 = 5, σ = sd/√2 =
+    /// √2/√2 = 1, so λ > 3σ: chaotic; the mirror image is not chaotic; (3, 2 | 1, 1) gives
+    /// λ = 3.5 with σ = 1.5: inconclusive.
+    #[test]
+    fn summary_of_known_log_growths() {
+        let s = summarize(&est(&[1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 2.0, 2.0]), 1.0, 2).unwrap();
+        assert_eq!(s.late_revolutions, 2);
+        assert_eq!(s.late_from, 2.0);
+        assert!((s.exponent - 5.0).abs() < 1e-15);
+        assert!((s.std_error.unwrap() - 1.0).abs() < 1e-15);
+        assert_eq!(s.chaos, Chaos::Chaotic);
+        // Running estimate: Σg/t = 16/4 at the end; over the late half it runs through
+        // 6/2, 9/2.5, 12/3, 14/3.5, 16/4: spread 4.0 − 3.0.
+        assert!((s.exponent_running - 4.0).abs() < 1e-15);
+        assert!((s.running_spread - 1.0).abs() < 1e-15);
+        assert!((s.per_revolution - 5.0).abs() < 1e-15);
+        let neg: Vec<f64> = [1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 2.0, 2.0]
+            .iter()
+            .map(|g| -g)
+            .collect();
+        assert_eq!(
+            summarize(&est(&neg), 1.0, 2).unwrap().chaos,
+            Chaos::NotChaotic
+        );
+        let s = summarize(&est(&[0.0, 0.0, 0.0, 0.0, 3.0, 2.0, 1.0, 1.0]), 1.0, 2).unwrap();
+        assert!((s.exponent - 3.5).abs() < 1e-15 && (s.std_error.unwrap() - 1.5).abs() < 1e-15);
+        assert_eq!(s.chaos, Chaos::Inconclusive);
+        assert!(s.sentence.contains("inconclusive"));
+        // One revolution: no uncertainty.
+        let s = summarize(&est(&[1.0, 1.0]), 1.0, 2).unwrap();
+        assert_eq!((s.std_error, s.chaos), (None, Chaos::Inconclusive));
+        assert!((s.exponent - 2.0).abs() < 1e-15);
+        // Not whole revolutions.
+        assert!(summarize(&est(&[1.0, 1.0, 1.0]), 1.0, 2).is_err());
+    }
+
+    #[test]
+    fn settings_ranges() {
+        assert!(PoincareSettings::default().validate().is_ok());
+        for s in [
+            PoincareSettings {
+                revolutions: 0,
+                ..Default::default()
+            },
+            PoincareSettings {
+                perturbation: 1.0,
+                ..Default::default()
+            },
+            PoincareSettings {
+                perturbation: f64::NAN,
+                ..Default::default()
+            },
+            PoincareSettings {
+                renorm_per_rev: 0,
+                ..Default::default()
+            },
+        ] {
+            assert_eq!(s.validate().unwrap_err().exit_code(), 2, "{s:?}");
+        }
+    }
+}

@@ -13,8 +13,10 @@
 //! measured limit    fixed-step RK4 over the whole run, without event location, bisection on
 //!                   ln h until h_unstable/h_stable ≤ 1 + 1e-4; stable(h) ⇔ no non-finite state
 //!                   and max_k ‖y_k‖∞ ≤ 10 · M_ref (M_ref: the run at the bracket's lower end,
-//!                   checked against h/2); bracket [h_pred/2, 2 h_pred] widened by ×4 until it
-//!                   brackets (lash_solver::analysis::stiffness::measure_rk4_limit)
+//!                   checked against h/2), and for a mechanism ‖Φ(q_k, t_k)‖₂ ≤ c/100 at every
+//!                   accepted step ([`PHI_MAX_PER_LENGTH`]); bracket [h_pred/2, 2 h_pred]
+//!                   widened by ×4 until it brackets
+//!                   (lash_solver::analysis::stiffness::measure_rk4_limit_where)
 //! accuracy step     h_acc = median accepted step of the reference run (an implicit method's
 //!                   steps are set by accuracy alone, not by stability)
 //! verdict           q = h_acc / h_stab (h_stab = measured h_stable, else h_pred):
@@ -300,8 +302,9 @@ pub struct Measurement {
 /// Measures the largest stable RK4 step of `sys` over `t_span` from `y0` by bisection
 /// ([`measure_rk4_limit`], its settings in `probe`), starting from the bracket
 /// [guess/2, 2·guess] and widening it by a factor 4 towards the side that failed, at most
-/// [`MAX_BRACKET_ATTEMPTS`] times. `base` holds the other options of the RK4 runs (events,
-/// `max_steps`). A bracket whose lower end needs more than [`MAX_PROBE_STEPS`] steps, or whose
+/// [`MAX_BRACKET_ATTEMPTS`] times. `base` holds the other options of the RK4 runs (events;
+/// `max_steps` is raised to what the bracket needs). A bracket whose lower end needs more than
+/// [`MAX_PROBE_STEPS`] steps (at half its step, the bisection's first check), or whose
 /// upper end exceeds a quarter of the span, ends the search with a note. `valid` must hold at
 /// every accepted state of a stable run ([`measure_rk4_limit_where`]).
 pub fn measure_limit<S: OdeSystem + ?Sized>(
@@ -328,7 +331,8 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
         wall_time_s: clock.elapsed().as_secs_f64(),
     };
     for attempt in 1..=MAX_BRACKET_ATTEMPTS {
-        if span / lo > MAX_PROBE_STEPS {
+        // The bisection's first check runs at lo/2.
+        if 2.0 * span / lo > MAX_PROBE_STEPS {
             return Ok(done(
                 None,
                 Some(format!(
@@ -348,7 +352,9 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
                 attempt - 1,
             ));
         }
-        match measure_rk4_limit_where(sys, t_span, y0, (lo, hi), base, probe, valid) {
+        let mut o = base.clone();
+        o.max_steps = o.max_steps.max((2.0 * span / lo).ceil() as usize + 16);
+        match measure_rk4_limit_where(sys, t_span, y0, (lo, hi), &o, probe, valid) {
             Ok(m) => return Ok(done(Some(m), None, attempt)),
             Err(AnalysisError::NoBracket { stable: false, .. }) => {
                 hi = lo;
@@ -1026,5 +1032,38 @@ impl StiffnessResult {
         });
         let title = format!("Stiffness along the run: {}", r.case);
         plot::panels_plot(&dir.join("stiffness"), &title, &panels)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&[]), None);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), Some(2.5));
+    }
+
+    #[test]
+    fn csv_leaves_missing_values_empty() {
+        let p = StiffnessPoint {
+            t: 0.5,
+            crank_angle: None,
+            dominant: Eigenvalue { re: -2.0, im: 0.0 },
+            spectral_radius: 2.0,
+            stiffness_ratio: None,
+            rk4_h_max: Some(1.5),
+            limiting: None,
+            n_unstable: 1,
+        };
+        let csv = to_csv(&[p]);
+        let row = csv.lines().nth(1).unwrap();
+        assert_eq!(row, "0.5,,-2,0,2,2,,1.5,,,1");
+        assert_eq!(
+            csv.lines().next().unwrap().split(',').count(),
+            row.split(',').count()
+        );
     }
 }

@@ -454,3 +454,47 @@ fn diagnostics_usage_errors() {
     }
     assert!(!d.path().join("x").exists());
 }
+
+/// A solver failure exits 3 with the time and state and writes nothing: the pendulum's
+/// reference run with RK4 at ω h = 11 (|R(11i)| ≈ 610 per step overflows within 128 s), and
+/// the lubricated press's trajectories with RK4 at 1 ms, 200× its stability limit.
+#[test]
+fn diagnostics_solver_failures_exit_3() {
+    let d = tempfile::tempdir().unwrap();
+    let case = pendulum(d.path());
+    let mut s = press_scene(PressJoint::Lubricated, 150.0, 1e-4);
+    s.revolutions = Some(1.0);
+    let lub = d.path().join("lub.json");
+    std::fs::write(&lub, s.to_json_pretty()).unwrap();
+    for args in [
+        vec![
+            "stiffness",
+            case.to_str().unwrap(),
+            "--method",
+            "rk4",
+            "--step",
+            "0.5",
+        ],
+        vec![
+            "poincare",
+            lub.to_str().unwrap(),
+            "--revolutions",
+            "2",
+            "--method",
+            "rk4",
+            "--step",
+            "1e-3",
+        ],
+    ] {
+        let mut a = args.clone();
+        a.extend(["--out", "x"]);
+        let o = lash(&a, d.path());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {err}");
+        assert!(
+            err.contains("solver failed") && err.contains("at t = "),
+            "{err}"
+        );
+        assert!(!d.path().join("x").exists());
+    }
+}
