@@ -153,6 +153,8 @@ fn stiffness_of_a_pendulum_matches_its_closed_form() {
     let s = json(&o.join("stiffness.json"));
     let pred = s["rk4_limit_predicted"]["value"].as_f64().unwrap();
     assert!((pred / h_pred - 1.0).abs() <= THETA0 * THETA0 / 4.0 + 2.0 * tol);
+    let p05 = s["rk4_limit_predicted_p05"].as_f64().unwrap();
+    assert!((p05 / h_pred - 1.0).abs() <= THETA0 * THETA0 / 4.0 + 2.0 * tol);
     let m = &s["rk4_limit_measured"];
     let (hs, hu) = (
         m["h_stable"].as_f64().unwrap(),
