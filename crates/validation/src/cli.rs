@@ -912,6 +912,59 @@ mod tests {
     }
 
     #[test]
+    fn stiffness_and_poincare_arguments() {
+        let c = cli(&[
+            "stiffness",
+            "c.json",
+            "--samples",
+            "50",
+            "--no-measure",
+            "--method",
+            "rk4",
+            "--step",
+            "1e-4",
+            "--t-end",
+            "0.2",
+        ])
+        .unwrap();
+        let Some(Command::Stiffness(s)) = c.command else {
+            panic!()
+        };
+        assert_eq!(
+            (s.samples, s.no_measure, s.t_end, s.solver.step),
+            (Some(50), true, Some(0.2), Some(1e-4))
+        );
+        let c = cli(&[
+            "poincare",
+            "c.json",
+            "--revolutions",
+            "5",
+            "--perturbation",
+            "1e-5",
+            "--renorm-per-rev",
+            "4",
+            "--rtol",
+            "1e-10",
+        ])
+        .unwrap();
+        let Some(Command::Poincare(p)) = c.command else {
+            panic!()
+        };
+        assert_eq!(
+            (
+                p.revolutions,
+                p.perturbation,
+                p.renorm_per_rev,
+                p.solver.rtol
+            ),
+            (Some(5), Some(1e-5), Some(4), Some(1e-10))
+        );
+        assert!(usage(&["stiffness", "c.json", "--samples", "1"]).contains("samples must be"));
+        assert!(usage(&["poincare", "c.json", "--perturbation", "0"]).contains("perturbation"));
+        assert!(usage(&["poincare", "c.json", "--renorm-per-rev", "0"]).contains(">= 1"));
+    }
+
+    #[test]
     fn help_and_version_are_printed_not_errors() {
         for a in [["lash", "--help"], ["lash", "--version"]] {
             match parse(a).unwrap() {

@@ -22,7 +22,8 @@
 //! ```
 //!
 //! The renormalisation interval T/10 keeps the separation small: at the dry press's exponent
-//! (≈ 20 1/s at 150 rpm) it grows by e^{λT/10} ≈ 2 between renormalisations. Both trajectories
+//! (≈ 9 1/s at 150 rpm, ≈ 20 1/s over the first revolutions) it grows by e^{λT/10} ≤ 2.2
+//! between renormalisations. Both trajectories
 //! use the case's solver options; the integration error must stay well below d0 (the default
 //! atol is rtol·c, so rtol 1e-8 against d0 = 1e-4 clearances). Sources: G. Benettin,
 //! L. Galgani, A. Giorgilli, J.-M. Strelcyn, Meccanica 15 (1980) 9–20; J. C. Sprott, *Chaos
