@@ -312,7 +312,7 @@ pub struct Measurement {
 }
 
 /// Measures the largest stable RK4 step of `sys` over `t_span` from `y0` by bisection
-/// ([`measure_rk4_limit`], its settings in `probe`), starting from the bracket
+/// ([`measure_rk4_limit_where`], its settings in `probe`), starting from the bracket
 /// [guess/2, 2·guess] and widening it by a factor 4 towards the side that failed, at most
 /// [`MAX_BRACKET_ATTEMPTS`] times. `base` holds the other options of the RK4 runs (events;
 /// `max_steps` is raised to what the bracket needs). A bracket whose lower end needs more than
