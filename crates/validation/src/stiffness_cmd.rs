@@ -508,7 +508,7 @@ pub fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
          is non-finite{} and max ‖y‖∞ ≤ {} × that of the run at the bracket's lower end (itself \
          checked against h/2); bisection on ln h until h_unstable/h_stable ≤ 1 + {:e}",
         match phi_max {
-            Some(m) => format!(", ‖Φ(q, t)‖₂ ≤ {m:e} m (c/100) at every accepted step"),
+            Some(m) => format!(", ‖Φ(q, t)‖₂ ≤ {m:.3e} m (L/100, L the smallest clearance, else 1 mm) at every accepted step"),
             None => String::new(),
         },
         probe.growth_bound,
@@ -947,11 +947,16 @@ impl StiffnessReport {
             "| samples with a growing mode (Re λ > 0) | {} of {} (at most {} at once) | |",
             self.samples_with_growing_modes, self.samples, self.growing_modes_max
         );
+        let reason = &self.verdict.reason;
+        let mut chars = reason.chars();
+        let reason = match chars.next() {
+            Some(c) => c.to_uppercase().chain(chars).collect::<String>(),
+            None => String::new(),
+        };
         let _ = writeln!(
             s,
-            "\n**Verdict: {}.** {}\n\nStability criterion of the measurement: {}.",
+            "\n**Verdict: {}.** {reason}.\n\nStability criterion of the measurement: {}.",
             family_name(&self.verdict),
-            self.verdict.reason,
             self.stability_criterion
         );
         s
