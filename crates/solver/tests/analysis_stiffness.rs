@@ -262,6 +262,47 @@ fn measured_rk4_limit_matches_the_complex_pair() {
     assert!(rel(m.estimate(), pred) < 1e-2);
 }
 
+/// A check on the accepted states sharpens the measurement and is applied to every run. On the
+/// block system (normal: ‖y‖₂ never grows below the limit) the check ‖y‖₂ ≤ 1.5‖y0‖₂ = 1.5√3
+/// fails after a growth of the −1000 mode by about 1.5√3 instead of the tenfold growth of
+/// ‖y‖∞ the bare criterion needs, so the stable end lies within 2 ln(1.5√3)/(N κ) ≈ 1.3e-3 of
+/// the prediction (N, κ as above) and strictly below the bare measurement's. A check that
+/// always fails makes the lower end unstable.
+#[test]
+fn measured_rk4_limit_with_a_state_check() {
+    let sys = block_system();
+    let x = -real_axis_root();
+    let pred = -x / 1000.0;
+    let base = SolverOptions::default();
+    let p = Rk4ProbeOptions::default();
+    let y0 = [1.0, 1.0, 1.0];
+    let cap = 1.5 * 3f64.sqrt();
+    let check = |_: f64, y: &[f64]| y.iter().map(|v| v * v).sum::<f64>().sqrt() <= cap;
+    let m =
+        measure_rk4_limit_where(&sys, (0.0, 1.0), &y0, (1e-3, 1e-2), &base, &p, &check).unwrap();
+    let bare = measure_rk4_limit(&sys, (0.0, 1.0), &y0, (1e-3, 1e-2), &base, &p).unwrap();
+    let r = 1.0 + x + x * x / 2.0 + x.powi(3) / 6.0 + x.powi(4) / 24.0;
+    let dr = 1.0 + x + x * x / 2.0 + x.powi(3) / 6.0;
+    let kappa = (x * dr / r).abs();
+    let n_steps = 1.0 / pred;
+    eprintln!(
+        "checked: predicted {pred:.6e}, measured [{:.6e}, {:.6e}], bare stable end {:.6e}",
+        m.h_stable, m.h_unstable, bare.h_stable
+    );
+    assert!(m.h_unstable > pred);
+    assert!(m.h_stable / pred - 1.0 <= 2.0 * cap.ln() / (n_steps * kappa));
+    assert!(m.h_stable < bare.h_stable);
+    let never = |_: f64, _: &[f64]| false;
+    assert_eq!(
+        measure_rk4_limit_where(&sys, (0.0, 1.0), &y0, (1e-3, 1e-2), &base, &p, &never)
+            .unwrap_err(),
+        AnalysisError::NoBracket {
+            h: 1e-3,
+            stable: false
+        }
+    );
+}
+
 #[test]
 fn measured_rk4_limit_needs_a_bracket() {
     let sys = block_system();

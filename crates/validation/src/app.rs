@@ -78,6 +78,8 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
             let base = Prepared::load(spec.case.clone())?;
             sweep_command(&a, |p, dir| sweep_point(&base, p, dir)).map(|_| ())
         }
+        Command::Stiffness(a) => stiffness_command(&a).map(|_| ()),
+        Command::Poincare(a) => poincare_command(&a).map(|_| ()),
         Command::Merge(a) => {
             let out = a.out.unwrap_or_else(|| a.dirs[0].clone());
             let table = sweep::merge(&a.dirs)?;
@@ -261,6 +263,65 @@ pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
         out.display()
     );
     Ok(table)
+}
+
+/// `lash stiffness`: checks the case and the flags, integrates the reference run analysing
+/// the Jacobian at the sample points, measures the RK4 limit, writes stiffness.csv,
+/// stiffness.{svg,png}, stiffness.md and stiffness.json, and prints the two limits and the
+/// verdict.
+pub fn stiffness_command(
+    a: &cli::StiffnessArgs,
+) -> Result<(crate::stiffness_cmd::StiffnessResult, PathBuf), Error> {
+    use crate::stiffness_cmd::{analyse, StiffnessSettings, DEFAULT_SAMPLES};
+    let case = Case::load(&a.case, None)?;
+    a.solver.apply(&SolverOptions::default())?;
+    let prepared = Prepared::load(case)?;
+    let opts = prepared.options(&a.solver)?;
+    prepared.t_span(a.t_end)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("stiffness", &prepared.case.name));
+    let settings = StiffnessSettings {
+        samples: a.samples.unwrap_or(DEFAULT_SAMPLES),
+        t_end: a.t_end,
+        measure: !a.no_measure,
+        ..Default::default()
+    };
+    let r = analyse(&prepared, &opts, &settings)?;
+    let files = r.write(&out)?;
+    print!("{}", r.report.describe());
+    println!("wrote {} files to {}", files.len(), out.display());
+    Ok((r, out))
+}
+
+/// `lash poincare`: checks the case (a crank driver and a clearance joint role) and the flags,
+/// integrates the section run and the two Lyapunov trajectories, writes poincare.csv,
+/// lyapunov.csv, the figures, poincare.md and poincare.json, and prints the estimate.
+pub fn poincare_command(
+    a: &cli::PoincareArgs,
+) -> Result<(crate::poincare::PoincareResult, PathBuf), Error> {
+    use crate::poincare::{analyse, PoincareSettings};
+    let case = Case::load(&a.case, None)?;
+    a.solver.apply(&SolverOptions::default())?;
+    let prepared = Prepared::load(case)?;
+    let opts = crate::poincare::options(&prepared, &a.solver)?;
+    let d = PoincareSettings::default();
+    let settings = PoincareSettings {
+        revolutions: a.revolutions.unwrap_or(d.revolutions),
+        perturbation: a.perturbation.unwrap_or(d.perturbation),
+        renorm_per_rev: a.renorm_per_rev.unwrap_or(d.renorm_per_rev),
+    };
+    settings.validate()?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("poincare", &prepared.case.name));
+    let r = analyse(&prepared, &opts, &settings)?;
+    let files = r.write(&out)?;
+    print!("{}", r.describe());
+    println!("wrote {} files to {}", files.len(), out.display());
+    Ok((r, out))
 }
 
 /// A few lines on what a run did: method, work, and the headline metrics.

@@ -11,6 +11,9 @@
 //!                          [--controllers C,..] [--t-end S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
 //! lash merge DIR... [--out DIR]
+//! lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
+//! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
+//!                    [solver flags] [--out DIR]
 //! ```
 //!
 //! Names and list syntax are the contract of INTERFACES.md: methods and controllers by
@@ -55,9 +58,10 @@ pub struct Cli {
 ///
 /// ```text
 /// run | study | compare | work-precision | sweep | merge
+/// stiffness | poincare                          (diagnostics)
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: the issue "The lash command"; "Stiffness diagnostics", "Chaos diagnostics".
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run one case: DIR/summary.json, DIR/trajectory.csv and figures.
@@ -72,6 +76,12 @@ pub enum Command {
     Sweep(SweepArgs),
     /// Join the finished points of sweep directories into one table (CSV and markdown).
     Merge(MergeArgs),
+    /// Stiffness diagnostics: Jacobian eigenvalues along the run, the RK4 step limit
+    /// (predicted and measured), which method family should win.
+    Stiffness(StiffnessArgs),
+    /// Chaos diagnostics: e/c once per crank revolution (Poincaré section) and the largest
+    /// Lyapunov exponent (Benettin's method).
+    Poincare(PoincareArgs),
 }
 
 /// The solver flags of `lash run`.
@@ -396,6 +406,64 @@ pub struct MergeArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Arguments of `lash stiffness`.
+///
+/// ```text
+/// lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
+/// ```
+///
+/// Source: the issue "Stiffness diagnostics".
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct StiffnessArgs {
+    /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
+    pub case: String,
+    /// Solver of the reference run (default: the case's, as `lash run`).
+    #[command(flatten)]
+    pub solver: SolverFlags,
+    /// Sample points along the run, both ends included (≥ 2). Default 1000.
+    #[arg(long, value_name = "N", value_parser = parse_samples)]
+    pub samples: Option<usize>,
+    /// End time override, s (scene cases only).
+    #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
+    /// Skip the measured RK4 limit (the bisection runs RK4 over the whole run many times).
+    #[arg(long = "no-measure")]
+    pub no_measure: bool,
+    /// Output directory. Default `out/stiffness/CASE`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// Arguments of `lash poincare`.
+///
+/// ```text
+/// lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
+///                    [solver flags] [--out DIR]
+/// ```
+///
+/// Source: the issue "Chaos diagnostics".
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct PoincareArgs {
+    /// The case: a scene file (JSON) with a crank driver and a clearance joint role.
+    pub case: String,
+    /// Crank revolutions (≥ 1). Default 20.
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub revolutions: Option<usize>,
+    /// Initial and renormalised separation of the two trajectories, in clearances (weighted
+    /// norm), in (0, 1). Default 1e-4.
+    #[arg(long, value_name = "D", value_parser = parse_perturbation, allow_hyphen_values = true)]
+    pub perturbation: Option<f64>,
+    /// Renormalisations per crank revolution (≥ 1). Default 10.
+    #[arg(long = "renorm-per-rev", value_name = "R", value_parser = parse_count)]
+    pub renorm_per_rev: Option<usize>,
+    /// Solver of both trajectories (default: the case's, as `lash run`).
+    #[command(flatten)]
+    pub solver: SolverFlags,
+    /// Output directory. Default `out/poincare/CASE`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
 /// What parsing the command line gave.
 ///
 /// ```text
@@ -522,6 +590,31 @@ pub fn parse_step(s: &str) -> Result<f64, String> {
     let v = parse_number(s, "step")?;
     if !(v > 0.0) {
         return Err(format!("step must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
+fn parse_samples(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 2 => Ok(n),
+        _ => Err(format!("samples must be a whole number >= 2, got '{s}'")),
+    }
+}
+
+fn parse_count(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("must be a whole number >= 1, got '{s}'")),
+    }
+}
+
+/// Parses a Lyapunov perturbation: a number in (0, 1) (clearances).
+pub fn parse_perturbation(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "perturbation")?;
+    if !(v > 0.0 && v < 1.0) {
+        return Err(format!(
+            "perturbation must be in (0, 1) clearances, got {s}"
+        ));
     }
     Ok(v)
 }
@@ -816,6 +909,59 @@ mod tests {
             panic!()
         };
         assert_eq!(m.dirs, vec![PathBuf::from("a"), PathBuf::from("b")]);
+    }
+
+    #[test]
+    fn stiffness_and_poincare_arguments() {
+        let c = cli(&[
+            "stiffness",
+            "c.json",
+            "--samples",
+            "50",
+            "--no-measure",
+            "--method",
+            "rk4",
+            "--step",
+            "1e-4",
+            "--t-end",
+            "0.2",
+        ])
+        .unwrap();
+        let Some(Command::Stiffness(s)) = c.command else {
+            panic!()
+        };
+        assert_eq!(
+            (s.samples, s.no_measure, s.t_end, s.solver.step),
+            (Some(50), true, Some(0.2), Some(1e-4))
+        );
+        let c = cli(&[
+            "poincare",
+            "c.json",
+            "--revolutions",
+            "5",
+            "--perturbation",
+            "1e-5",
+            "--renorm-per-rev",
+            "4",
+            "--rtol",
+            "1e-10",
+        ])
+        .unwrap();
+        let Some(Command::Poincare(p)) = c.command else {
+            panic!()
+        };
+        assert_eq!(
+            (
+                p.revolutions,
+                p.perturbation,
+                p.renorm_per_rev,
+                p.solver.rtol
+            ),
+            (Some(5), Some(1e-5), Some(4), Some(1e-10))
+        );
+        assert!(usage(&["stiffness", "c.json", "--samples", "1"]).contains("samples must be"));
+        assert!(usage(&["poincare", "c.json", "--perturbation", "0"]).contains("perturbation"));
+        assert!(usage(&["poincare", "c.json", "--renorm-per-rev", "0"]).contains(">= 1"));
     }
 
     #[test]

@@ -14,7 +14,8 @@
 //! (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG figures),
 //! [`report`] (the files of one run), [`simulate`] (running a case: the core of every
 //! command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against cost,
-//! cheapest runs).
+//! cheapest runs), [`stiffness_cmd`] (`lash stiffness`: eigenvalues, RK4 limits, verdict),
+//! [`poincare`] (`lash poincare`: Poincaré section, Lyapunov exponent).
 
 #![warn(missing_docs)]
 
@@ -27,8 +28,10 @@ pub mod headline;
 pub mod io;
 pub mod metrics;
 pub mod plot;
+pub mod poincare;
 pub mod report;
 pub mod simulate;
+pub mod stiffness_cmd;
 pub mod study;
 pub mod summary;
 pub mod sweep;

@@ -211,6 +211,15 @@ fn plot_err(path: &Path, e: String) -> Error {
 /// Checks lengths and finiteness (and positivity for log axes); returns the data bounds
 /// (x_min, x_max, y_min, y_max).
 fn bounds(series: &[Series<'_>], log: bool) -> Result<(f64, f64, f64, f64), Error> {
+    bounds_xy(series, log, log)
+}
+
+/// [`bounds`] with the log check per axis.
+fn bounds_xy(
+    series: &[Series<'_>],
+    log_x: bool,
+    log_y: bool,
+) -> Result<(f64, f64, f64, f64), Error> {
     let mut b = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -233,7 +242,7 @@ fn bounds(series: &[Series<'_>], log: bool) -> Result<(f64, f64, f64, f64), Erro
                     s.name
                 )));
             }
-            if log && !(x > 0.0 && y > 0.0) {
+            if (log_x && !(x > 0.0)) || (log_y && !(y > 0.0)) {
                 return Err(Error::Internal(format!(
                     "plot: series '{}' has a point ({x:e}, {y:e}) that a log axis cannot show",
                     s.name
@@ -436,6 +445,111 @@ pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Resul
     render(stem, FIGURE_SIZE, &fig)
 }
 
+/// One panel of [`panels_plot`].
+///
+/// ```text
+/// title above the panel; y against x; x linear; y linear or log10 (then every y > 0)
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug)]
+pub struct Panel<'a> {
+    /// The panel's title and axis labels.
+    pub axes: Axes<'a>,
+    /// Its series.
+    pub series: &'a [Series<'a>],
+    /// Whether the y axis is log10.
+    pub log_y: bool,
+}
+
+/// Width of a panel figure, px.
+pub const PANEL_WIDTH: u32 = 1000;
+/// Height of one panel, px.
+pub const PANEL_HEIGHT: u32 = 400;
+
+struct PanelsFigure<'a> {
+    title: &'a str,
+    panels: &'a [Panel<'a>],
+    bounds: Vec<(f64, f64, f64, f64)>,
+}
+
+impl Figure for PanelsFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let area = root
+            .margin(10, 0, 0, 0)
+            .titled(self.title, (FAMILY, 24))
+            .map_err(|e| e.to_string())?;
+        let parts = area.split_evenly((self.panels.len(), 1));
+        for ((p, part), &(x0, x1, y0, y1)) in self.panels.iter().zip(&parts).zip(&self.bounds) {
+            let (xa, xb) = if x1 > x0 { (x0, x1) } else { padded(x0, x1) };
+            let fx = |v: &f64| tick(*v, xb - xa);
+            let mut b = ChartBuilder::on(part);
+            b.caption(p.axes.title, (FAMILY, 18))
+                .margin(12)
+                .x_label_area_size(45)
+                .y_label_area_size(85);
+            if p.log_y {
+                let (ya, yb) = padded_log(y0, y1);
+                let fy = |v: &f64| tick_log(*v);
+                let mut chart = b
+                    .build_cartesian_2d(xa..xb, (ya..yb).log_scale())
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .configure_mesh()
+                    .x_desc(p.axes.x_label)
+                    .y_desc(p.axes.y_label)
+                    .x_label_formatter(&fx)
+                    .y_label_formatter(&fy)
+                    .label_style((FAMILY, 14))
+                    .axis_desc_style((FAMILY, 16))
+                    .draw()
+                    .map_err(|e| e.to_string())?;
+                draw_series(&mut chart, p.series)?;
+            } else {
+                let (ya, yb) = padded(y0, y1);
+                let fy = |v: &f64| tick(*v, yb - ya);
+                let mut chart = b
+                    .build_cartesian_2d(xa..xb, ya..yb)
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .configure_mesh()
+                    .x_desc(p.axes.x_label)
+                    .y_desc(p.axes.y_label)
+                    .x_label_formatter(&fx)
+                    .y_label_formatter(&fy)
+                    .label_style((FAMILY, 14))
+                    .axis_desc_style((FAMILY, 16))
+                    .draw()
+                    .map_err(|e| e.to_string())?;
+                draw_series(&mut chart, p.series)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Panels stacked vertically under one title, each with its own axes (x linear, y linear or
+/// log10): quantities of different units against one abscissa (stiffness: |λ| and the RK4
+/// step limit against crank angle). Writes `stem.svg` and `stem.png`, [`PANEL_WIDTH`] wide and
+/// [`PANEL_HEIGHT`] per panel.
+pub fn panels_plot(stem: &Path, title: &str, panels: &[Panel<'_>]) -> Result<Written, Error> {
+    if panels.is_empty() {
+        return Err(Error::Internal("plot: no panels".into()));
+    }
+    let bounds = panels
+        .iter()
+        .map(|p| bounds_xy(p.series, false, p.log_y))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let fig = PanelsFigure {
+        title,
+        panels,
+        bounds,
+    };
+    let h = PANEL_HEIGHT * panels.len() as u32 + 40;
+    render(stem, (PANEL_WIDTH, h), &fig)
+}
+
 struct OrbitFigure<'a> {
     title: &'a str,
     /// (label, e_x/c, e_y/c) per orbit.
@@ -486,13 +600,17 @@ impl Figure for OrbitFigure<'_> {
         for (k, o) in self.orbits.iter().enumerate() {
             let c = style_of(k);
             let orbit: Vec<(f64, f64)> = o.x.iter().copied().zip(o.y.iter().copied()).collect();
-            chart
-                .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
-                .map_err(|e| e.to_string())?
-                .label(o.name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
-                });
+            let ann = match o.style {
+                SeriesStyle::Points => chart
+                    .draw_series(orbit.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                    .map_err(|e| e.to_string())?,
+                _ => chart
+                    .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
+                    .map_err(|e| e.to_string())?,
+            };
+            ann.label(o.name).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
+            });
         }
         chart
             .configure_series_labels()
@@ -522,7 +640,8 @@ pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Wr
 }
 
 /// Several orbits (series x = e_x/c, y = e_y/c, named in the legend) in one clearance circle,
-/// as [`orbit_plot`].
+/// as [`orbit_plot`]. A series of style [`SeriesStyle::Points`] is drawn as markers (a
+/// Poincaré section), every other style as a thin line.
 pub fn orbits_plot(stem: &Path, title: &str, orbits: &[Series<'_>]) -> Result<Written, Error> {
     bounds(orbits, false)?;
     let r = orbits
@@ -706,6 +825,104 @@ mod tests {
         assert!(std::fs::read_to_string(&w.svg)
             .unwrap()
             .contains("clearance circle"));
+    }
+
+    #[test]
+    fn panels_plot_stacks_log_and_linear_panels() {
+        let d = tempfile::tempdir().unwrap();
+        let x: Vec<f64> = (0..=72).map(|k| 10.0 * k as f64).collect();
+        let rho: Vec<f64> = x
+            .iter()
+            .map(|a| 1e3 * (2.0 + a.to_radians().cos()))
+            .collect();
+        let h: Vec<f64> = rho.iter().map(|r| 2.785 / r).collect();
+        let a = Axes {
+            title: "spectral radius",
+            x_label: "crank angle, °",
+            y_label: "|λ|, 1/s",
+        };
+        let b = Axes {
+            title: "RK4 limit",
+            x_label: "crank angle, °",
+            y_label: "h, s",
+        };
+        let s1 = [Series {
+            name: "|λ|max",
+            x: &x,
+            y: &rho,
+            style: SeriesStyle::Line,
+        }];
+        let s2 = [Series {
+            name: "2.785/|λ|",
+            x: &x,
+            y: &h,
+            style: SeriesStyle::Line,
+        }];
+        let w = panels_plot(
+            &d.path().join("st"),
+            "Stiffness",
+            &[
+                Panel {
+                    axes: a,
+                    series: &s1,
+                    log_y: true,
+                },
+                Panel {
+                    axes: b,
+                    series: &s2,
+                    log_y: false,
+                },
+            ],
+        )
+        .unwrap();
+        let img = decode(&w.png);
+        assert_eq!((img.0, img.1), (PANEL_WIDTH, 2 * PANEL_HEIGHT + 40));
+        assert!(dark_pixels(&img, 0, 40) > 100, "no title text rendered");
+        // Each panel draws its own axes, labels and curve.
+        assert!(dark_pixels(&img, 40, 40 + PANEL_HEIGHT) > 3000);
+        assert!(dark_pixels(&img, 40 + PANEL_HEIGHT, 40 + 2 * PANEL_HEIGHT) > 3000);
+        let svg = std::fs::read_to_string(&w.svg).unwrap();
+        assert!(svg.contains("spectral radius") && svg.contains("RK4 limit"));
+        // A log panel refuses y ≤ 0, a linear x axis accepts x = 0.
+        let zero = [0.0; 73];
+        let bad = [Series {
+            name: "z",
+            x: &x,
+            y: &zero,
+            style: SeriesStyle::Line,
+        }];
+        let e = panels_plot(
+            &d.path().join("bad"),
+            "t",
+            &[Panel {
+                axes: a,
+                series: &bad,
+                log_y: true,
+            }],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("log axis"), "{e}");
+        assert!(panels_plot(&d.path().join("none"), "t", &[]).is_err());
+    }
+
+    #[test]
+    fn orbits_plot_draws_points_as_markers() {
+        let d = tempfile::tempdir().unwrap();
+        let ex = [0.1, 0.5, -0.3];
+        let ey = [0.2, -0.4, 0.6];
+        let w = orbits_plot(
+            &d.path().join("sec"),
+            "Poincaré section",
+            &[Series {
+                name: "once per revolution",
+                x: &ex,
+                y: &ey,
+                style: SeriesStyle::Points,
+            }],
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&w.svg).unwrap();
+        assert_eq!(svg.matches("<circle").count(), 3, "one marker per point");
     }
 
     #[test]

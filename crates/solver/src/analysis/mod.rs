@@ -24,10 +24,10 @@ pub use lyapunov::{
     Stroboscopic,
 };
 pub use stiffness::{
-    analyze, eigenvalues, jacobian_at, measure_rk4_limit, rk4_amplification, rk4_is_stable,
-    rk4_ray_limit, sample_solution, sample_states, sample_trajectory, summarize, verdict,
-    Eigenvalue, Family, MeasuredLimit, Rk4ProbeOptions, StiffnessOptions, StiffnessSummary,
-    Verdict,
+    analyze, eigenvalues, jacobian_at, measure_rk4_limit, measure_rk4_limit_where,
+    rk4_amplification, rk4_is_stable, rk4_ray_limit, sample_solution, sample_states,
+    sample_trajectory, summarize, verdict, Eigenvalue, Family, MeasuredLimit, Rk4ProbeOptions,
+    StiffnessOptions, StiffnessSummary, Verdict,
 };
 
 use crate::error::SolveError;

@@ -649,6 +649,7 @@ pub fn verdict(
 ///         h_lo is trusted when the run at h_lo/2 reaches the same size within growth_bound
 ///         (both ways), so an unstable lower end is caught rather than taken as the scale
 /// bisection on ln h until h_unstable / h_stable ≤ 1 + rel_tol
+/// measure_rk4_limit_where: stable(h) also needs valid(t_k, y_k) at every accepted state
 /// ```
 /// The reference is a run, not ‖y0‖, because the state of a nonlinear system may grow
 /// legitimately (a mechanism starting at rest). Past the limit the unstable mode grows like
@@ -706,8 +707,13 @@ impl MeasuredLimit {
     }
 }
 
-/// Result of one probe run: Some(max ‖y‖∞) when the run stayed finite and within `bound`
-/// (None when it failed with NonFiniteState or exceeded the bound), and the RHS evaluations.
+/// A predicate on the accepted states of a probe run: `valid(t, y)` false counts the run as
+/// unstable ([`measure_rk4_limit_where`]).
+pub type StateCheck<'a> = &'a dyn Fn(f64, &[f64]) -> bool;
+
+/// Result of one probe run: Some(max ‖y‖∞) when the run stayed finite, within `bound` and
+/// `valid` at every accepted state (None when it failed with NonFiniteState, exceeded the
+/// bound or left the valid set), and the RHS evaluations.
 fn rk4_probe<S: OdeSystem + ?Sized>(
     sys: &S,
     t_span: (f64, f64),
@@ -715,6 +721,7 @@ fn rk4_probe<S: OdeSystem + ?Sized>(
     h: f64,
     base: &SolverOptions,
     bound: f64,
+    valid: StateCheck<'_>,
 ) -> Result<(Option<f64>, usize), AnalysisError> {
     let mut o = base.clone();
     o.method = Method::Rk4;
@@ -728,7 +735,7 @@ fn rk4_probe<S: OdeSystem + ?Sized>(
         match it.step() {
             Ok(out) => {
                 size = size.max(norm(it.y()));
-                if size > bound {
+                if size > bound || !valid(it.t(), it.y()) {
                     return Ok((None, it.stats().rhs_evals));
                 }
                 let done = match out {
@@ -762,7 +769,9 @@ pub fn rk4_is_stable<S: OdeSystem + ?Sized>(
             "bound must be > 0, got {bound}"
         )));
     }
-    Ok(rk4_probe(sys, t_span, y0, h, base, bound)?.0.is_some())
+    Ok(rk4_probe(sys, t_span, y0, h, base, bound, &|_, _| true)?
+        .0
+        .is_some())
 }
 
 /// The largest stable RK4 step on a span, measured by bisection inside `bracket = (h_lo,
@@ -776,6 +785,24 @@ pub fn measure_rk4_limit<S: OdeSystem + ?Sized>(
     bracket: (f64, f64),
     base: &SolverOptions,
     probe: &Rk4ProbeOptions,
+) -> Result<MeasuredLimit, AnalysisError> {
+    measure_rk4_limit_where(sys, t_span, y0, bracket, base, probe, &|_, _| true)
+}
+
+/// [`measure_rk4_limit`] with a further condition on stability: a run is stable only if
+/// `valid(t, y)` holds at every accepted state (t, y) (the start excluded), besides staying
+/// finite and bounded. For systems whose instabilities stay bounded: a mechanism's clearance
+/// joint beyond its RK4 limit rattles within about a clearance while ‖y‖∞ (the link
+/// positions) hardly changes, but its constraints drift far from Φ = 0 (lash's `stiffness`
+/// command checks ‖Φ‖ ≤ c/100). The check sees accepted states only, never the RK4 stages.
+pub fn measure_rk4_limit_where<S: OdeSystem + ?Sized>(
+    sys: &S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    bracket: (f64, f64),
+    base: &SolverOptions,
+    probe: &Rk4ProbeOptions,
+    valid: StateCheck<'_>,
 ) -> Result<MeasuredLimit, AnalysisError> {
     let (mut lo, mut hi) = bracket;
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
@@ -799,8 +826,8 @@ pub fn measure_rk4_limit<S: OdeSystem + ?Sized>(
         return Err(AnalysisError::InvalidInput("max_runs must be >= 3".into()));
     }
     let unbounded = base.divergence_bound;
-    let (reference, mut evals) = rk4_probe(sys, t_span, y0, lo, base, unbounded)?;
-    let (half, e) = rk4_probe(sys, t_span, y0, 0.5 * lo, base, unbounded)?;
+    let (reference, mut evals) = rk4_probe(sys, t_span, y0, lo, base, unbounded, valid)?;
+    let (half, e) = rk4_probe(sys, t_span, y0, 0.5 * lo, base, unbounded, valid)?;
     evals += e;
     let (m_ref, m_half) = match (reference, half) {
         (Some(a), Some(b)) => (a, b),
@@ -824,7 +851,7 @@ pub fn measure_rk4_limit<S: OdeSystem + ?Sized>(
         });
     }
     let bound = g * m_ref;
-    let (r, e) = rk4_probe(sys, t_span, y0, hi, base, bound)?;
+    let (r, e) = rk4_probe(sys, t_span, y0, hi, base, bound, valid)?;
     evals += e;
     if r.is_some() {
         return Err(AnalysisError::NoBracket {
@@ -841,7 +868,7 @@ pub fn measure_rk4_limit<S: OdeSystem + ?Sized>(
             )));
         }
         let mid = (lo * hi).sqrt();
-        let (r, e) = rk4_probe(sys, t_span, y0, mid, base, bound)?;
+        let (r, e) = rk4_probe(sys, t_span, y0, mid, base, bound, valid)?;
         evals += e;
         runs += 1;
         if r.is_some() {
