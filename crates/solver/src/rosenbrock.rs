@@ -21,13 +21,15 @@
 //! recomputed from a and C) and the order conditions up to order 4.
 //!
 //! Derivatives: J is the system's Jacobian, or forward differences with increments floored
-//! at atol_i/rtol ([`crate::jacobian`]). f_t is a forward difference in t, skipped (f_t = 0)
-//! when [`OdeSystem::is_autonomous`] says so; the order of the method needs the exact J
-//! (a Rosenbrock method is not a W-method), so difference errors (~10⁻⁸ relative) show up
-//! only below that level. W is factored in place by faer's LU with partial pivoting.
+//! at atol_i/rtol ([`crate::jacobian`]). f_t is a central difference in t (~10⁻¹¹ relative; a
+//! forward one, ~10⁻⁸, left the dense output with order 2 on forced problems), skipped
+//! (f_t = 0) when [`OdeSystem::is_autonomous`] says so; the order of the method needs the
+//! exact J (a Rosenbrock method is not a W-method), so difference errors (~10⁻⁸ relative)
+//! show up only below that level. W is factored in place by faer's LU with partial pivoting
+//! (or the small LU below).
 //!
 //! Cost per step: one Jacobian (analytic, or n RHS evaluations by differences), one RHS for
-//! f(t_n, y_n), one for ∂f/∂t by differences unless the system is autonomous; per attempt one
+//! f(t_n, y_n), two for ∂f/∂t by differences unless the system is autonomous; per attempt one
 //! LU factorisation of W, 7 RHS evaluations and 8 triangular solves. A rejected attempt reuses
 //! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
 //! h0 on every step, the error estimate ignored.

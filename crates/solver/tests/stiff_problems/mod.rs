@@ -62,6 +62,26 @@ impl OdeSystem for ProtheroRobinson {
     }
 }
 
+/// Prothero–Robinson y' = λ(y − sin t) + cos t, y(0) = 0, exact solution sin t (HNW II,
+/// §IV.15) with the rate λ a parameter and the analytic Jacobian; forced, so Rodas5P
+/// uses ∂f/∂t (by differences).
+pub struct ForcedSine(pub f64);
+
+impl OdeSystem for ForcedSine {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = self.0 * (y[0] - t.sin()) + t.cos();
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], mut jac: MatMut<'_, f64>) {
+        jac[(0, 0)] = self.0;
+    }
+}
+
 /// Logistic growth y' = y (1 − y), y(0) = 0.1: y(t) = 1 / (1 + 9 e^{−t}). Analytic Jacobian,
 /// autonomous.
 pub struct Logistic;
