@@ -78,6 +78,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
             let base = Prepared::load(spec.case.clone())?;
             sweep_command(&a, |p, dir| sweep_point(&base, p, dir)).map(|_| ())
         }
+        Command::Extremes(a) => crate::extremes::command(&a).map(|_| ()),
         Command::Merge(a) => {
             let out = a.out.unwrap_or_else(|| a.dirs[0].clone());
             let table = sweep::merge(&a.dirs)?;
@@ -352,9 +353,9 @@ pub fn sweep_point(base: &Prepared, point: &SweepPoint, dir: &Path) -> Result<Po
     let flags = cli::SolverFlags {
         method: pp.method,
         rtol: pp.rtol,
-        atol: None,
         step: pp.step,
         controller: pp.controller,
+        ..Default::default()
     };
     let mut req = RunRequest::new(prepared.options(&flags)?);
     req.trajectory_points = Some(0);

@@ -14,7 +14,7 @@
 //! (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG figures),
 //! [`report`] (the files of one run), [`simulate`] (running a case: the core of every
 //! command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against cost,
-//! cheapest runs).
+//! cheapest runs), [`extremes`] (the matrix of extreme scenes × methods × tolerances).
 
 #![warn(missing_docs)]
 
@@ -23,6 +23,7 @@ pub mod case;
 pub mod cli;
 pub mod compare;
 pub mod error;
+pub mod extremes;
 pub mod headline;
 pub mod io;
 pub mod metrics;
