@@ -25,7 +25,8 @@ pub enum SolveError {
         y: Vec<f64>,
     },
     /// The right-hand side or the state became non-finite (NaN or ±∞), or the state grew past
-    /// the divergence bound.
+    /// the divergence bound, or (fixed-step RK4 with `rk4_instability_steps` > 0) the steps
+    /// stayed outside RK4's stability region that many times in a row (`rk4` module doc).
     #[error("non-finite or diverging state at t = {t:e}")]
     NonFiniteState {
         /// Time of the last finite state.

@@ -71,3 +71,57 @@ fn bouncing_ball_bounce_times_with_rk4() {
         assert!(!hit.rising);
     }
 }
+
+/// y' = −k y / (1 + (y/s)²): the linearisation at the origin has λ = −k, and the rate falls as
+/// |y| grows. The exact solution decays monotonically to 0. Fixed-step RK4 past its stability
+/// radius r = 2.785 (h k = 4) amplifies small y by |R(−4)| = 5 per step until |y| is large
+/// enough that the effective rate k/(1 + (y/s)²) is stable again: a spurious bounded solution
+/// (Yee, Sweby & Griffiths 1991) that the divergence bound cannot catch.
+struct Saturating {
+    k: f64,
+    s: f64,
+}
+impl OdeSystem for Saturating {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = -self.k * y[0] / (1.0 + (y[0] / self.s).powi(2));
+    }
+}
+
+#[test]
+fn stability_check_catches_spurious_bounded_solutions() {
+    use lash_solver::rk4::RK4_STABILITY_RADIUS;
+    // −r is the real root of z³ + 4z² + 12z + 24, where R(z) = 1 again.
+    let r = RK4_STABILITY_RADIUS;
+    assert!((-r * r * r + 4.0 * r * r - 12.0 * r + 24.0).abs() < 1e-12);
+    let sys = Saturating { k: 1000.0, s: 1.0 };
+    let run = |hk: f64, check: usize| {
+        let o = SolverOptions {
+            rk4_instability_steps: check,
+            ..rk4(hk / sys.k)
+        };
+        solve(&sys, (0.0, 2.0), &[1e-3], &o)
+    };
+    // Past the radius, without the check: finite, bounded and wrong (the exact solution is
+    // below 1e-3·e^{−k t/(1 + 1e-6)}, i.e. 0 in double precision at t = 2).
+    let y = run(4.0, 0).unwrap().y_final[0].abs();
+    assert!(y > 0.05 && y < 1.0, "spurious solution {y}");
+    // With the check: NonFiniteState within the first 15 + a few steps (the amplitude must
+    // first grow from 1e-3; the flagged run starts at once since h ρ ≈ h k = 4 there).
+    for hk in [3.0, 4.0, 6.0] {
+        match run(hk, 15) {
+            Err(SolveError::NonFiniteState { t, y }) => {
+                let h = hk / sys.k;
+                assert!(t <= 40.0 * h && t >= 14.0 * h, "h k = {hk}: t = {t}");
+                assert!(y[0].is_finite());
+            }
+            other => panic!("h k = {hk}: {other:?}"),
+        }
+    }
+    // Inside the radius (h k = 2.7 < 2.785) the check never fires and the solution decays by
+    // |R(−2.7)| = 0.8794 per step: 1e-3 · 0.8794^740 = 5e-45 after 740 steps.
+    let y = run(2.7, 15).unwrap().y_final[0];
+    assert!(y.abs() < 1e-43, "{y}");
+}

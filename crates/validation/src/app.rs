@@ -80,6 +80,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         }
         Command::Stiffness(a) => stiffness_command(&a).map(|_| ()),
         Command::Poincare(a) => poincare_command(&a).map(|_| ()),
+        Command::Extremes(a) => crate::extremes::command(&a).map(|_| ()),
         Command::Merge(a) => {
             let out = a.out.unwrap_or_else(|| a.dirs[0].clone());
             let table = sweep::merge(&a.dirs)?;
@@ -413,9 +414,9 @@ pub fn sweep_point(base: &Prepared, point: &SweepPoint, dir: &Path) -> Result<Po
     let flags = cli::SolverFlags {
         method: pp.method,
         rtol: pp.rtol,
-        atol: None,
         step: pp.step,
         controller: pp.controller,
+        ..Default::default()
     };
     let mut req = RunRequest::new(prepared.options(&flags)?);
     req.trajectory_points = Some(0);

@@ -4,7 +4,7 @@
 //! lash                                   the default run: the 150 rpm press, ideal vs dry vs
 //!                                        lubricated, RK4 against the best adaptive method
 //! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
-//!              [--t-end S] [--out DIR]
+//!              [--max-steps N] [--max-wall-time S] [--t-end S] [--out DIR]
 //! lash study paper [--out DIR]
 //! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
@@ -14,6 +14,7 @@
 //! lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
 //!                    [solver flags] [--out DIR]
+//! lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
 //! ```
 //!
 //! Names and list syntax are the contract of INTERFACES.md: methods and controllers by
@@ -82,14 +83,22 @@ pub enum Command {
     /// Chaos diagnostics: e/c once per crank revolution (Poincaré section) and the largest
     /// Lyapunov exponent (Benettin's method).
     Poincare(PoincareArgs),
+    /// Run the extremes matrix: extreme scenes × every method × tolerances 1e-2 … 1e-12;
+    /// exit 0 when no run fails (each agrees with its reference within its promise, ends in a
+    /// typed solver error, or is a documented known finding), 1 otherwise.
+    Extremes(ExtremesArgs),
 }
 
 /// The solver flags of `lash run`.
 ///
 /// ```text
 /// [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
-/// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only
+/// [--max-steps N] [--max-wall-time S]
+/// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only;  budgets: any method
 /// ```
+///
+/// A budget that runs out is a solver failure (exit 3, time and state printed, nothing
+/// written): `--max-steps` as `too many steps`, `--max-wall-time` as `budget exhausted`.
 ///
 /// Source: INTERFACES.md (method and controller names).
 #[derive(Debug, Clone, Default, PartialEq, Args)]
@@ -110,6 +119,16 @@ pub struct SolverFlags {
     /// Step-size controller of adaptive methods (i, pi, pid, h211, h312, gustafsson).
     #[arg(long, value_name = "C", value_parser = parse_controller)]
     pub controller: Option<ControllerKind>,
+    /// Step budget: most step attempts (accepted and rejected), a whole number >= 1. Running
+    /// out fails the run with "too many steps" (exit 3). Default: the case's (50 000 000 for
+    /// scenes).
+    #[arg(long = "max-steps", value_name = "N", value_parser = parse_max_steps)]
+    pub max_steps: Option<usize>,
+    /// Wall-clock budget of the integration, s; finite and > 0. Running out fails the run
+    /// with "budget exhausted" (exit 3). Default: none.
+    #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
+          allow_hyphen_values = true)]
+    pub max_wall_time: Option<f64>,
 }
 
 impl SolverFlags {
@@ -123,12 +142,19 @@ impl SolverFlags {
     /// adaptive:   --step is a usage error; --controller on diffsol's methods is a usage error;
     ///             rtol, atol = the flag or base; controller = the flag, or base's if the
     ///             method did not change
+    /// budgets:   --max-steps, --max-wall-time replace base's for any method
     /// ```
     pub fn apply(&self, base: &SolverOptions) -> Result<SolverOptions, Error> {
         let method = self.method.unwrap_or(base.method);
         let same = method == base.method;
         let mut o = base.clone();
         o.method = method;
+        if let Some(n) = self.max_steps {
+            o.max_steps = n;
+        }
+        if let Some(w) = self.max_wall_time {
+            o.max_wall_time = Some(w);
+        }
         if method.is_fixed_step() {
             for (flag, given) in [
                 ("--rtol", self.rtol.is_some()),
@@ -389,6 +415,37 @@ pub struct SweepArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Arguments of `lash extremes`.
+///
+/// ```text
+/// lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
+///   → DIR/extremes.md, DIR/extremes.json;  exit 0 no run failed (known findings are
+///     reported, not failures), 1 some run failed (report written first), 3 a scene's
+///     reference failed at every rtol of its ladder (nothing written)
+/// ```
+///
+/// Source: the issue "Extremes"; module `extremes`.
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct ExtremesArgs {
+    /// The quick subset (3 scenes × every method × 3 tolerances), as in the default tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Parallel runs (≥ 1). Default 1: the wall-clock budget is per run, and parallel runs
+    /// share the cores.
+    #[arg(long, value_name = "N", value_parser = parse_jobs)]
+    pub jobs: Option<usize>,
+    /// Step budget of every run (attempts). Default 1 000 000.
+    #[arg(long = "max-steps", value_name = "N", value_parser = parse_max_steps)]
+    pub max_steps: Option<usize>,
+    /// Wall-clock budget of every run, s. Default 20.
+    #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
+          allow_hyphen_values = true)]
+    pub max_wall_time: Option<f64>,
+    /// Output directory. Default `out/extremes` (`out/extremes-quick` with --quick).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
 /// Arguments of `lash merge`.
 ///
 /// ```text
@@ -619,6 +676,23 @@ pub fn parse_perturbation(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// Parses a step budget: a whole number >= 1.
+pub fn parse_max_steps(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("max-steps must be a whole number >= 1, got '{s}'")),
+    }
+}
+
+/// Parses a wall-clock budget: finite and > 0 (s).
+pub fn parse_wall_time(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "max-wall-time")?;
+    if !(v > 0.0) {
+        return Err(format!("max-wall-time must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
 fn parse_jobs(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
@@ -698,6 +772,44 @@ mod tests {
         assert_eq!(o.rtol, 1e-8);
         assert_eq!(o.controller, Some(ControllerKind::H211));
         assert_eq!(o.step, None);
+    }
+
+    #[test]
+    fn budget_flags_set_the_solver_budgets_for_any_method() {
+        for method in ["bdf", "rk4"] {
+            let mut args = vec![
+                "--method",
+                method,
+                "--max-steps",
+                "10",
+                "--max-wall-time",
+                "0.5",
+            ];
+            if method == "rk4" {
+                args.extend(["--step", "1e-4"]);
+            }
+            let o = run_flags(&args).apply(&SolverOptions::default()).unwrap();
+            assert_eq!((o.max_steps, o.max_wall_time), (10, Some(0.5)), "{method}");
+        }
+        // Without the flags the base's budgets stay.
+        let base = SolverOptions {
+            max_steps: 77,
+            max_wall_time: Some(3.0),
+            ..Default::default()
+        };
+        let o = run_flags(&[]).apply(&base).unwrap();
+        assert_eq!((o.max_steps, o.max_wall_time), (77, Some(3.0)));
+        let m = usage(&["run", "c.json", "--max-steps", "0"]);
+        assert!(
+            m.contains("max-steps must be a whole number >= 1, got '0'"),
+            "{m}"
+        );
+        let m = usage(&["run", "c.json", "--max-steps", "1e3"]);
+        assert!(m.contains("max-steps must be a whole number"), "{m}");
+        let m = usage(&["run", "c.json", "--max-wall-time", "-1"]);
+        assert!(m.contains("max-wall-time must be > 0, got -1"), "{m}");
+        let m = usage(&["run", "c.json", "--max-wall-time", "inf"]);
+        assert!(m.contains("max-wall-time must be finite"), "{m}");
     }
 
     #[test]

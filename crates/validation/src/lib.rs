@@ -15,7 +15,8 @@
 //! [`report`] (the files of one run), [`simulate`] (running a case: the core of every
 //! command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against cost,
 //! cheapest runs), [`stiffness_cmd`] (`lash stiffness`: eigenvalues, RK4 limits, verdict),
-//! [`poincare`] (`lash poincare`: Poincaré section, Lyapunov exponent).
+//! [`poincare`] (`lash poincare`: Poincaré section, Lyapunov exponent), [`extremes`] (the
+//! matrix of extreme scenes × methods × tolerances).
 
 #![warn(missing_docs)]
 
@@ -24,6 +25,7 @@ pub mod case;
 pub mod cli;
 pub mod compare;
 pub mod error;
+pub mod extremes;
 pub mod headline;
 pub mod io;
 pub mod metrics;

@@ -38,10 +38,15 @@
 //!                  φ         s = L / (1 m)          (rad: L of arc on a 1 m lever)
 //!                  ẋ, ẏ, φ̇   s = L · ω_ref          (m/s, rad/s)
 //!                L = the smallest radial clearance of the scene (1e-3 m without a clearance
-//!                joint), ω_ref = |ω| of the crank driver (1 s⁻¹ without one): positions are
-//!                controlled to a fraction rtol of the clearance, which is what contact needs,
-//!                while |y_i| ≈ 0.4 m makes rtol·|y_i| alone 4000× coarser than c. atol scales
-//!                with rtol, so tolerance proportionality holds down to rtol = 1e-13.
+//!                joint), ω_ref = |ω| of the crank driver (1 s⁻¹ without one). Every method
+//!                weighs the local error of component i by atol_i + rtol·|y_i|, so atol is
+//!                the floor that applies where y_i passes near 0 (rod angle, velocities at
+//!                reversal, a journal at the centre). Body positions of the press are
+//!                |y_i| ≈ 0.4 m, so there the relative term dominates and positions are
+//!                controlled to about rtol·0.4 m, not rtol·c: the measured error of the
+//!                extremes matrix is 1e3–5e4·rtol on the dry scenes for that reason
+//!                (BENCHMARKS.md, Extremes). atol scales with rtol, so tolerance
+//!                proportionality holds down to rtol = 1e-13.
 //!                An --atol on the command line replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
 //! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
@@ -51,6 +56,17 @@
 //!                shortest flight 1 ms; a step over a whole contact would miss both its onset
 //!                and its loss (tests/simulate.rs checks the onset count against a reference).
 //! max_steps      50 000 000
+//! divergence     1e6: a state component (m, rad, m/s, rad/s) beyond 1e6 in magnitude is
+//!  bound         divergence (NonFiniteState), not motion of a mechanism: 1000 km, 1000 km/s,
+//!                1.6e5 revolutions of an integrated body. The solver's own default, 1e100,
+//!                let an unstable RK4 run go on for ~16× as many steps of growth first.
+//! rk4 stability  15: fixed-step RK4 fails with NonFiniteState after 15 consecutive steps
+//!  check         outside its stability region (h·ρ > 2.785, lash_solver::rk4). Past the
+//!                limit the oil film of a lubricated joint does not blow up: the numerical
+//!                journal drifts to a lower eccentricity where the step is stable, finite
+//!                and wrong (lubricated_150rpm_c0.1 at h = 5e-6 and 1e-5 s: ε_max 0.28 and
+//!                0.16 instead of 0.34, slider acceleration up to 1.6e4 m/s² instead of 3.9),
+//!                which no bound on the state catches.
 //! events         located for adaptive methods; off for fixed-step methods (the paper's RK4
 //!                runs without event location, MODEL.md §7), whose crossings are counted at
 //!                the step ends
@@ -95,6 +111,10 @@ pub const DEFAULT_EVENT_SAMPLES: usize = 4;
 pub const H_MAX_PER_PERIOD: f64 = 1.0 / 100.0;
 /// Step limit of a mechanism run.
 pub const DEFAULT_MAX_STEPS: usize = 50_000_000;
+/// Divergence bound of a mechanism run (module doc), in SI units.
+pub const MECHANISM_DIVERGENCE_BOUND: f64 = 1e6;
+/// Consecutive RK4 steps outside the stability region that fail a mechanism run (module doc).
+pub const MECHANISM_RK4_INSTABILITY_STEPS: usize = 15;
 /// Length scale L of the default atol for scenes without a clearance joint, m.
 pub const DEFAULT_LENGTH_SCALE: f64 = 1e-3;
 /// Longest energy-quadrature panel of a run with a crank, as a fraction of the period: long
@@ -306,6 +326,8 @@ impl Prepared {
                     _ => f64::INFINITY,
                 };
                 o.max_steps = DEFAULT_MAX_STEPS;
+                o.divergence_bound = MECHANISM_DIVERGENCE_BOUND;
+                o.rk4_instability_steps = MECHANISM_RK4_INSTABILITY_STEPS;
                 o
             }
             None => {
@@ -339,9 +361,9 @@ impl Prepared {
         let flags = SolverFlags {
             method: Some(method),
             rtol: rtol.filter(|_| !method.is_fixed_step()),
-            atol: None,
             step: step.filter(|_| method.is_fixed_step()),
             controller,
+            ..Default::default()
         };
         self.options(&flags)
     }

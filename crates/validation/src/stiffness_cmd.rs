@@ -531,8 +531,14 @@ pub fn analyse(
     let t_span = p.t_span(settings.t_end)?;
     let times = uniform_grid(t_span.0, t_span.1, settings.samples);
     let sopts = StiffnessOptions::default();
+    // The measured limit must be independent of the prediction: the mechanism defaults turn
+    // on RK4's stability check (h·ρ from the stages, `rk4_instability_steps`), which would
+    // stop the probe runs exactly where the eigenvalues predict. The probe judges stability
+    // by growth and the constraint check only.
     let rk4_base = |guess: f64| -> Result<SolverOptions, Error> {
-        p.options_for(Method::Rk4, None, Some(guess), None)
+        let mut o = p.options_for(Method::Rk4, None, Some(guess), None)?;
+        o.rk4_instability_steps = 0;
+        Ok(o)
     };
     let (sampled, measurement, analytic) = match &p.model {
         Model::Mechanism(scene) => {

@@ -148,3 +148,59 @@ fn merge_of_an_empty_sweep_writes_a_header_only_table() {
     let csv = std::fs::read_to_string(d.path().join("sweep/merged.csv")).unwrap();
     assert_eq!(csv, "id,index,status,error\n");
 }
+
+/// Asserts exit code 3, nothing written to `out`, and a two-line report: the solver's typed
+/// error containing `needle`, then the time and the state (INTERFACES.md).
+fn budget_error(args: &[&str], cwd: &Path, out: &str, needle: &str) {
+    let o = lash(args, cwd);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{args:?}: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 2, "{args:?}: {err}");
+    assert!(lines[0].starts_with("error: solver failed: "), "{err}");
+    assert!(lines[0].contains(needle), "'{needle}' not in {err}");
+    assert!(
+        lines[1].starts_with("  at t = ") && lines[1].contains("state = ["),
+        "{err}"
+    );
+    assert!(!cwd.join(out).exists(), "{args:?} wrote {out}");
+}
+
+#[test]
+fn exhausted_budgets_exit_3_and_name_the_budget() {
+    let d = tempfile::tempdir().unwrap();
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/press/dry_150rpm_c0.1.json");
+    let case = case.to_str().unwrap();
+    // 10 steps cannot cover two revolutions (h_max = T/100 alone needs 200).
+    budget_error(
+        &["run", case, "--max-steps", "10", "--out", "a"],
+        d.path(),
+        "a",
+        "too many steps: ",
+    );
+    budget_error(
+        &[
+            "run",
+            case,
+            "--method",
+            "rk4",
+            "--step",
+            "2e-4",
+            "--max-steps",
+            "10",
+            "--out",
+            "b",
+        ],
+        d.path(),
+        "b",
+        "too many steps: 10 steps taken, reached t = 2",
+    );
+    // One microsecond of wall time: the integration (thousands of steps, milliseconds) cannot
+    // finish inside it; the budget is checked before every step.
+    budget_error(
+        &["run", case, "--max-wall-time", "1e-6", "--out", "c"],
+        d.path(),
+        "c",
+        "wall-clock budget of 0.000001 s used",
+    );
+}
