@@ -129,6 +129,9 @@ fn help_exits_0() {
         "work-precision",
         "sweep",
         "merge",
+        "extremes",
+        "stiffness",
+        "poincare",
     ] {
         assert!(out.contains(sub), "help lacks {sub}: {out}");
     }
