@@ -651,18 +651,20 @@ pub fn parse_step(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
-fn parse_samples(s: &str) -> Result<usize, String> {
+/// Parses a whole number `>= min` for the flag `name`.
+fn parse_whole(s: &str, name: &str, min: usize) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
-        Ok(n) if n >= 2 => Ok(n),
-        _ => Err(format!("samples must be a whole number >= 2, got '{s}'")),
+        Ok(n) if n >= min => Ok(n),
+        _ => Err(format!("{name} must be a whole number >= {min}, got '{s}'")),
     }
 }
 
+fn parse_samples(s: &str) -> Result<usize, String> {
+    parse_whole(s, "samples", 2)
+}
+
 fn parse_count(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("must be a whole number >= 1, got '{s}'")),
-    }
+    parse_whole(s, "the value", 1)
 }
 
 /// Parses a Lyapunov perturbation: a number in (0, 1) (clearances).
@@ -678,10 +680,7 @@ pub fn parse_perturbation(s: &str) -> Result<f64, String> {
 
 /// Parses a step budget: a whole number >= 1.
 pub fn parse_max_steps(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("max-steps must be a whole number >= 1, got '{s}'")),
-    }
+    parse_whole(s, "max-steps", 1)
 }
 
 /// Parses a wall-clock budget: finite and > 0 (s).
@@ -694,10 +693,7 @@ pub fn parse_wall_time(s: &str) -> Result<f64, String> {
 }
 
 fn parse_jobs(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("jobs must be a whole number >= 1, got '{s}'")),
-    }
+    parse_whole(s, "jobs", 1)
 }
 
 fn parse_shard(s: &str) -> Result<Shard, String> {

@@ -2,34 +2,11 @@
 //! written, and the contents of summary.json, trajectory.csv and the comparison tables
 //! (INTERFACES.md).
 
+mod common;
+use common::{json, lash, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use lash_model::cases::{press_scene, PressJoint};
-use serde_json::Value;
-
-fn lash(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lash"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run lash")
-}
-
-fn ok(args: &[&str], cwd: &Path) -> String {
-    let o = lash(args, cwd);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn json(p: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
-}
 
 fn press_case(dir: &Path) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../cases/press/{}", dir.display()))

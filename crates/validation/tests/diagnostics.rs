@@ -4,8 +4,9 @@
 //! Baumgarte modes (Lyapunov exponent −α + √(α² − β²)); and the files of both commands on the
 //! dry press.
 
+mod common;
+use common::{json, lash, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use lash_model::cases::{press_scene, PressJoint};
 use lash_solver::analysis::stiffness::{Rk4ProbeOptions, StiffnessOptions};
@@ -13,30 +14,6 @@ use lash_solver::{Method, OdeSystem, SolverOptions};
 use lash_validation::poincare::{self, Chaos, PoincareSettings};
 use lash_validation::simulate::Prepared;
 use lash_validation::stiffness_cmd::{measure_limit, sample_along};
-use serde_json::Value;
-
-fn lash(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lash"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run lash")
-}
-
-fn ok(args: &[&str], cwd: &Path) -> String {
-    let o = lash(args, cwd);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn json(p: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
-}
 
 fn csv(p: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let text = std::fs::read_to_string(p).unwrap();

@@ -1,16 +1,9 @@
 //! End-to-end: the built `lash` binary turns bad input into exit code 2 and one line on
 //! standard error (INTERFACES.md, "Exit codes of `lash`").
 
+mod common;
+use common::lash;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn lash(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lash"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run lash")
-}
 
 /// Asserts exit code 2, nothing on stdout, and exactly one line `error: ...` containing `needle`.
 fn usage_error(args: &[&str], cwd: &Path, needle: &str) {
