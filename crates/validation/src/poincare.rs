@@ -39,7 +39,7 @@ use lash_model::Mechanism;
 use lash_solver::analysis::lyapunov::{
     largest_lyapunov_pair, stroboscopic_map, LyapunovEstimate, LyapunovOptions,
 };
-use lash_solver::{Method, SolverOptions};
+use lash_solver::SolverOptions;
 
 use crate::cli::SolverFlags;
 use crate::error::Error;
@@ -47,7 +47,7 @@ use crate::io;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
 use crate::stiffness_cmd::analysis_error;
-use crate::summary::effective_controller;
+use crate::summary::RunHeader;
 use crate::trajectory::fmt_num;
 
 /// Default number of revolutions.
@@ -469,20 +469,9 @@ pub fn section(p: &Prepared, opts: &SolverOptions, s: &PoincareSettings) -> Resu
 /// Source: this module.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PoincareReport {
-    /// lash version.
-    pub version: String,
-    /// Case name.
-    pub case: String,
-    /// sha256 of the scene file.
-    pub scene_sha256: Option<String>,
-    /// Method of both runs.
-    pub method: Method,
-    /// Controller (null for fixed-step and diffsol's methods).
-    pub controller: Option<lash_solver::ControllerKind>,
-    /// Relative tolerance (null for fixed-step methods).
-    pub rtol: Option<f64>,
-    /// Fixed step (null for adaptive methods), s.
-    pub step: Option<f64>,
+    /// Case and settings (the keys of summary.json).
+    #[serde(flatten)]
+    pub run: RunHeader,
     /// Crank period T, s.
     pub period: f64,
     /// Revolutions N.
@@ -546,15 +535,8 @@ pub fn analyse(
         .windows(2)
         .map(|w| (w[1].ex_over_c - w[0].ex_over_c).hypot(w[1].ey_over_c - w[0].ey_over_c))
         .fold(0.0, f64::max);
-    let fixed = opts.method.is_fixed_step();
     let report = PoincareReport {
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        case: p.case.name.clone(),
-        scene_sha256: p.case.sha256().map(str::to_string),
-        method: opts.method,
-        controller: effective_controller(opts),
-        rtol: (!fixed).then_some(opts.rtol),
-        step: if fixed { opts.step } else { None },
+        run: RunHeader::new(&p.case, opts),
         period: ly.period,
         revolutions: s.revolutions,
         perturbation: s.perturbation,
@@ -633,15 +615,11 @@ impl PoincareResult {
             "{}: {} revolutions of T = {:.6} s, {} {}\n  section: |e|/c in [{:.4}, {:.4}] over \
              the late half, consecutive points at most {:.3e} clearances apart\n  Lyapunov: {} \
              (running estimate {:.4} 1/s, spread {:.3e} over the late half; {:.2} s)\n",
-            r.case,
+            r.run.case,
             r.revolutions,
             r.period,
-            r.method.name(),
-            match (r.rtol, r.step) {
-                (Some(t), _) => format!("rtol {t:e}"),
-                (None, Some(h)) => format!("step {h:e} s"),
-                _ => String::new(),
-            },
+            r.run.method.name(),
+            r.run.accuracy(),
             r.section_eps_min_late,
             r.section_eps_max_late,
             r.section_step_max_late,
@@ -656,19 +634,18 @@ impl PoincareResult {
     pub fn to_markdown(&self) -> String {
         let r = &self.report;
         let l = &r.lyapunov;
-        let mut s = format!("# Poincaré section and Lyapunov exponent of {}\n\n", r.case);
+        let mut s = format!(
+            "# Poincaré section and Lyapunov exponent of {}\n\n",
+            r.run.case
+        );
         let _ = writeln!(
             s,
             "{} revolutions of T = {:.6} s with {} ({}). Section: e/c of the clearance joint \
              once per revolution (poincare.png, poincare_eps.png).\n",
             r.revolutions,
             r.period,
-            r.method.name(),
-            match (r.rtol, r.step) {
-                (Some(t), _) => format!("rtol {t:e}"),
-                (None, Some(h)) => format!("step {h:e} s"),
-                _ => String::new(),
-            }
+            r.run.method.name(),
+            r.run.accuracy()
         );
         s.push_str("| quantity | value |\n|---|---|\n");
         let _ = writeln!(
@@ -737,7 +714,7 @@ impl PoincareResult {
         let ey: Vec<f64> = pts.iter().map(|q| q.ey_over_c).collect();
         let rev: Vec<f64> = pts.iter().map(|q| q.revolution as f64).collect();
         let eps: Vec<f64> = pts.iter().map(|q| q.eps).collect();
-        let case = &self.report.case;
+        let case = &self.report.run.case;
         push(plot::orbits_plot(
             &dir.join("poincare"),
             &format!("Poincaré section (once per revolution): {case}"),

@@ -49,7 +49,7 @@ use crate::error::Error;
 use crate::io;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
-use crate::summary::effective_controller;
+use crate::summary::RunHeader;
 use crate::trajectory::fmt_num;
 
 /// Default number of sample points along the run (both ends included): every 0.72° of crank
@@ -418,20 +418,9 @@ pub struct At {
 /// HNW II §IV.1–IV.2.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct StiffnessReport {
-    /// lash version.
-    pub version: String,
-    /// Case name.
-    pub case: String,
-    /// sha256 of the scene file (null for built-ins).
-    pub scene_sha256: Option<String>,
-    /// Method of the reference run.
-    pub method: Method,
-    /// Its controller (null for fixed-step and diffsol's methods).
-    pub controller: Option<lash_solver::ControllerKind>,
-    /// Its relative tolerance (null for fixed-step methods).
-    pub rtol: Option<f64>,
-    /// Its fixed step (null for adaptive methods), s.
-    pub step: Option<f64>,
+    /// Case and settings (the keys of summary.json).
+    #[serde(flatten)]
+    pub run: RunHeader,
     /// Start of the run, s.
     pub t_start: f64,
     /// End of the run, s.
@@ -706,15 +695,8 @@ fn build_report(
         (Some(m), Some(h)) => Some(m.h_stable / h),
         _ => None,
     };
-    let fixed = opts.method.is_fixed_step();
     Ok(StiffnessReport {
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        case: p.case.name.clone(),
-        scene_sha256: p.case.sha256().map(str::to_string),
-        method: opts.method,
-        controller: effective_controller(opts),
-        rtol: (!fixed).then_some(opts.rtol),
-        step: if fixed { opts.step } else { None },
+        run: RunHeader::new(&p.case, opts),
         t_start: t_span.0,
         t_end: t_span.1,
         samples: pts.len(),
@@ -812,11 +794,11 @@ impl StiffnessReport {
     pub fn describe(&self) -> String {
         let mut s = format!(
             "{}: {} samples over [{}, {}] s, {} reference run: {} steps, median {:.3e} s\n",
-            self.case,
+            self.run.case,
             self.samples,
             self.t_start,
             self.t_end,
-            self.method.name(),
+            self.run.method.name(),
             self.stats.accepted,
             self.accuracy_step
         );
@@ -879,16 +861,12 @@ impl StiffnessReport {
 
     /// stiffness.md: the numbers and the verdict.
     pub fn to_markdown(&self) -> String {
-        let mut s = format!("# Stiffness of {}\n\n", self.case);
+        let mut s = format!("# Stiffness of {}\n\n", self.run.case);
         let _ = writeln!(
             s,
             "Reference run: {} ({}), t ∈ [{}, {}] s, {} accepted steps; Jacobian {}; {} samples.\n",
-            self.method.name(),
-            match (self.rtol, self.step) {
-                (Some(r), _) => format!("rtol {r:e}"),
-                (None, Some(h)) => format!("step {h:e} s"),
-                _ => String::new(),
-            },
+            self.run.method.name(),
+            self.run.accuracy(),
             self.t_start,
             self.t_end,
             self.stats.accepted,
@@ -1088,7 +1066,7 @@ impl StiffnessResult {
             series: &s2,
             log_y: true,
         });
-        let title = format!("Stiffness along the run: {}", r.case);
+        let title = format!("Stiffness along the run: {}", r.run.case);
         plot::panels_plot(&dir.join("stiffness"), &title, &panels)
     }
 }

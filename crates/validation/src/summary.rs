@@ -41,6 +41,58 @@ pub fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
     }))
 }
 
+/// Which case ran with which settings: the header the diagnostic reports (`stiffness.json`,
+/// `poincare.json`) share with summary.json, flattened into their JSON objects.
+///
+/// ```text
+/// { version, case, scene_sha256, method, controller, rtol, step }
+/// fixed-step: controller = rtol = null, step = h;  adaptive: step = null
+/// ```
+///
+/// Source: INTERFACES.md (`summary.json`, the same keys and meanings).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RunHeader {
+    /// lash version.
+    pub version: String,
+    /// Case name.
+    pub case: String,
+    /// sha256 of the scene file (null for built-ins).
+    pub scene_sha256: Option<String>,
+    /// Method.
+    pub method: Method,
+    /// Controller ([`effective_controller`]).
+    pub controller: Option<ControllerKind>,
+    /// Relative tolerance (null for fixed-step methods).
+    pub rtol: Option<f64>,
+    /// Fixed step (null for adaptive methods), s.
+    pub step: Option<f64>,
+}
+
+impl RunHeader {
+    /// The header of a run of `case` with `opts`.
+    pub fn new(case: &Case, opts: &SolverOptions) -> RunHeader {
+        let fixed = opts.method.is_fixed_step();
+        RunHeader {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            case: case.name.clone(),
+            scene_sha256: case.sha256().map(str::to_string),
+            method: opts.method,
+            controller: effective_controller(opts),
+            rtol: (!fixed).then_some(opts.rtol),
+            step: if fixed { opts.step } else { None },
+        }
+    }
+
+    /// `rtol R` (adaptive) or `step H s` (fixed-step).
+    pub fn accuracy(&self) -> String {
+        match (self.rtol, self.step) {
+            (Some(t), _) => format!("rtol {t:e}"),
+            (None, Some(h)) => format!("step {h:e} s"),
+            _ => String::new(),
+        }
+    }
+}
+
 /// The content of summary.json.
 ///
 /// ```text
