@@ -190,11 +190,11 @@ mod tests {
     fn missing_and_invalid_cases_are_input_errors() {
         let d = tempfile::tempdir().unwrap();
         let e = Case::load("nope.json", Some(d.path())).unwrap_err();
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
         assert!(e.to_string().contains("nope.json not found"), "{e}");
         std::fs::write(d.path().join("bad.json"), b"{oops").unwrap();
         let e = Case::load("bad.json", Some(d.path())).unwrap_err();
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
         assert!(e.to_string().contains("not valid JSON"), "{e}");
         assert!(!e.to_string().contains('\n'));
         let e = Case::load("testset:nosuch", None).unwrap_err();
@@ -215,7 +215,7 @@ mod tests {
             .join(format!("{}.json", c.name));
         assert!(file.is_file(), "{}", file.display());
         let e = Case::catalogue("dry_150rpm_c9").unwrap_err();
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
         assert!(e.to_string().contains("'dry_150rpm_c9'"), "{e}");
     }
 }

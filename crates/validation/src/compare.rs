@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 
 use lash_solver::{ControllerKind, Method};
 
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::io;
 use crate::metrics::{EventQuantity, Sample, GRID_POINTS};
 use crate::simulate::{simulate, uniform_grid, Prepared, RunRequest, RunResult};
@@ -36,6 +36,9 @@ use crate::workprecision::fmt_num;
 
 /// Relative tolerance of reference runs.
 pub const REFERENCE_RTOL: f64 = 1e-12;
+
+/// Default tolerances of the adaptive methods in a comparison.
+pub const COMPARE_TOLERANCES: [f64; 2] = [1e-6, 1e-9];
 
 /// The RK4 steps tried by [`stable_rk4_step`], as multiples of a power of ten (1–2–5 series).
 pub const STEP_SERIES: [f64; 3] = [5.0, 2.0, 1.0];
@@ -470,9 +473,12 @@ fn timed(f: impl Fn() -> Result<RunResult, Error>) -> Result<RunResult, Error> {
 /// `t_end` succeeds with ‖Φ‖ < 1e-8 on a 401-point trajectory: how the paper would choose a
 /// fixed step ("the largest step that runs stably"). Tries down to T·1e-7.
 pub fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
-    let period = p
-        .period()
-        .ok_or_else(|| Error::Usage("RK4 needs --steps for a case without a crank".into()))?;
+    let period = p.period().ok_or_else(|| {
+        OptionError::new("steps")
+            .text("RK4 needs ")
+            .name("steps")
+            .text(" for a case without a crank")
+    })?;
     let top = period / 400.0;
     let mut exp = top.log10().floor() as i32;
     loop {

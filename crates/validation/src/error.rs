@@ -1,42 +1,45 @@
-//! The errors of the `lash` command and the exit code each maps to.
+//! The errors of the engine and the kind of each.
 //!
 //! ```text
-//! exit code = 0  success
-//!             2  bad input or usage      (Usage, Input, Io)
-//!             3  the solver failed       (Solver)
-//!             1  a bug                   (NotYetAvailable, Internal)
+//! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Io)
+//!        Solver    the solver failed               (Solver)
+//!        Bug       an internal inconsistency       (NotYetAvailable, Internal)
 //! ```
 //!
-//! Source: the exit-code contract of INTERFACES.md ("Exit codes of `lash`").
+//! Options are named by the engine's names (`rtol`, `t_end`, `max_steps`, …): an
+//! [`Error::Option`] keeps the names apart from its text, so that each front end spells them its
+//! own way (the `lash` command as `--rtol`, `--t-end`; a Python binding as `rtol`, `t_end`).
+//! [`Display`](std::fmt::Display) spells them as the engine names them.
+//!
+//! Source: the exit-code contract of INTERFACES.md ("Exit codes of `lash`"): the kinds are its
+//! classes (exit codes 2, 3 and 1).
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 use lash_solver::SolveError;
 
-/// Exit code of a successful run.
-pub const EXIT_OK: u8 = 0;
-/// Exit code of a bug (an internal inconsistency, or a command whose engine is not built yet).
-pub const EXIT_BUG: u8 = 1;
-/// Exit code of bad input or usage.
-pub const EXIT_USAGE: u8 = 2;
-/// Exit code of a solver failure.
-pub const EXIT_SOLVER: u8 = 3;
-
-/// Everything that can make `lash` fail.
+/// Everything that can make the engine fail.
 ///
 /// ```text
-/// Error → exit code:  Usage | Input | Io → 2,  Solver → 3,  NotYetAvailable | Internal → 1
+/// Error → kind:  Usage | Option | Input | Io → BadInput,  Solver → Solver,
+///                NotYetAvailable | Internal → Bug
 /// ```
 ///
-/// Every variant's message is one line that names the problem (the flag, the file, the field);
-/// [`Error::report`] adds the time and state of a solver failure.
+/// Every variant's message is one line that names the problem (the option, the file, the
+/// field); a solver failure also carries its time and state ([`SolveError::time`],
+/// [`SolveError::state`]).
 ///
 /// Source: INTERFACES.md ("Exit codes of `lash`").
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// Bad command line: a wrong flag combination, an out-of-range number, an unknown name.
+    /// A request that does not fit: a wrong combination, an out-of-range number, an unknown
+    /// name (the message names no option; see [`Error::Option`] for one that does).
     #[error("{0}")]
     Usage(String),
+    /// A request whose message names options (a wrong value or combination of options).
+    #[error("{0}")]
+    Option(OptionError),
     /// Bad input file: a missing or invalid case, sweep file or result directory.
     #[error("{0}")]
     Input(String),
@@ -59,13 +62,32 @@ pub enum Error {
     Internal(String),
 }
 
+/// The class of an [`Error`]: whose fault it is.
+///
+/// ```text
+/// BadInput → exit code 2,  Solver → 3,  Bug → 1   (INTERFACES.md)
+/// ```
+///
+/// Source: INTERFACES.md ("Exit codes of `lash`").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The request or an input file is wrong (usage, an option, a case, a file).
+    BadInput,
+    /// The solver failed.
+    Solver,
+    /// A bug: an internal inconsistency, or an engine not built yet.
+    Bug,
+}
+
 impl Error {
-    /// The exit code of this error (INTERFACES.md).
-    pub fn exit_code(&self) -> u8 {
+    /// The class of this error.
+    pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Usage(_) | Error::Input(_) | Error::Io { .. } => EXIT_USAGE,
-            Error::Solver(_) => EXIT_SOLVER,
-            Error::NotYetAvailable(_) | Error::Internal(_) => EXIT_BUG,
+            Error::Usage(_) | Error::Option(_) | Error::Input(_) | Error::Io { .. } => {
+                ErrorKind::BadInput
+            }
+            Error::Solver(_) => ErrorKind::Solver,
+            Error::NotYetAvailable(_) | Error::Internal(_) => ErrorKind::Bug,
         }
     }
 
@@ -77,17 +99,157 @@ impl Error {
         }
     }
 
-    /// What `lash` prints on standard error: `error: MESSAGE` on one line; for a solver failure
-    /// a second line with the time and the state at the failure.
-    pub fn report(&self) -> String {
-        let mut s = format!("error: {self}");
-        if let Error::Solver(e) = self {
-            if let (Some(t), Some(y)) = (e.time(), e.state()) {
-                let ys: Vec<String> = y.iter().map(|v| format!("{v:e}")).collect();
-                s.push_str(&format!("\n  at t = {t:e}, state = [{}]", ys.join(", ")));
-            }
+    /// The message with the options spelled by `spell` (engine name → the front end's name);
+    /// the same as `to_string()` for every error but [`Error::Option`].
+    pub fn message_with(&self, spell: &dyn Fn(&str) -> String) -> String {
+        match self {
+            Error::Option(o) => o.render(spell),
+            other => other.to_string(),
         }
-        s
+    }
+}
+
+/// One piece of a [`Message`].
+///
+/// Source: this module.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Piece {
+    /// Text, as is.
+    Text(String),
+    /// An option, by its engine name (`rtol`, `t_end`, …).
+    Option(&'static str),
+}
+
+/// A line of text that may name options, kept apart so that each front end spells them its
+/// own way; [`Display`](fmt::Display) spells them as the engine names them.
+///
+/// ```text
+/// Message::default().text("rk4 left out (give ").name("steps").text(" to include it)")
+///   lash:   "rk4 left out (give --steps to include it)"
+///   engine: "rk4 left out (give steps to include it)"
+/// ```
+///
+/// Source: the issue "One engine, one step driver" (the engine names no command-line flag).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Message {
+    /// The pieces, in order.
+    pub pieces: Vec<Piece>,
+}
+
+impl Message {
+    /// Appends text.
+    pub fn text(mut self, s: impl Into<String>) -> Self {
+        self.pieces.push(Piece::Text(s.into()));
+        self
+    }
+
+    /// Appends an option name.
+    pub fn name(mut self, option: &'static str) -> Self {
+        self.pieces.push(Piece::Option(option));
+        self
+    }
+
+    /// The same message with `text` before it.
+    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+        self.pieces.insert(0, Piece::Text(text.into()));
+        self
+    }
+
+    /// The line with each option spelled by `spell`.
+    pub fn render(&self, spell: &dyn Fn(&str) -> String) -> String {
+        self.pieces
+            .iter()
+            .map(|p| match p {
+                Piece::Text(s) => s.clone(),
+                Piece::Option(o) => spell(o),
+            })
+            .collect()
+    }
+}
+
+impl fmt::Display for Message {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.render(&|o| o.to_string()))
+    }
+}
+
+impl From<&str> for Message {
+    fn from(s: &str) -> Self {
+        Message::default().text(s)
+    }
+}
+
+impl From<String> for Message {
+    fn from(s: String) -> Self {
+        Message::default().text(s)
+    }
+}
+
+/// A request whose options are wrong: the option at fault and a [`Message`] that names
+/// options apart from its text.
+///
+/// ```text
+/// OptionError::leading("rtol", " is only for adaptive methods, and rk4 is fixed-step")
+///   lash:   "--rtol is only for adaptive methods, and rk4 is fixed-step"
+///   engine: "rtol is only for adaptive methods, and rk4 is fixed-step"
+/// ```
+///
+/// Source: the issue "One engine, one step driver" (engine errors name no command-line flag).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OptionError {
+    /// The option at fault, by its engine name.
+    pub option: &'static str,
+    /// What is wrong.
+    pub message: Message,
+}
+
+impl OptionError {
+    /// An empty message about `option`.
+    pub fn new(option: &'static str) -> Self {
+        OptionError {
+            option,
+            message: Message::default(),
+        }
+    }
+
+    /// The common message: the option at fault, then `rest` (which starts with a space).
+    pub fn leading(option: &'static str, rest: impl Into<String>) -> Self {
+        OptionError::new(option).name(option).text(rest)
+    }
+
+    /// Appends text.
+    pub fn text(mut self, s: impl Into<String>) -> Self {
+        self.message = self.message.text(s);
+        self
+    }
+
+    /// Appends an option name.
+    pub fn name(mut self, option: &'static str) -> Self {
+        self.message = self.message.name(option);
+        self
+    }
+
+    /// The same error with `text` before its message.
+    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+        self.message = self.message.prefixed(text);
+        self
+    }
+
+    /// The message with each option spelled by `spell`.
+    pub fn render(&self, spell: &dyn Fn(&str) -> String) -> String {
+        self.message.render(spell)
+    }
+}
+
+impl fmt::Display for OptionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.message.fmt(f)
+    }
+}
+
+impl From<OptionError> for Error {
+    fn from(e: OptionError) -> Self {
+        Error::Option(e)
     }
 }
 
@@ -96,36 +258,53 @@ mod tests {
     use super::*;
 
     #[test]
-    fn exit_codes_follow_interfaces() {
-        assert_eq!(Error::Usage("x".into()).exit_code(), 2);
-        assert_eq!(Error::Input("x".into()).exit_code(), 2);
+    fn kinds_follow_interfaces() {
+        assert_eq!(Error::Usage("x".into()).kind(), ErrorKind::BadInput);
+        assert_eq!(Error::Input("x".into()).kind(), ErrorKind::BadInput);
         let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
-        assert_eq!(io.exit_code(), 2);
+        assert_eq!(io.kind(), ErrorKind::BadInput);
         assert!(io.to_string().starts_with("a/b: "));
         let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
-        assert_eq!(s.exit_code(), 3);
-        assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
-        assert_eq!(Error::Internal("x".into()).exit_code(), 1);
+        assert_eq!(s.kind(), ErrorKind::Solver);
+        assert_eq!(
+            Error::NotYetAvailable("lash run".into()).kind(),
+            ErrorKind::Bug
+        );
+        assert_eq!(Error::Internal("x".into()).kind(), ErrorKind::Bug);
+        assert_eq!(
+            Error::from(OptionError::leading("t_end", " must be > 0")).kind(),
+            ErrorKind::BadInput
+        );
     }
 
     #[test]
-    fn solver_report_names_time_and_state() {
-        let e = Error::Solver(SolveError::NonFiniteState {
-            t: 0.25,
-            y: vec![1.0, -2.5],
-        });
-        let r = e.report();
-        let lines: Vec<&str> = r.lines().collect();
-        assert_eq!(lines.len(), 2);
-        assert_eq!(
-            lines[0],
-            "error: solver failed: non-finite or diverging state at t = 2.5e-1"
+    fn option_errors_spell_options_as_asked() {
+        let e = Error::from(
+            OptionError::new("steps")
+                .name("steps")
+                .text(" is only for fixed-step methods, and ")
+                .name("methods")
+                .text(" lists none"),
         );
-        assert_eq!(lines[1], "  at t = 2.5e-1, state = [1e0, -2.5e0]");
-        // Usage errors stay on one line.
         assert_eq!(
-            Error::Usage("--rtol must be > 0".into()).report(),
-            "error: --rtol must be > 0"
+            e.to_string(),
+            "steps is only for fixed-step methods, and methods lists none"
+        );
+        let flag = |o: &str| format!("--{}", o.replace('_', "-"));
+        assert_eq!(
+            e.message_with(&flag),
+            "--steps is only for fixed-step methods, and --methods lists none"
+        );
+        let Error::Option(o) = e else { panic!() };
+        assert_eq!(o.option, "steps");
+        let p = o.prefixed("2 sweep point(s) failed: ");
+        assert_eq!(
+            p.render(&flag),
+            "2 sweep point(s) failed: --steps is only for fixed-step methods, and --methods lists none"
+        );
+        assert_eq!(
+            Error::Input("x".into()).message_with(&flag),
+            Error::Input("x".into()).to_string()
         );
     }
 }

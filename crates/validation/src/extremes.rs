@@ -1673,40 +1673,23 @@ impl Matrix {
     }
 }
 
-/// `lash extremes`: runs the matrix (or its quick subset), writes extremes.md and
-/// extremes.json, prints the counts, and fails with exit code 1 (a bug) when some run ended
-/// in an outcome that is not allowed (the report is written first, to show which).
-pub fn command(a: &crate::cli::ExtremesArgs) -> Result<Matrix, Error> {
-    let mut plan = if a.quick { Plan::quick() } else { Plan::full() };
-    if let Some(n) = a.max_steps {
-        plan.budget.max_steps = n;
-    }
-    if let Some(w) = a.max_wall_time {
-        plan.budget.max_wall_time = w;
-    }
-    plan.jobs = a.jobs.unwrap_or(1);
-    let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out").join(if a.quick {
-            "extremes-quick"
-        } else {
-            "extremes"
-        })
-    });
-    let m = run(&plan, &|l| eprintln!("{l}"))?;
-    let files = m.write(&out)?;
+/// What `lash extremes` says about a matrix written to `md` and `json`: one line of counts per
+/// method, then the totals and the files.
+pub fn describe(m: &Matrix, md: &Path, json: &Path) -> String {
+    let mut s = String::new();
     for c in &m.counts {
-        println!(
-            "{:10} {:3} runs: {:3} agreed, {:3} typed errors, {} known findings, {} failures",
+        s.push_str(&format!(
+            "{:10} {:3} runs: {:3} agreed, {:3} typed errors, {} known findings, {} failures\n",
             c.label,
             c.runs,
             c.agreed,
             c.errored.values().sum::<usize>(),
             c.known,
             c.failures
-        );
+        ));
     }
-    println!(
-        "{} runs in {:.1} s, {} known findings, {} failures; wrote {} and {}",
+    s.push_str(&format!(
+        "{} runs in {:.1} s, {} known findings, {} failures; wrote {} and {}\n",
         m.cells.len(),
         m.wall_time_s,
         m.cells
@@ -1714,16 +1697,22 @@ pub fn command(a: &crate::cli::ExtremesArgs) -> Result<Matrix, Error> {
             .filter(|c| matches!(c.outcome, Outcome::Known { .. }))
             .count(),
         m.failures,
-        files[0].display(),
-        files[1].display()
-    );
+        md.display(),
+        json.display()
+    ));
+    s
+}
+
+/// Ok when no run of the matrix failed; else an internal error (a bug, exit code 1) that
+/// counts the failures and points to the report `md`, which lists them.
+pub fn check(m: &Matrix, md: &Path) -> Result<(), Error> {
     if m.failures > 0 {
         return Err(Error::Internal(format!(
             "extremes: {} of {} runs failed: an outcome that is not allowed (listed in {})",
             m.failures,
             m.cells.len(),
-            files[0].display()
+            md.display()
         )));
     }
-    Ok(m)
+    Ok(())
 }

@@ -15,10 +15,10 @@
 //!   error      compare::ErrorNorms::headline: relative RMS error of the slider acceleration
 //!                over the first half revolution (dry: chaotic, MODEL.md §9) or the last
 //!                revolution (ideal, lubricated)
-//! prints the table; writes validation/reports/default/ (git-ignored): README.md (the
-//! tables), default.json, slider_acceleration.{svg,png} (last revolution, the three cases and
-//! the closed form), orbits.{svg,png} (dry and lubricated journal orbits), and per case the
-//! reference run's summary.json, trajectory.csv and figures
+//! returns the table (`lash` prints it); writes validation/reports/default/ (git-ignored):
+//! README.md (the tables), default.json, slider_acceleration.{svg,png} (last revolution, the
+//! three cases and the closed form), orbits.{svg,png} (dry and lubricated journal orbits), and
+//! per case the reference run's summary.json, trajectory.csv and figures
 //! ```
 //!
 //! Source: the issue "The lash command" (the default run); MODEL.md §5–§9.
@@ -31,9 +31,10 @@ use lash_solver::Method;
 
 use crate::compare::{self, Compared, ErrorNorms, ErrorWindow, Reference};
 use crate::error::Error;
-use crate::io;
+use crate::io::{self, Written};
 use crate::metrics::{Metrics, Sample};
 use crate::plot::{self, Axes, Series, SeriesStyle};
+use crate::progress::{NoProgress, Progress};
 use crate::simulate::{Prepared, RunResult};
 use crate::workprecision::fmt_num;
 
@@ -374,16 +375,27 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
     Ok(out)
 }
 
-/// Runs the default comparison, prints its table, and writes `out` (default
-/// `validation/reports/default` under the workspace root).
+/// Runs the default comparison and writes `out` (default `validation/reports/default` under
+/// the workspace root); reports nothing. See [`run_with_progress`].
 pub fn run(out: Option<PathBuf>) -> Result<Headline, Error> {
+    run_with_progress(out, &NoProgress).map(|w| w.result)
+}
+
+/// Runs the default comparison, noting each case as it starts (`running STEM …`), and writes
+/// `out` (default `validation/reports/default` under the workspace root): README.md (the
+/// table, [`Headline::to_markdown`]), default.json, the figures and per case the reference
+/// run's files. Returns the table, the directory and the files written.
+pub fn run_with_progress(
+    out: Option<PathBuf>,
+    progress: &dyn Progress,
+) -> Result<Written<Headline>, Error> {
     let clock = Instant::now();
     let root = workspace_root();
     let dir = out.unwrap_or_else(|| root.join("validation/reports/default"));
     let mut cases = Vec::new();
     let mut runs = Vec::new();
     for c in &CASES {
-        eprintln!("running {} …", c.stem);
+        progress.note(&format!("running {} …", c.stem).into());
         let (report, run, _) = run_case(&root, c)?;
         cases.push(report);
         runs.push((*c, run));
@@ -399,9 +411,13 @@ pub fn run(out: Option<PathBuf>) -> Result<Headline, Error> {
     };
     h.total_wall_time_s = clock.elapsed().as_secs_f64();
     let md = h.to_markdown();
-    io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
-    io::write_json_atomic(&dir.join("default.json"), &h)?;
-    print!("{md}");
-    println!("\nwrote {} files to {}", written.len() + 2, dir.display());
-    Ok(h)
+    let (readme, json) = (dir.join("README.md"), dir.join("default.json"));
+    io::write_atomic(&readme, md.as_bytes())?;
+    io::write_json_atomic(&json, &h)?;
+    written.extend([readme, json]);
+    Ok(Written {
+        result: h,
+        dir,
+        files: written,
+    })
 }

@@ -1,4 +1,4 @@
-//! Atomic file output: nothing half-written ever lands in `--out`.
+//! Atomic file output: nothing half-written ever lands in an output directory.
 //!
 //! ```text
 //! write(path, bytes):  tmp = dir(path)/.NAME.tmp-PID-N[.EXT]
@@ -16,6 +16,23 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::Error;
+
+/// What a command wrote: its result, the output directory and the files in it.
+///
+/// ```text
+/// Written { result, dir, files }   files in the order written, each inside dir
+/// ```
+///
+/// Source: this module.
+#[derive(Debug)]
+pub struct Written<T> {
+    /// The command's result.
+    pub result: T,
+    /// The output directory.
+    pub dir: PathBuf,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+}
 
 /// Counter that makes temporary names unique within the process (threads write in parallel).
 static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -161,7 +178,7 @@ mod tests {
         let f = d.path().join("file");
         fs::write(&f, b"").unwrap();
         let e = create_dir(&f).unwrap_err();
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
     }
 
     #[test]

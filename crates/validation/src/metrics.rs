@@ -647,7 +647,7 @@ mod tests {
     fn bad_samples_are_bugs_not_silent_nans() {
         let s = samples(Sample::at);
         let e = compute(&s[..2000], W, None, &[], None).unwrap_err();
-        assert_eq!(e.exit_code(), 1);
+        assert_eq!(e.kind(), crate::ErrorKind::Bug);
         let mut off = s.clone();
         off[7].t += 1e-6;
         assert!(compute(&off, W, None, &[], None)

@@ -41,9 +41,9 @@ use lash_solver::analysis::lyapunov::{
 };
 use lash_solver::SolverOptions;
 
-use crate::cli::SolverFlags;
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::io;
+use crate::options::SolverChoice;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
 use crate::stiffness_cmd::analysis_error;
@@ -99,16 +99,17 @@ impl PoincareSettings {
     /// Checks the ranges (usage errors).
     pub fn validate(&self) -> Result<(), Error> {
         if self.revolutions == 0 {
-            return Err(Error::Usage("--revolutions must be >= 1".into()));
+            return Err(OptionError::leading("revolutions", " must be >= 1").into());
         }
         if !(self.perturbation.is_finite() && self.perturbation > 0.0 && self.perturbation < 1.0) {
-            return Err(Error::Usage(format!(
-                "--perturbation must be in (0, 1) clearances, got {}",
-                self.perturbation
-            )));
+            return Err(OptionError::leading(
+                "perturbation",
+                format!(" must be in (0, 1) clearances, got {}", self.perturbation),
+            )
+            .into());
         }
         if self.renorm_per_rev == 0 {
-            return Err(Error::Usage("--renorm-per-rev must be >= 1".into()));
+            return Err(OptionError::leading("renorm_per_rev", " must be >= 1").into());
         }
         Ok(())
     }
@@ -261,10 +262,10 @@ pub fn summarize(
     })
 }
 
-/// The solver options of `lash poincare`: the case's defaults with the flags laid over them,
-/// as `lash run`, except that an adaptive method without `--rtol` runs at [`DEFAULT_RTOL`].
-pub fn options(p: &Prepared, flags: &SolverFlags) -> Result<SolverOptions, Error> {
-    let mut f = flags.clone();
+/// The solver options of `lash poincare`: the case's defaults with the choice laid over them,
+/// as `lash run`, except that an adaptive method without an rtol runs at [`DEFAULT_RTOL`].
+pub fn options(p: &Prepared, choice: &SolverChoice) -> Result<SolverOptions, Error> {
+    let mut f = choice.clone();
     let method = f.method.unwrap_or(p.default_options().method);
     if !method.is_fixed_step() && f.rtol.is_none() {
         f.rtol = Some(DEFAULT_RTOL);
@@ -888,7 +889,11 @@ mod tests {
                 ..Default::default()
             },
         ] {
-            assert_eq!(s.validate().unwrap_err().exit_code(), 2, "{s:?}");
+            assert_eq!(
+                s.validate().unwrap_err().kind(),
+                crate::ErrorKind::BadInput,
+                "{s:?}"
+            );
         }
     }
 }

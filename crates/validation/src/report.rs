@@ -314,7 +314,7 @@ mod tests {
             },
         )
         .unwrap_err();
-        assert_eq!(e.exit_code(), 1);
+        assert_eq!(e.kind(), crate::ErrorKind::Bug);
         assert!(!dir.exists());
     }
 }

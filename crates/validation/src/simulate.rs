@@ -4,7 +4,7 @@
 //! ```text
 //! Prepared::load(case)        scene file → checked Scene (SceneError → exit 2) | testset:NAME
 //!                             | a catalogue scene (Case::catalogue)
-//! Prepared::options(flags)    the defaults below, the command-line flags laid over them
+//! Prepared::options(choice)   the defaults below, the request's SolverChoice laid over them
 //! simulate(prepared, request) → RunResult { summary, window samples (2001-point metrics grid of
 //!                               the last revolution), trajectory samples, extra samples,
 //!                               states, events, energy totals, ideal slider-crank }
@@ -25,7 +25,7 @@
 //!                   (crossing time by linear interpolation), so contact onsets are still counted
 //! ```
 //!
-//! Defaults of a mechanism run (a scene), each overridable from the command line or the API:
+//! Defaults of a mechanism run (a scene), each overridable by a request's SolverChoice:
 //!
 //! ```text
 //! method         bdf: the one method that is never far from the cheapest in `lash
@@ -47,7 +47,7 @@
 //!                extremes matrix is 1e3–5e4·rtol on the dry scenes for that reason
 //!                (BENCHMARKS.md, Extremes). atol scales with rtol, so tolerance
 //!                proportionality holds down to rtol = 1e-13.
-//!                An --atol on the command line replaces the whole vector.
+//!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
 //! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
 //!                joint, where nothing can be stepped over): with 4 samples an
@@ -92,11 +92,11 @@ use lash_solver::{
 };
 
 use crate::case::{Case, CaseSource};
-use crate::cli::SolverFlags;
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::metrics::{
     self, EnergyTotals, EventQuantity, EventRecord, JointInfo, Sample, Window, GRID_POINTS,
 };
+use crate::options::SolverChoice;
 use crate::report::{self, RunOutput};
 use crate::summary::Summary;
 use crate::trajectory::Extra;
@@ -275,19 +275,27 @@ impl Prepared {
             (Some(i), _) => {
                 let te = t_end.unwrap_or(i.t_end);
                 if !(te.is_finite() && te > i.t_start) {
-                    return Err(Error::Usage(format!(
-                        "--t-end must be a finite time after the start {} s, got {te}",
-                        i.t_start
-                    )));
+                    return Err(OptionError::leading(
+                        "t_end",
+                        format!(
+                            " must be a finite time after the start {} s, got {te}",
+                            i.t_start
+                        ),
+                    )
+                    .into());
                 }
                 Ok((i.t_start, te))
             }
             (None, Some(p)) => {
                 if t_end.is_some() {
-                    return Err(Error::Usage(format!(
-                        "--t-end does not apply to {}: its reference solution holds at t = {:e}",
-                        self.case.name, p.t_end
-                    )));
+                    return Err(OptionError::leading(
+                        "t_end",
+                        format!(
+                            " does not apply to {}: its reference solution holds at t = {:e}",
+                            self.case.name, p.t_end
+                        ),
+                    )
+                    .into());
                 }
                 Ok((p.t0, p.t_end))
             }
@@ -339,13 +347,13 @@ impl Prepared {
         }
     }
 
-    /// The case's defaults with the command-line flags laid over them: atol follows rtol
-    /// unless --atol is given; a fixed-step method runs without event location, an adaptive
+    /// The case's defaults with the solver choice laid over them: atol follows rtol unless
+    /// the choice gives atol; a fixed-step method runs without event location, an adaptive
     /// one with it. Inconsistent options (an atol array of the wrong length) are usage errors.
-    pub fn options(&self, flags: &SolverFlags) -> Result<SolverOptions, Error> {
+    pub fn options(&self, choice: &SolverChoice) -> Result<SolverOptions, Error> {
         let base = self.default_options();
-        let mut o = flags.apply(&base)?;
-        self.finish_options(&mut o, flags.atol.is_some())?;
+        let mut o = choice.apply(&base)?;
+        self.finish_options(&mut o, choice.atol.is_some())?;
         Ok(o)
     }
 
@@ -358,14 +366,14 @@ impl Prepared {
         step: Option<f64>,
         controller: Option<lash_solver::ControllerKind>,
     ) -> Result<SolverOptions, Error> {
-        let flags = SolverFlags {
+        let choice = SolverChoice {
             method: Some(method),
             rtol: rtol.filter(|_| !method.is_fixed_step()),
             step: step.filter(|_| method.is_fixed_step()),
             controller,
             ..Default::default()
         };
-        self.options(&flags)
+        self.options(&choice)
     }
 
     fn finish_options(&self, o: &mut SolverOptions, atol_given: bool) -> Result<(), Error> {

@@ -45,7 +45,7 @@ use lash_solver::analysis::stiffness::{
 use lash_solver::analysis::AnalysisError;
 use lash_solver::{Integrator, Method, OdeSystem, SolverOptions, Stats, StepOutcome};
 
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::io;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
@@ -512,10 +512,11 @@ pub fn analyse(
     settings: &StiffnessSettings,
 ) -> Result<StiffnessResult, Error> {
     if settings.samples < MIN_SAMPLES {
-        return Err(Error::Usage(format!(
-            "--samples must be >= {MIN_SAMPLES}, got {}",
-            settings.samples
-        )));
+        return Err(OptionError::leading(
+            "samples",
+            format!(" must be >= {MIN_SAMPLES}, got {}", settings.samples),
+        )
+        .into());
     }
     let t_span = p.t_span(settings.t_end)?;
     let times = uniform_grid(t_span.0, t_span.1, settings.samples);

@@ -901,17 +901,22 @@ pub fn run_and_write(plan: &Plan, out: &Path) -> Result<StudyResult, Error> {
     Ok(result)
 }
 
-/// `lash study paper [--out DIR]`: runs the paper's §4 (see the module doc), writes the
-/// figures, the report and study.json into `out`, and prints one line of results.
+/// `lash study paper [--out DIR]`: runs the paper's §4 (see the module doc) and writes the
+/// figures, the report and study.json into `out` ([`describe_paper`] says it in one line).
 pub fn paper(out: &Path) -> Result<StudyResult, Error> {
-    let r = run_and_write(&Plan::paper(), out)?;
+    run_and_write(&Plan::paper(), out)
+}
+
+/// One line of results of the paper's study written to `out`: cases, realisations, times,
+/// how many of the paper's claims hold, where the report is.
+pub fn describe_paper(r: &StudyResult, out: &Path) -> String {
     let paper: Vec<&Claim> = r
         .claims
         .iter()
         .filter(|c| c.origin == Origin::Paper)
         .collect();
     let holding = paper.iter().filter(|c| c.verdict == Verdict::Holds).count();
-    println!(
+    format!(
         "study paper: {} cases × {} realisations, runs {:.1} s, figures {:.1} s; {} of {} paper claims hold; report {}",
         r.cases.len(),
         r.plan.realisations,
@@ -920,8 +925,7 @@ pub fn paper(out: &Path) -> Result<StudyResult, Error> {
         holding,
         paper.len(),
         out.join(REPORT_FILE).display()
-    );
-    Ok(r)
+    )
 }
 
 #[cfg(test)]
@@ -1155,11 +1159,14 @@ mod tests {
         plan.settings.rtol = 0.0; // refused by the solver's option check
         plan.realisations = 1;
         let e = run_and_write(&plan, &out).unwrap_err();
-        assert_eq!(e.exit_code(), 3, "{e}");
+        assert_eq!(e.kind(), crate::ErrorKind::Solver, "{e}");
         assert!(!out.exists());
         plan = Plan::paper();
         plan.realisations = 0;
-        assert_eq!(run_and_write(&plan, &out).unwrap_err().exit_code(), 2);
+        assert_eq!(
+            run_and_write(&plan, &out).unwrap_err().kind(),
+            crate::ErrorKind::BadInput
+        );
         assert!(!out.exists());
     }
 

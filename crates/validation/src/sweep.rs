@@ -25,6 +25,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Mutex;
+use std::time::Instant;
 
 use lash_model::scene::{JointSpec, NormalSpec};
 use lash_model::Scene;
@@ -36,6 +37,7 @@ use serde_json::Value;
 use crate::case::{sha256_hex, Case};
 use crate::error::Error;
 use crate::io;
+use crate::progress::{NoProgress, Progress};
 
 /// Name of the result file of a point.
 pub const RESULT_FILE: &str = "result.json";
@@ -392,7 +394,10 @@ fn check_file(f: &SweepFile) -> Result<(), Error> {
         }
     }
     if let Some(r) = &f.rtol {
-        if let Some(x) = r.iter().find(|x| !(crate::cli::RTOL_MIN..1.0).contains(*x)) {
+        if let Some(x) = r
+            .iter()
+            .find(|x| !(crate::options::RTOL_MIN..1.0).contains(*x))
+        {
             return bad(format!("every rtol must be in [1e-14, 1), got {x}"));
         }
     }
@@ -613,7 +618,7 @@ pub struct PointRecord {
 /// How [`run_sweep`] runs.
 ///
 /// ```text
-/// jobs threads (None = cores), shard I/N, progress bar on/off
+/// jobs threads (None = cores), shard I/N
 /// ```
 ///
 /// Source: the issue "The lash command".
@@ -623,8 +628,6 @@ pub struct SweepOptions {
     pub jobs: Option<usize>,
     /// Which points.
     pub shard: Shard,
-    /// Whether to draw a progress bar on standard error.
-    pub progress: bool,
 }
 
 impl Default for SweepOptions {
@@ -632,7 +635,6 @@ impl Default for SweepOptions {
         SweepOptions {
             jobs: None,
             shard: Shard::ALL,
-            progress: false,
         }
     }
 }
@@ -668,9 +670,11 @@ impl SweepReport {
         self.failed.sort_by_key(|(i, _)| *i);
         let n = self.failed.len();
         let (i, e) = self.failed.swap_remove(0);
-        let msg = format!("{n} sweep point(s) failed; first, point {i}: {e}");
+        let head = format!("{n} sweep point(s) failed; first, point {i}: ");
+        let msg = format!("{head}{e}");
         Err(match e {
             Error::Usage(_) => Error::Usage(msg),
+            Error::Option(o) => Error::Option(o.prefixed(head)),
             Error::Input(_) | Error::Io { .. } => Error::Input(msg),
             Error::NotYetAvailable(_) => Error::NotYetAvailable(msg),
             Error::Solver(_) | Error::Internal(_) => Error::Internal(msg),
@@ -690,12 +694,28 @@ pub fn is_finished(root: &Path, point: &SweepPoint) -> bool {
 /// Runs the points of `opts.shard` that have not finished, in parallel, each in its own
 /// directory `root/id` (created before `runner` is called and passed to it). A finished
 /// point's `result.json` is written atomically; a solver failure is recorded as finished; any
-/// other runner error leaves the point unfinished for a rerun.
+/// other runner error leaves the point unfinished for a rerun. No progress reports (see
+/// [`run_sweep_with_progress`]).
 pub fn run_sweep<F>(
     points: &[SweepPoint],
     root: &Path,
     opts: &SweepOptions,
     runner: F,
+) -> Result<SweepReport, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    run_sweep_with_progress(points, root, opts, runner, &NoProgress)
+}
+
+/// [`run_sweep`], reporting to `progress`: `started` with the number of points to run, then
+/// `finished` (the point's id and wall time) as each point ends, whatever its outcome.
+pub fn run_sweep_with_progress<F>(
+    points: &[SweepPoint],
+    root: &Path,
+    opts: &SweepOptions,
+    runner: F,
+    progress: &dyn Progress,
 ) -> Result<SweepReport, Error>
 where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
@@ -715,23 +735,14 @@ where
         skipped: selected.len() - todo.len(),
         ..Default::default()
     });
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new(todo.len() as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} points  {elapsed_precise} elapsed, ~{eta} left",
-        ) {
-            b.set_style(style);
-        }
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    progress.started(todo.len());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.unwrap_or(0))
         .build()
         .map_err(|e| Error::Internal(format!("thread pool: {e}")))?;
     pool.install(|| {
         todo.par_iter().for_each(|p| {
+            let clock = Instant::now();
             let outcome = run_point(p, root, &runner);
             let mut r = report.lock().unwrap_or_else(|e| e.into_inner());
             match outcome {
@@ -739,10 +750,10 @@ where
                 Ok(PointStatus::SolverFailed) => r.solver_failed += 1,
                 Err(e) => r.failed.push((p.index, e)),
             }
-            bar.inc(1);
+            drop(r);
+            progress.finished(&p.id, clock.elapsed().as_secs_f64());
         })
     });
-    bar.finish_and_clear();
     Ok(report.into_inner().unwrap_or_else(|e| e.into_inner()))
 }
 
@@ -949,7 +960,7 @@ mod tests {
         assert_eq!("0/1".parse::<Shard>().unwrap(), Shard::ALL);
         for bad in ["4/4", "0/0", "-1/2", "a/b", "1", "1/2/3", ""] {
             let e = bad.parse::<Shard>().unwrap_err();
-            assert_eq!(e.exit_code(), 2, "{bad}");
+            assert_eq!(e.kind(), crate::ErrorKind::BadInput, "{bad}");
         }
         let s = Shard { index: 2, count: 3 };
         assert_eq!(
@@ -1049,7 +1060,7 @@ mod tests {
         assert!(msg(r#"{"case": "nope.json"}"#).contains("not found"));
         assert!(msg(r#"{"case": "base.json", "speed_rpm": [1, 1]}"#).contains("twice"));
         let e = SweepSpec::load(&d.path().join("absent.json")).unwrap_err();
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
     }
 
     /// A fake runner: slider_acc_max = speed², and counts its calls.
@@ -1073,7 +1084,6 @@ mod tests {
             let opts = SweepOptions {
                 jobs: Some(2),
                 shard: Shard { index: i, count: 3 },
-                progress: false,
             };
             let r = run_sweep(&pts, &root, &opts, |p, dir| fake(p, dir, &calls)).unwrap();
             let expect = (0..16).filter(|k| k % 3 == i).count();
@@ -1141,7 +1151,7 @@ mod tests {
         let t = merge(std::slice::from_ref(&root)).unwrap();
         assert_eq!((t.rows.len(), t.unfinished), (k, 16 - k));
         let e = r.into_result().unwrap_err();
-        assert_eq!(e.exit_code(), 1);
+        assert_eq!(e.kind(), crate::ErrorKind::Bug);
         assert!(
             e.to_string()
                 .contains("11 sweep point(s) failed; first, point 5: internal error: killed"),

@@ -16,8 +16,9 @@ use std::path::{Path, PathBuf};
 
 use lash_solver::{ControllerKind, Method};
 
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::io;
+use crate::options::no_duplicates;
 use crate::plot::{self, Axes, Series, SeriesStyle};
 
 /// A number for a table: plain for 0.01 ≤ |x| < 1e5 (at most 4 decimals), else scientific
@@ -40,6 +41,111 @@ pub fn fmt_num(x: f64) -> String {
 
 /// Default accuracy targets.
 pub const DEFAULT_TARGETS: [f64; 5] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10];
+
+/// Default tolerances of a work–precision set.
+pub const DEFAULT_TOLERANCES: [f64; 3] = [1e-4, 1e-6, 1e-8];
+
+/// The method the controllers are compared on when it is listed: the highest-order pair,
+/// whose steps are longest and so most sensitive to the controller.
+pub const CONTROLLER_METHOD: Method = Method::Dop853;
+
+/// A checked work–precision request.
+///
+/// ```text
+/// runs = {adaptive m} × tolerances  ∪  {fixed-step m} × steps  ∪  controllers × tolerances
+///        (the controllers on one adaptive method of ours)
+/// ```
+///
+/// Source: the issue "The lash command" (`lash work-precision`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorkPrecisionPlan {
+    /// Methods, in the order given, no duplicates.
+    pub methods: Vec<Method>,
+    /// Tolerances of the adaptive methods (empty when there are none).
+    pub tolerances: Vec<f64>,
+    /// Steps of the fixed-step methods; None = derive from the case.
+    pub steps: Option<Vec<f64>>,
+    /// Controllers to compare (empty when no method in the list takes one).
+    pub controllers: Vec<ControllerKind>,
+}
+
+impl WorkPrecisionPlan {
+    /// Checks the lists of a request (None = not given) against each other and applies the
+    /// defaults: every method, [`DEFAULT_TOLERANCES`], every controller. Errors name the
+    /// lists as the options `methods`, `tolerances`, `steps`, `controllers`.
+    pub fn new(
+        methods: Option<&[Method]>,
+        tolerances: Option<&[f64]>,
+        steps: Option<&[f64]>,
+        controllers: Option<&[ControllerKind]>,
+    ) -> Result<WorkPrecisionPlan, Error> {
+        let methods = methods.map_or_else(|| Method::ALL.to_vec(), <[Method]>::to_vec);
+        no_duplicates("methods", &methods, |m| m.name().to_string())?;
+        let any_fixed = methods.iter().any(|m| m.is_fixed_step());
+        let any_adaptive = methods.iter().any(|m| !m.is_fixed_step());
+        let any_controlled = methods
+            .iter()
+            .any(|m| !m.is_fixed_step() && !m.is_diffsol());
+        if steps.is_some() && !any_fixed {
+            return Err(
+                OptionError::leading("steps", " is only for fixed-step methods, and ")
+                    .name("methods")
+                    .text(" lists none")
+                    .into(),
+            );
+        }
+        if tolerances.is_some() && !any_adaptive {
+            return Err(
+                OptionError::leading("tolerances", " is only for adaptive methods, and ")
+                    .name("methods")
+                    .text(" lists none")
+                    .into(),
+            );
+        }
+        if controllers.is_some() && !any_controlled {
+            return Err(OptionError::leading(
+                "controllers",
+                " needs an adaptive method with our step control in ",
+            )
+            .name("methods")
+            .into());
+        }
+        let tolerances = match tolerances {
+            Some(t) => t.to_vec(),
+            None if any_adaptive => DEFAULT_TOLERANCES.to_vec(),
+            None => vec![],
+        };
+        no_duplicates("tolerances", &tolerances, |t| format!("{t:e}"))?;
+        if let Some(s) = steps {
+            no_duplicates("steps", s, |h| format!("{h:e}"))?;
+        }
+        let controllers = match controllers {
+            Some(c) => c.to_vec(),
+            None if any_controlled => ControllerKind::ALL.to_vec(),
+            None => vec![],
+        };
+        no_duplicates("controllers", &controllers, |c| c.name().to_string())?;
+        Ok(WorkPrecisionPlan {
+            methods,
+            tolerances,
+            steps: steps.map(<[f64]>::to_vec),
+            controllers,
+        })
+    }
+
+    /// The method of ours the controllers are compared on: [`CONTROLLER_METHOD`] if listed,
+    /// else the first adaptive method of ours in the list.
+    pub fn controller_method(&self) -> Option<Method> {
+        if self.methods.contains(&CONTROLLER_METHOD) {
+            Some(CONTROLLER_METHOD)
+        } else {
+            self.methods
+                .iter()
+                .copied()
+                .find(|m| !m.is_fixed_step() && !m.is_diffsol())
+        }
+    }
+}
 
 /// One run of a work–precision set.
 ///

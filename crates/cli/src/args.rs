@@ -21,18 +21,28 @@
 //! [`Method::from_name`] and [`ControllerKind::from_name`], lists comma-separated, `--step` only
 //! for fixed-step methods, `--rtol`/`--atol`/`--controller` only for adaptive ones. Every parse
 //! error becomes one line and exit code 2 ([`parse`]).
+//!
+//! Each argument struct converts into the engine's options (`lash_validation::commands`):
+//! `SolverFlags` → [`SolverChoice`], `RunArgs` → `RunOptions`, and so on. The checks that are
+//! facts of the engine (which option fits which method, the work–precision lists) are the
+//! engine's; their errors name options by the engine's names, spelled here as flags
+//! ([`crate::exit::flagged`]).
 
 use std::ffi::OsString;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
+use lash_validation::commands::{
+    CompareOptions, ExtremesOptions, MergeOptions, PoincareOptions, RunOptions, StiffnessOptions,
+    StudyOptions, SweepRunOptions, WorkPrecisionOptions,
+};
+use lash_validation::options::RTOL_MIN;
+use lash_validation::sweep::Shard;
+use lash_validation::workprecision::WorkPrecisionPlan;
+use lash_validation::{Error, SolverChoice};
 
-use crate::error::Error;
-use crate::sweep::Shard;
-
-/// Smallest relative tolerance accepted (the solver's range, `SolverOptions::rtol`).
-pub const RTOL_MIN: f64 = 1e-14;
+use crate::exit::flagged;
 
 /// The `lash` command line.
 ///
@@ -132,8 +142,21 @@ pub struct SolverFlags {
 }
 
 impl SolverFlags {
+    /// The engine's solver choice these flags make.
+    pub fn choice(&self) -> SolverChoice {
+        SolverChoice {
+            method: self.method,
+            rtol: self.rtol,
+            atol: self.atol.clone(),
+            step: self.step,
+            controller: self.controller,
+            max_steps: self.max_steps,
+            max_wall_time: self.max_wall_time,
+        }
+    }
+
     /// Lays the flags over `base` (the case's own options, or the defaults) and checks that
-    /// they fit the method that results.
+    /// they fit the method that results ([`SolverChoice::apply`]); an error names the flags.
     ///
     /// ```text
     /// method = --method or base.method
@@ -145,61 +168,7 @@ impl SolverFlags {
     /// budgets:   --max-steps, --max-wall-time replace base's for any method
     /// ```
     pub fn apply(&self, base: &SolverOptions) -> Result<SolverOptions, Error> {
-        let method = self.method.unwrap_or(base.method);
-        let same = method == base.method;
-        let mut o = base.clone();
-        o.method = method;
-        if let Some(n) = self.max_steps {
-            o.max_steps = n;
-        }
-        if let Some(w) = self.max_wall_time {
-            o.max_wall_time = Some(w);
-        }
-        if method.is_fixed_step() {
-            for (flag, given) in [
-                ("--rtol", self.rtol.is_some()),
-                ("--atol", self.atol.is_some()),
-                ("--controller", self.controller.is_some()),
-            ] {
-                if given {
-                    return Err(Error::Usage(format!(
-                        "{flag} is only for adaptive methods, and {method} is fixed-step"
-                    )));
-                }
-            }
-            o.step = self.step.or(if same { base.step } else { None });
-            if o.step.is_none() {
-                return Err(Error::Usage(format!(
-                    "method {method} is fixed-step and needs --step"
-                )));
-            }
-            o.controller = None;
-        } else {
-            if self.step.is_some() {
-                return Err(Error::Usage(format!(
-                    "--step is only for fixed-step methods, and {method} is adaptive"
-                )));
-            }
-            if self.controller.is_some() && method.is_diffsol() {
-                return Err(Error::Usage(format!(
-                    "--controller does not apply to {method}, which uses diffsol's own step control"
-                )));
-            }
-            o.step = None;
-            if let Some(r) = self.rtol {
-                o.rtol = r;
-            }
-            if let Some(a) = &self.atol {
-                o.atol = a.clone();
-            }
-            o.controller = if method.is_diffsol() {
-                None
-            } else {
-                self.controller
-                    .or(if same { base.controller } else { None })
-            };
-        }
-        Ok(o)
+        self.choice().apply(base).map_err(flagged)
     }
 }
 
@@ -223,6 +192,18 @@ pub struct RunArgs {
     /// Output directory. Default `out/run/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+impl RunArgs {
+    /// The engine's options.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            case: self.case.clone(),
+            solver: self.solver.choice(),
+            t_end: self.t_end,
+            out: self.out.clone(),
+        }
+    }
 }
 
 /// The studies `lash study` knows.
@@ -255,6 +236,16 @@ pub struct StudyArgs {
     pub out: Option<PathBuf>,
 }
 
+impl StudyArgs {
+    /// The engine's options.
+    pub fn options(&self) -> StudyOptions {
+        let StudyName::Paper = self.study;
+        StudyOptions {
+            out: self.out.clone(),
+        }
+    }
+}
+
 /// Arguments of `lash compare`.
 ///
 /// ```text
@@ -283,8 +274,18 @@ pub struct CompareArgs {
     pub out: Option<PathBuf>,
 }
 
-/// Default tolerances of `lash compare`.
-pub const COMPARE_TOLERANCES: [f64; 2] = [1e-6, 1e-9];
+impl CompareArgs {
+    /// The engine's options.
+    pub fn options(&self) -> CompareOptions {
+        CompareOptions {
+            case: self.case.clone(),
+            tolerances: self.tolerances.clone(),
+            steps: self.steps.clone(),
+            t_end: self.t_end,
+            out: self.out.clone(),
+        }
+    }
+}
 
 /// Arguments of `lash work-precision`.
 ///
@@ -321,75 +322,24 @@ pub struct WorkPrecisionArgs {
     pub out: Option<PathBuf>,
 }
 
-/// Default tolerances of `lash work-precision`.
-pub const DEFAULT_TOLERANCES: [f64; 3] = [1e-4, 1e-6, 1e-8];
-
-/// A checked work–precision request.
-///
-/// ```text
-/// runs = {adaptive m} × tolerances  ∪  {fixed-step m} × steps  ∪  controllers × tolerances
-///        (the controllers on one adaptive method of ours)
-/// ```
-///
-/// Source: the issue "The lash command" (`lash work-precision`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct WorkPrecisionPlan {
-    /// Methods, in the order given, no duplicates.
-    pub methods: Vec<Method>,
-    /// Tolerances of the adaptive methods (empty when there are none).
-    pub tolerances: Vec<f64>,
-    /// Steps of the fixed-step methods; None = derive from the case.
-    pub steps: Option<Vec<f64>>,
-    /// Controllers to compare (empty when no method in the list takes one).
-    pub controllers: Vec<ControllerKind>,
-}
-
 impl WorkPrecisionArgs {
-    /// Checks the lists against each other and applies the defaults.
-    pub fn plan(&self) -> Result<WorkPrecisionPlan, Error> {
-        let methods = self.methods.clone().unwrap_or_else(|| Method::ALL.to_vec());
-        no_duplicates("--methods", &methods, |m| m.name().to_string())?;
-        let any_fixed = methods.iter().any(|m| m.is_fixed_step());
-        let any_adaptive = methods.iter().any(|m| !m.is_fixed_step());
-        let any_controlled = methods
-            .iter()
-            .any(|m| !m.is_fixed_step() && !m.is_diffsol());
-        if self.steps.is_some() && !any_fixed {
-            return Err(Error::Usage(
-                "--steps is only for fixed-step methods, and --methods lists none".into(),
-            ));
-        }
-        if self.tolerances.is_some() && !any_adaptive {
-            return Err(Error::Usage(
-                "--tolerances is only for adaptive methods, and --methods lists none".into(),
-            ));
-        }
-        if self.controllers.is_some() && !any_controlled {
-            return Err(Error::Usage(
-                "--controllers needs an adaptive method with our step control in --methods".into(),
-            ));
-        }
-        let tolerances = match &self.tolerances {
-            Some(t) => t.clone(),
-            None if any_adaptive => DEFAULT_TOLERANCES.to_vec(),
-            None => vec![],
-        };
-        no_duplicates("--tolerances", &tolerances, |t| format!("{t:e}"))?;
-        if let Some(s) = &self.steps {
-            no_duplicates("--steps", s, |h| format!("{h:e}"))?;
-        }
-        let controllers = match &self.controllers {
-            Some(c) => c.clone(),
-            None if any_controlled => ControllerKind::ALL.to_vec(),
-            None => vec![],
-        };
-        no_duplicates("--controllers", &controllers, |c| c.name().to_string())?;
-        Ok(WorkPrecisionPlan {
-            methods,
-            tolerances,
+    /// The engine's options.
+    pub fn options(&self) -> WorkPrecisionOptions {
+        WorkPrecisionOptions {
+            case: self.case.clone(),
+            methods: self.methods.clone(),
+            tolerances: self.tolerances.clone(),
             steps: self.steps.clone(),
-            controllers,
-        })
+            controllers: self.controllers.clone(),
+            t_end: self.t_end,
+            out: self.out.clone(),
+        }
+    }
+
+    /// Checks the lists against each other and applies the defaults
+    /// ([`WorkPrecisionPlan::new`]); an error names the flags.
+    pub fn plan(&self) -> Result<WorkPrecisionPlan, Error> {
+        self.options().plan().map_err(flagged)
     }
 }
 
@@ -413,6 +363,18 @@ pub struct SweepArgs {
     /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+impl SweepArgs {
+    /// The engine's options.
+    pub fn options(&self) -> SweepRunOptions {
+        SweepRunOptions {
+            file: self.file.clone(),
+            jobs: self.jobs,
+            shard: self.shard,
+            out: self.out.clone(),
+        }
+    }
 }
 
 /// Arguments of `lash extremes`.
@@ -446,6 +408,19 @@ pub struct ExtremesArgs {
     pub out: Option<PathBuf>,
 }
 
+impl ExtremesArgs {
+    /// The engine's options.
+    pub fn options(&self) -> ExtremesOptions {
+        ExtremesOptions {
+            quick: self.quick,
+            jobs: self.jobs,
+            max_steps: self.max_steps,
+            max_wall_time: self.max_wall_time,
+            out: self.out.clone(),
+        }
+    }
+}
+
 /// Arguments of `lash merge`.
 ///
 /// ```text
@@ -461,6 +436,16 @@ pub struct MergeArgs {
     /// Where merged.csv and merged.md go. Default: the first DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+impl MergeArgs {
+    /// The engine's options.
+    pub fn options(&self) -> MergeOptions {
+        MergeOptions {
+            dirs: self.dirs.clone(),
+            out: self.out.clone(),
+        }
+    }
 }
 
 /// Arguments of `lash stiffness`.
@@ -491,6 +476,20 @@ pub struct StiffnessArgs {
     pub out: Option<PathBuf>,
 }
 
+impl StiffnessArgs {
+    /// The engine's options.
+    pub fn options(&self) -> StiffnessOptions {
+        StiffnessOptions {
+            case: self.case.clone(),
+            solver: self.solver.choice(),
+            samples: self.samples,
+            t_end: self.t_end,
+            measure: !self.no_measure,
+            out: self.out.clone(),
+        }
+    }
+}
+
 /// Arguments of `lash poincare`.
 ///
 /// ```text
@@ -519,6 +518,20 @@ pub struct PoincareArgs {
     /// Output directory. Default `out/poincare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+impl PoincareArgs {
+    /// The engine's options.
+    pub fn options(&self) -> PoincareOptions {
+        PoincareOptions {
+            case: self.case.clone(),
+            revolutions: self.revolutions,
+            perturbation: self.perturbation,
+            renorm_per_rev: self.renorm_per_rev,
+            solver: self.solver.choice(),
+            out: self.out.clone(),
+        }
+    }
 }
 
 /// What parsing the command line gave.
@@ -569,15 +582,6 @@ pub fn one_line(msg: &str) -> String {
         .strip_prefix("error: ")
         .unwrap_or(&joined)
         .to_string()
-}
-
-fn no_duplicates<T>(flag: &str, v: &[T], name: impl Fn(&T) -> String) -> Result<(), Error> {
-    for (i, a) in v.iter().enumerate() {
-        if v[..i].iter().any(|b| name(b) == name(a)) {
-            return Err(Error::Usage(format!("{flag} lists {} twice", name(a))));
-        }
-    }
-    Ok(())
 }
 
 /// Parses a method name (INTERFACES.md).
@@ -703,6 +707,8 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::exit::ExitStatus;
+    use lash_validation::workprecision::DEFAULT_TOLERANCES;
 
     fn cli(args: &[&str]) -> Result<Cli, Error> {
         let mut v = vec!["lash"];

@@ -1,0 +1,271 @@
+//! Dispatch: parsed command line → the engine's options → work → what is printed → exit code.
+//!
+//! ```text
+//! main_with(args) = 0 on success; on failure print report() to stderr and return
+//!                   exit_code()  (2 usage/input, 3 solver, 1 bug)
+//! stdout: the command's result (tables, descriptions, "wrote N files to DIR")
+//! stderr: the engine's notes and a sweep's progress bar (StderrProgress), errors
+//! ```
+//!
+//! Source: INTERFACES.md ("Exit codes of `lash`"). Commands whose engine (the model, the
+//! adaptive and stiff solvers) is not wired in yet check all their input and then fail with
+//! [`Error::NotYetAvailable`].
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+use lash_validation::commands::{self, describe_run, SweepOutcome, WorkPrecisionResult};
+use lash_validation::compare::Comparison;
+use lash_validation::extremes::{self, Matrix};
+use lash_validation::headline::Headline;
+use lash_validation::io::Written;
+use lash_validation::poincare::PoincareResult;
+use lash_validation::simulate::RunResult;
+use lash_validation::stiffness_cmd::StiffnessResult;
+use lash_validation::study;
+use lash_validation::sweep::{PointResult, SweepPoint, SweepReport};
+use lash_validation::workprecision::WpTable;
+use lash_validation::Error;
+
+use crate::args::{
+    self, Command, CompareArgs, ExtremesArgs, Parsed, PoincareArgs, RunArgs, StiffnessArgs,
+    SweepArgs, WorkPrecisionArgs,
+};
+use crate::exit::{ExitStatus, EXIT_BUG, EXIT_OK};
+use crate::progress::StderrProgress;
+
+/// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
+/// A panic (a bug) is caught and becomes exit code 1 (its message is printed by the panic hook).
+pub fn main_with<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    guard(|| {
+        args::parse(args).and_then(|p| match p {
+            Parsed::Print(s) => {
+                print!("{s}");
+                Ok(())
+            }
+            Parsed::Cli(c) => execute(c.command),
+        })
+    })
+}
+
+/// Runs `f` and maps its outcome to an exit code: 0, the error's code (its report printed on
+/// standard error), or 1 for a panic.
+pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(())) => EXIT_OK,
+        Ok(Err(e)) => {
+            eprintln!("{}", e.report());
+            e.exit_code()
+        }
+        Err(_) => EXIT_BUG,
+    }
+}
+
+/// Executes one command; `None` is the default run (the engine's `headline`: the 150 rpm
+/// press, ideal vs dry vs lubricated, RK4 against the best adaptive method).
+pub fn execute(command: Option<Command>) -> Result<(), Error> {
+    let Some(command) = command else {
+        return default_command().map(|_| ());
+    };
+    match command {
+        Command::Run(a) => run_command(&a).map(|_| ()),
+        Command::Study(a) => {
+            let w = commands::study_paper(&a.options())?;
+            println!("{}", study::describe_paper(&w.result, &w.dir));
+            Ok(())
+        }
+        Command::Compare(a) => compare_command(&a).map(|_| ()),
+        Command::WorkPrecision(a) => work_precision_command(&a).map(|_| ()),
+        Command::Sweep(a) => {
+            let progress = StderrProgress::new();
+            let outcome = commands::sweep(&a.options(), &progress);
+            progress.clear();
+            print_sweep(&outcome?);
+            Ok(())
+        }
+        Command::Stiffness(a) => stiffness_command(&a).map(|_| ()),
+        Command::Poincare(a) => poincare_command(&a).map(|_| ()),
+        Command::Extremes(a) => extremes_command(&a).map(|_| ()),
+        Command::Merge(a) => {
+            let m = commands::merge(&a.options())?;
+            println!(
+                "merged {} points into {} and {}",
+                m.table.rows.len(),
+                m.csv.display(),
+                m.md.display()
+            );
+            Ok(())
+        }
+    }
+}
+
+/// The default run: notes each case on standard error, prints the table and the files
+/// written (into `validation/reports/default`).
+pub fn default_command() -> Result<Written<Headline>, Error> {
+    let w = commands::default_run(None, &StderrProgress::new())?;
+    print!("{}", w.result.to_markdown());
+    println!("\nwrote {} files to {}", w.files.len(), w.dir.display());
+    Ok(w)
+}
+
+/// `lash run`: the engine's run (module `commands`), then what it did and where the files are.
+/// Returns the result and the output directory.
+pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
+    let w = commands::run(&a.options())?;
+    print!("{}", describe_run(&w.result));
+    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    Ok((w.result, w.dir))
+}
+
+/// `lash compare`: RK4 at several steps, every embedded pair and every stiff method at each
+/// tolerance, against the case's reference; notes the reference on standard error, writes
+/// compare.md and compare.json and prints the table.
+pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
+    let w = commands::compare(&a.options(), &StderrProgress::new())?;
+    print!("{}", w.result.to_markdown());
+    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    Ok(w.result)
+}
+
+/// `lash work-precision`: every method × tolerance and RK4 × step, and the controllers
+/// compared on one method of ours, against the case's reference; notes each run on standard
+/// error, writes the markdown and JSON tables and the log–log figures, prints the table.
+pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
+    let w = commands::work_precision(&a.options(), &StderrProgress::new())?;
+    let WorkPrecisionResult { table, reference } = w.result;
+    print!("{}", table.to_markdown());
+    println!(
+        "reference: {}\nwrote {} files to {}",
+        reference,
+        w.files.len(),
+        w.dir.display()
+    );
+    Ok(table)
+}
+
+/// `lash stiffness`: the engine's analysis, then the two limits and the verdict.
+pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf), Error> {
+    let w = commands::stiffness(&a.options())?;
+    print!("{}", w.result.report.describe());
+    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    Ok((w.result, w.dir))
+}
+
+/// `lash poincare`: the engine's section and Lyapunov exponent, then the estimate.
+pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), Error> {
+    let w = commands::poincare(&a.options())?;
+    print!("{}", w.result.describe());
+    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    Ok((w.result, w.dir))
+}
+
+/// `lash extremes`: runs the matrix (or its quick subset), notes each scene and run on
+/// standard error, writes extremes.md and extremes.json, prints the counts, and fails with
+/// exit code 1 (a bug) when some run ended in an outcome that is not allowed (the report is
+/// written first, to show which).
+pub fn extremes_command(a: &ExtremesArgs) -> Result<Matrix, Error> {
+    let w = commands::extremes(&a.options(), &StderrProgress::new())?;
+    print!(
+        "{}",
+        extremes::describe(&w.result, &w.files[0], &w.files[1])
+    );
+    extremes::check(&w.result, &w.files[0])?;
+    Ok(w.result)
+}
+
+/// `lash sweep` with a point runner: the engine's sweep ([`commands::sweep_with`]) with a
+/// progress bar when standard error is a terminal, then one line of counts.
+pub fn sweep_command<F>(a: &SweepArgs, runner: F) -> Result<SweepReport, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let progress = StderrProgress::new();
+    let outcome = commands::sweep_with(&a.options(), runner, &progress);
+    progress.clear();
+    let outcome = outcome?;
+    print_sweep(&outcome);
+    Ok(outcome.report)
+}
+
+/// Prints the closing line of a sweep on standard error.
+fn print_sweep(o: &SweepOutcome) {
+    eprintln!(
+        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
+        o.shard,
+        o.points,
+        o.report.ok,
+        o.report.solver_failed,
+        o.report.skipped,
+        o.dir.display()
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::args::MergeArgs;
+    use lash_validation::sweep::Shard;
+
+    #[test]
+    fn sweep_shards_then_merge_through_the_commands() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("base.json"), b"{}").unwrap();
+        let file = d.path().join("grid.json");
+        std::fs::write(
+            &file,
+            br#"{"case": "base.json", "speed_rpm": [120, 150, 180], "clearance": [1e-4, 2e-4]}"#,
+        )
+        .unwrap();
+        let out = d.path().join("res");
+        let runner = |p: &SweepPoint, _: &Path| {
+            Ok(PointResult::flatten(&serde_json::json!({
+                "x": p.params.speed_rpm.unwrap() * p.params.clearance.unwrap()
+            })))
+        };
+        for i in 0..2 {
+            let a = SweepArgs {
+                file: file.clone(),
+                jobs: Some(2),
+                shard: Some(Shard { index: i, count: 2 }),
+                out: Some(out.clone()),
+            };
+            let r = sweep_command(&a, runner).unwrap();
+            assert_eq!((r.selected, r.ok), (3, 3));
+        }
+        execute(Some(Command::Merge(MergeArgs {
+            dirs: vec![out.clone()],
+            out: None,
+        })))
+        .unwrap();
+        let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows.len(), 7);
+        assert!(
+            rows[0].ends_with(",speed_rpm,clearance,status,error,x"),
+            "{}",
+            rows[0]
+        );
+        // Point 0 = 120 rpm × 1e-4 m.
+        assert!(rows[1].ends_with(",120.0,0.0001,ok,,0.012"), "{}", rows[1]);
+    }
+
+    #[test]
+    fn guard_maps_outcomes_to_exit_codes() {
+        assert_eq!(guard(|| Ok(())), 0);
+        assert_eq!(guard(|| Err(Error::Usage("x".into()))), 2);
+        assert_eq!(
+            guard(
+                || Err(Error::Solver(lash_solver::SolveError::NonFiniteState {
+                    t: 1.0,
+                    y: vec![]
+                }))
+            ),
+            3
+        );
+        assert_eq!(guard(|| panic!("a bug")), 1);
+    }
+}

@@ -1,0 +1,122 @@
+//! Exit codes of `lash`, and the one line (two for a solver failure) it prints for an error.
+//!
+//! ```text
+//! exit code = 0  success
+//!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Io)
+//!             3  the solver failed       (ErrorKind::Solver)
+//!             1  a bug                   (ErrorKind::Bug: NotYetAvailable, Internal; a panic)
+//! ```
+//!
+//! The engine names options by its own names (`rtol`, `t_end`); `lash` spells them as its
+//! flags (`--rtol`, `--t-end`: [`flag`]).
+//!
+//! Source: the exit-code contract of INTERFACES.md ("Exit codes of `lash`").
+
+use lash_validation::{Error, ErrorKind};
+
+/// Exit code of a successful run.
+pub const EXIT_OK: u8 = 0;
+/// Exit code of a bug (an internal inconsistency, or a command whose engine is not built yet).
+pub const EXIT_BUG: u8 = 1;
+/// Exit code of bad input or usage.
+pub const EXIT_USAGE: u8 = 2;
+/// Exit code of a solver failure.
+pub const EXIT_SOLVER: u8 = 3;
+
+/// The flag of an engine option: `t_end` → `--t-end`.
+pub fn flag(option: &str) -> String {
+    format!("--{}", option.replace('_', "-"))
+}
+
+/// The error with the options in its message spelled as flags: an [`Error::Option`] becomes
+/// the [`Error::Usage`] `lash` reports; every other error stays as it is.
+pub fn flagged(e: Error) -> Error {
+    match e {
+        Error::Option(o) => Error::Usage(o.render(&flag)),
+        other => other,
+    }
+}
+
+/// What `lash` makes of an engine error: its exit code and what it prints.
+///
+/// Source: INTERFACES.md ("Exit codes of `lash`").
+pub trait ExitStatus {
+    /// The exit code (INTERFACES.md).
+    fn exit_code(&self) -> u8;
+
+    /// What `lash` prints on standard error: `error: MESSAGE` on one line (options spelled as
+    /// flags); for a solver failure a second line with the time and the state at the failure.
+    fn report(&self) -> String;
+}
+
+impl ExitStatus for Error {
+    fn exit_code(&self) -> u8 {
+        match self.kind() {
+            ErrorKind::BadInput => EXIT_USAGE,
+            ErrorKind::Solver => EXIT_SOLVER,
+            ErrorKind::Bug => EXIT_BUG,
+        }
+    }
+
+    fn report(&self) -> String {
+        let mut s = format!("error: {}", self.message_with(&flag));
+        if let Error::Solver(e) = self {
+            if let (Some(t), Some(y)) = (e.time(), e.state()) {
+                let ys: Vec<String> = y.iter().map(|v| format!("{v:e}")).collect();
+                s.push_str(&format!("\n  at t = {t:e}, state = [{}]", ys.join(", ")));
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lash_solver::SolveError;
+    use lash_validation::error::OptionError;
+
+    #[test]
+    fn exit_codes_follow_interfaces() {
+        assert_eq!(Error::Usage("x".into()).exit_code(), 2);
+        assert_eq!(Error::Input("x".into()).exit_code(), 2);
+        let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
+        assert_eq!(io.exit_code(), 2);
+        assert!(io.to_string().starts_with("a/b: "));
+        let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
+        assert_eq!(s.exit_code(), 3);
+        assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
+        assert_eq!(Error::Internal("x".into()).exit_code(), 1);
+    }
+
+    #[test]
+    fn solver_report_names_time_and_state() {
+        let e = Error::Solver(SolveError::NonFiniteState {
+            t: 0.25,
+            y: vec![1.0, -2.5],
+        });
+        let r = e.report();
+        let lines: Vec<&str> = r.lines().collect();
+        assert_eq!(lines.len(), 2);
+        assert_eq!(
+            lines[0],
+            "error: solver failed: non-finite or diverging state at t = 2.5e-1"
+        );
+        assert_eq!(lines[1], "  at t = 2.5e-1, state = [1e0, -2.5e0]");
+        // Usage errors stay on one line.
+        assert_eq!(
+            Error::Usage("--rtol must be > 0".into()).report(),
+            "error: --rtol must be > 0"
+        );
+    }
+
+    #[test]
+    fn option_errors_are_reported_with_flags() {
+        let e = Error::from(OptionError::leading("t_end", " must be > 0"));
+        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.report(), "error: --t-end must be > 0");
+        let u = flagged(e);
+        assert!(matches!(&u, Error::Usage(m) if m == "--t-end must be > 0"));
+        assert_eq!(flag("renorm_per_rev"), "--renorm-per-rev");
+    }
+}

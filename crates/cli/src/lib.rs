@@ -1,0 +1,22 @@
+//! # lash-cli
+//!
+//! The `lash` command line over the engine (`lash-validation`): clap arguments, their
+//! conversion into the engine's options, what each command prints, exit codes, and the
+//! progress display.
+//!
+//! ```text
+//! argv ──args::parse──▶ Command ──args: .options()──▶ lash_validation::commands::*
+//!      ──Written<result> | Error──▶ app: print (stdout), exit: report (stderr) + exit code
+//! engine notes, sweep progress ──Progress──▶ progress::StderrProgress (bar on a terminal)
+//! ```
+//!
+//! Modules: [`args`] (clap derive types and value parsers), [`app`] (dispatch and printing),
+//! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`progress`]
+//! (notes and the progress bar on standard error).
+
+#![warn(missing_docs)]
+
+pub mod app;
+pub mod args;
+pub mod exit;
+pub mod progress;
