@@ -359,7 +359,8 @@ fn section_hist(m: &Mechanism, rtol: f64) {
     let per = crank_period(m);
     let o = options(Method::Rodas5p, rtol, rtol * 1e-3, 0.0, Output::Final);
     let y0 = m.initial_state();
-    let mut st = make_stepper(m, m.t_start(), &y0, &o).expect("stepper");
+    let problem = lash_solver::Problem::new(m, &o).expect("options");
+    let mut st = make_stepper(&problem, m.t_start(), &y0).expect("stepper");
     let nb = 12;
     let mut acc = vec![0usize; nb];
     let mut rej = vec![0usize; nb];

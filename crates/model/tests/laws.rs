@@ -7,7 +7,7 @@ use lash_model::laws::{
     hertz_stiffness, step_damping, Film, FilmModel, FrictionLaw, NormalLaw, MIN_IMPACT_VELOCITY,
 };
 use lash_solver::{
-    EventAction, EventHit, EventSpec, Integrator, Method, OdeSystem, SolverOptions, StepOutcome,
+    EventAction, EventHit, EventSpec, Method, OdeSystem, Problem, SolverOptions, StepOutcome,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -639,7 +639,8 @@ fn impact(law: NormalLaw, mass: f64, v: f64, h: f64) -> Impact {
         step: Some(h),
         ..Default::default()
     };
-    let mut it = Integrator::new(&sys, 0.0, 1.0, &[-1e-6, v], &opts).unwrap();
+    let problem = Problem::new(&sys, &opts).unwrap();
+    let mut it = problem.integrator(0.0, 1.0, &[-1e-6, v]).unwrap();
     let (mut t_on, mut delta_max) = (f64::NAN, f64::NAN);
     loop {
         match it.step().unwrap() {

@@ -28,7 +28,7 @@ use std::fmt::Write as _;
 use lash_model::cases::press_catalogue;
 use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec, MAX_MAGNITUDE, MIN_MAGNITUDE};
 use lash_model::{Mechanism, Scene, SceneError};
-use lash_solver::{solve, Atol, Integrator, Method, OdeSystem, Output, SolveError, SolverOptions};
+use lash_solver::{solve, Atol, Method, OdeSystem, Output, Problem, SolveError, SolverOptions};
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::strategy::ValueTree;
@@ -1942,7 +1942,9 @@ fn run_mechanism(doc: &Value) -> Result<Run, TestCaseError> {
     let y0 = m.initial_state();
     let phi0 = m.outputs(m.t_start(), &y0).constraint_violation;
     prop_assert!(phi0 <= 1e-11, "assembled ‖Φ‖ = {phi0:e}\n{text}");
-    let mut it = Integrator::new(&m, m.t_start(), m.t_end(), &y0, &dopri())
+    let problem = Problem::new(&m, &dopri()).map_err(|e| TestCaseError::fail(format!("{e}")))?;
+    let mut it = problem
+        .integrator(m.t_start(), m.t_end(), &y0)
         .map_err(|e| TestCaseError::fail(format!("{e}")))?;
     let film = scene.joints.iter().find_map(|j| match j {
         JointSpec::Clearance(c) => c.film.as_ref().map(|f| {

@@ -17,6 +17,10 @@
 //!   column by column from n products: the system's Jacobian, or the forward-difference
 //!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations).
 //!
+//! Ownership: diffsol's solvers borrow their `OdeSolverProblem`. Following diffsol's own
+//! pattern, the problem ([`DiffsolProblem`]) is owned by the caller's [`crate::Problem`] and
+//! every [`DiffsolStepper`] borrows it; no `unsafe` is involved.
+//!
 //! What our driver relies on, and how it is met:
 //! - `step(t_stop)` never passes `t_stop`: it is given to diffsol as its stop time
 //!   (`set_stop_time`), and a step that diffsol reports as having reached it ends exactly on it.
@@ -24,22 +28,28 @@
 //!   difference table; SDIRK: the continuous extension of the tableau).
 //! - Events are located by [`crate::Integrator`] on that dense output; diffsol's root finding
 //!   is not used.
-//! - `restart(t, y)` builds a new diffsol solver from a fresh state (t, y, f(t, y), h): no
-//!   history survives, BDF starts again at order 1, the Jacobian is re-evaluated. The first
-//!   trial step is the last accepted one (capped by h_max), or Hairer's estimate (diffsol's
-//!   `set_step_size`) at the very start. States are built from diffsol's `StateCommon`, so a
-//!   BDF difference table is never inherited: the known pitfall of a solver built from a
-//!   state taken after `state_mut_back` (stale history unless `as_mut()` is called first)
-//!   cannot arise.
+//! - `restart(t, y)` builds a new diffsol solver on the same problem from a fresh state
+//!   (t, y, f(t, y), h): no history survives, BDF starts again at order 1, the Jacobian is
+//!   re-evaluated. The first trial step is chosen as at the start: `opts.h0`, else Hairer's
+//!   estimate (diffsol's `set_step_size`), capped by h_max. States are built from diffsol's
+//!   `StateCommon`, so a BDF difference table is never inherited: the known pitfall of a
+//!   solver built from a state taken after `state_mut_back` (stale history unless `as_mut()`
+//!   is called first) cannot arise. diffsol's `set_state` with such a fresh state (after
+//!   `set_problem`) does not give the same results as a rebuilt solver: on a bouncing ball with
+//!   drag its BDF failed with a too-small step at the first bounce, where the rebuilt solver
+//!   runs through (it keeps the step-size history and Newton rate estimates of the old
+//!   trajectory). Restarts therefore rebuild; a rebuild costs the allocation of the solver's
+//!   work vectors and one Jacobian, which the fresh state needs anyway.
 //! - diffsol has no maximum step. Our `h_max` is enforced with stop times: when it is finite
-//!   each step gets the stop time t + h_max (t_stop itself when it is at most
-//!   h_max·(1 + 10⁻¹⁰) away, so that no sliver is left), so no step is longer than
-//!   h_max·(1 + 10⁻¹⁰), at the cost of a step-size rescale whenever a stop is reached.
+//!   each step gets the stop time t + h_max (t_stop itself when the landing rule of
+//!   [`crate::stepper::landing_step`] says a step of h_max lands on it), so no step is longer
+//!   than h_max·(1 + 10⁻¹⁰), at the cost of a step-size rescale whenever a stop is reached.
 //! - A stop time closer than diffsol's round-off (100 ε (|t| + |h|)) cannot be stepped to by
 //!   diffsol; such a sliver (an event just before t_end) is bridged by one explicit Euler
 //!   step and a restart.
 //! - `h_min` (floor max(h_min, 16 ε |t|)) is diffsol's minimum step, updated before each step.
-//! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget).
+//! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget);
+//!   the budgets ([`crate::stepper::Budget`]) are checked before every step.
 //! - diffsol's controllers are its own; `controller` and `limits` do not apply (options
 //!   validation rejects a controller for these methods) and `adaptive = false` is rejected.
 //!
@@ -53,10 +63,10 @@
 //! rejected_error, Newton convergence failures → rejected_newton, Newton iterations →
 //! newton_iters, linear-solver setups (factorisations of I − hγJ) → lu_factorizations;
 //! rhs_evals and jac_evals are counted by our operator (finite-difference columns included).
-//! Counters of solvers replaced at restarts are carried over.
+//! Counters of solvers replaced at restarts are carried over; the RHS and Jacobian counts are
+//! those made since this stepper was built (a problem may serve several integrations).
 
 use std::cell::RefCell;
-use std::ptr::NonNull;
 
 use diffsol::ode_solver::state::StateCommon;
 use diffsol::{
@@ -71,7 +81,7 @@ use crate::error::SolveError;
 use crate::jacobian::JacobianEvaluator;
 use crate::options::{Method, SolverOptions};
 use crate::stats::Stats;
-use crate::stepper::Stepper;
+use crate::stepper::{check_stop, landing_step, step_floor, Budget, Stepper};
 use crate::system::OdeSystem;
 
 type Vd = NalgebraVec<f64>;
@@ -270,9 +280,70 @@ impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
 
 type Problem<'a, S> = OdeSolverProblem<SysEqn<'a, S>>;
 
-enum Solver<'a, S: OdeSystem + ?Sized> {
-    Bdf(Box<Bdf<'a, SysEqn<'a, S>, Lu>>),
-    Sdirk(Box<Sdirk<'a, SysEqn<'a, S>, Lu>>),
+/// diffsol's problem for one system and one set of tolerances: owned by the caller (our
+/// [`crate::Problem`]) and borrowed by every [`DiffsolStepper`] built on it, diffsol's own
+/// pattern (the caller keeps the `OdeSolverProblem`, the solver borrows it).
+pub struct DiffsolProblem<'a, S: OdeSystem + ?Sized> {
+    problem: Problem<'a, S>,
+}
+
+impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
+    /// Builds diffsol's problem for `sys` with the tolerances of `opts` (validated options of
+    /// one of diffsol's methods).
+    pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
+        let method = opts.method;
+        if !method.is_diffsol() {
+            return Err(SolveError::InvalidOptions(format!(
+                "{method} is not one of diffsol's methods"
+            )));
+        }
+        if !opts.adaptive {
+            return Err(SolveError::InvalidOptions(format!(
+                "method {method} cannot run non-adaptive"
+            )));
+        }
+        let n = sys.dim();
+        let ctx = Cx::default();
+        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        let eqn = SysEqn {
+            rhs: SysRhs {
+                sys,
+                n,
+                ctx,
+                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
+                work: RefCell::new((
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    vec![0.0; n],
+                    faer::Mat::zeros(n, n),
+                )),
+                counts: RefCell::new(Stats::default()),
+            },
+            // Never evaluated: states are built directly from (t, y).
+            init: SysInit {
+                y0: vec![0.0; n],
+                ctx,
+            },
+        };
+        let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
+        let mut problem = OdeBuilder::<Md>::new()
+            .rtol(opts.rtol)
+            .atol(atol)
+            .build_from_eqn(eqn)
+            .map_err(|e| SolveError::InvalidOptions(format!("diffsol: {e}")))?;
+        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
+        Ok(DiffsolProblem { problem })
+    }
+
+    /// rhs_evals and jac_evals made through this problem so far (by every stepper on it).
+    fn counts(&self) -> Stats {
+        *self.problem.eqn.rhs.counts.borrow()
+    }
+}
+
+enum Solver<'p, 'a, S: OdeSystem + ?Sized> {
+    Bdf(Box<Bdf<'p, SysEqn<'a, S>, Lu>>),
+    Sdirk(Box<Sdirk<'p, SysEqn<'a, S>, Lu>>),
 }
 
 macro_rules! with_solver {
@@ -292,23 +363,24 @@ macro_rules! with_solver {
 /// ```
 /// diffsol 0.18 (M. Robinson), nalgebra backend; see the module documentation for how our
 /// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
-pub struct DiffsolStepper<'a, S: OdeSystem + ?Sized> {
-    /// The live solver. It borrows `*problem`; it is dropped before `problem` is freed
-    /// (see `Drop`). Always `Some` outside `restart` and `drop`.
-    solver: Option<Solver<'a, S>>,
-    /// The problem, owned (allocated by `Box`, freed in `Drop`).
-    problem: NonNull<Problem<'a, S>>,
+pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
+    problem: &'p DiffsolProblem<'a, S>,
+    /// The live solver, borrowing `problem`. Always `Some` outside a failed restart.
+    solver: Option<Solver<'p, 'a, S>>,
     method: Method,
     opts: SolverOptions,
+    budget: Budget,
     t: f64,
     t_prev: f64,
     y: Vec<f64>,
     /// The stop time currently set in diffsol.
     tstop: Option<f64>,
-    h_last: Option<f64>,
     /// The state before an explicit Euler sliver step (see `sliver_step`), while the last
     /// step is one.
     sliver: Option<Vec<f64>>,
+    /// The problem's rhs/jac counters when this stepper was built (the problem may serve
+    /// several integrations).
+    counts_at_start: Stats,
     /// Solver counters of replaced solvers (restarts).
     base: Stats,
     stats: Stats,
@@ -334,74 +406,47 @@ fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
     }
 }
 
-impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
-    /// Builds diffsol's `method` (bdf, trbdf2 or esdirk34) at (t0, y0). Options must be
-    /// validated.
-    pub fn new(sys: &'a S, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
+impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
+    /// Builds the problem's method (bdf, trbdf2 or esdirk34, from `opts`) at (t0, y0).
+    /// Options must be validated and be the ones the problem was built with.
+    pub fn new(
+        problem: &'p DiffsolProblem<'a, S>,
+        t0: f64,
+        y0: &[f64],
+        opts: &SolverOptions,
+    ) -> Result<Self, SolveError> {
         let method = opts.method;
         if !method.is_diffsol() {
             return Err(SolveError::InvalidOptions(format!(
                 "{method} is not one of diffsol's methods"
             )));
         }
-        if !opts.adaptive {
-            return Err(SolveError::InvalidOptions(format!(
-                "method {method} cannot run non-adaptive"
-            )));
-        }
         let n = y0.len();
-        if n != sys.dim() {
+        if n != problem.problem.eqn.rhs.n {
             return Err(SolveError::InvalidOptions(format!(
                 "y0 has {n} entries, the system {}",
-                sys.dim()
+                problem.problem.eqn.rhs.n
             )));
         }
-        let ctx = Cx::default();
-        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
-        let eqn = SysEqn {
-            rhs: SysRhs {
-                sys,
-                n,
-                ctx,
-                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
-                work: RefCell::new((
-                    vec![0.0; n],
-                    vec![0.0; n],
-                    vec![0.0; n],
-                    faer::Mat::zeros(n, n),
-                )),
-                counts: RefCell::new(Stats::default()),
-            },
-            init: SysInit {
-                y0: y0.to_vec(),
-                ctx,
-            },
-        };
-        let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
-        let mut problem = OdeBuilder::<Md>::new()
-            .rtol(opts.rtol)
-            .atol(atol)
-            .t0(t0)
-            .build_from_eqn(eqn)
-            .map_err(|e| SolveError::InvalidOptions(format!("diffsol: {e}")))?;
-        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
-        let problem = NonNull::from(Box::leak(Box::new(problem)));
+        let ctx = *problem.problem.context();
         let mut st = DiffsolStepper {
-            solver: None,
             problem,
+            solver: None,
             method,
             opts: opts.clone(),
+            budget: Budget::new(opts),
             t: t0,
             t_prev: t0,
             y: y0.to_vec(),
             tstop: None,
-            h_last: None,
             sliver: None,
+            counts_at_start: problem.counts(),
             base: Stats::default(),
             stats: Stats::default(),
             buf: RefCell::new(Vd::zeros(n, ctx)),
         };
-        st.start(t0, y0, opts.h0)?;
+        st.start(t0, y0)?;
+        st.update_stats();
         Ok(st)
     }
 
@@ -413,21 +458,10 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
             .map_or(0, |solver| with_solver!(solver, s => s.order()))
     }
 
-    /// The owned problem with the lifetime the solvers need.
-    ///
-    /// # Safety
-    /// The reference must not outlive `self`: it may only be stored in `self.solver`, which
-    /// `Drop` clears before it frees the problem. The problem is never moved or mutated while
-    /// a solver exists.
-    unsafe fn problem_ref(&self) -> &'a Problem<'a, S> {
-        // SAFETY: `problem` comes from `Box::leak` in `new` and is freed only in `Drop`.
-        unsafe { &*self.problem.as_ptr() }
-    }
-
-    /// Builds a fresh diffsol solver at (t, y) with first trial step `h` (or an estimate).
-    fn start(&mut self, t: f64, y: &[f64], h: Option<f64>) -> Result<(), SolveError> {
-        // SAFETY: the reference is stored only in `self.solver` (see `problem_ref`).
-        let problem = unsafe { self.problem_ref() };
+    /// Builds a fresh diffsol solver at (t, y) with first trial step `opts.h0` or diffsol's
+    /// starting-step estimate.
+    fn start(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        let problem = &self.problem.problem;
         let ctx = *problem.context();
         let n = y.len();
         let yv = Vd::from_slice(y, ctx);
@@ -455,6 +489,7 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
             _ => Tableau::<f64>::esdirk34().order(),
         };
         let err = |e: DiffsolError| map_err(e, t, 0.0, y);
+        let h = self.opts.h0;
         let solver = match self.method {
             Method::Bdf => {
                 let mut state = BdfState::<Vd>::new_from_common(common);
@@ -513,11 +548,7 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
     fn sliver_step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         let n = self.y.len();
         let mut f = vec![0.0; n];
-        // SAFETY: a short-lived shared borrow of the problem, which outlives this call.
-        unsafe { self.problem_ref() }
-            .eqn
-            .rhs
-            .eval(self.t, &self.y, &mut f);
+        self.problem.problem.eqn.rhs.eval(self.t, &self.y, &mut f);
         let dt = t_stop - self.t;
         let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
         if !y_new.iter().all(|v| v.is_finite()) {
@@ -527,9 +558,8 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
                 y: self.y.clone(),
             });
         }
-        let (t_old, y_old, h_last) = (self.t, self.y.clone(), self.h_last);
+        let (t_old, y_old) = (self.t, self.y.clone());
         self.restart(t_stop, &y_new)?;
-        self.h_last = h_last;
         self.t_prev = t_old;
         self.sliver = Some(y_old);
         self.base.accepted += 1;
@@ -540,13 +570,7 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
 
     /// Refreshes the counters from the live solver.
     fn update_stats(&mut self) {
-        // SAFETY: a short-lived shared borrow of the problem, which outlives `self`'s methods.
-        let counts = unsafe { self.problem_ref() }
-            .eqn
-            .rhs
-            .counts
-            .borrow()
-            .clone();
+        let counts = self.problem.counts();
         let Some(solver) = self.solver.as_ref() else {
             return;
         };
@@ -559,22 +583,12 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolStepper<'a, S> {
         st.steps = st.accepted + st.rejected_error + st.rejected_newton;
         st.newton_iters = b.newton_iters + d.number_of_nonlinear_solver_iterations;
         st.lu_factorizations = b.lu_factorizations + d.number_of_linear_solver_setups;
-        st.rhs_evals = counts.rhs_evals;
-        st.jac_evals = counts.jac_evals;
+        st.rhs_evals = counts.rhs_evals - self.counts_at_start.rhs_evals;
+        st.jac_evals = counts.jac_evals - self.counts_at_start.jac_evals;
     }
 }
 
-impl<S: OdeSystem + ?Sized> Drop for DiffsolStepper<'_, S> {
-    fn drop(&mut self) {
-        // The solver borrows the problem: drop it first.
-        self.solver = None;
-        // SAFETY: `problem` was created by `Box::leak` in `new`, is freed only here, and no
-        // reference to it survives (the solver is gone).
-        unsafe { drop(Box::from_raw(self.problem.as_ptr())) };
-    }
-}
-
-impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
+impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
     fn method(&self) -> Method {
         self.method
     }
@@ -589,20 +603,8 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
     }
 
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        if self.stats.steps >= self.opts.max_steps {
-            return Err(SolveError::TooManySteps {
-                t: self.t,
-                steps: self.stats.steps,
-                y: self.y.clone(),
-            });
-        }
-        if !(t_stop > self.t) {
-            return Err(SolveError::StepSizeTooSmall {
-                t: self.t,
-                h: t_stop - self.t,
-                y: self.y.clone(),
-            });
-        }
+        check_stop(self.t, t_stop)?;
+        self.budget.check(self.stats.steps, self.t, &self.y)?;
         self.sliver = None;
         let Some(solver) = self.solver.as_mut() else {
             return Err(SolveError::NewtonFailure {
@@ -622,19 +624,21 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
         let want = if h_max.is_finite() {
             match self.tstop {
                 Some(ts) if ts <= t_stop => ts,
-                // Land on t_stop rather than leave a sliver below 10⁻¹⁰ h_max.
-                _ if remaining <= h_max * (1.0 + 1e-10) => t_stop,
-                _ => self.t + h_max,
+                _ => {
+                    // The landing rule: land on t_stop rather than leave a sliver.
+                    let (h, lands) = landing_step(self.t, t_stop, h_max);
+                    if lands {
+                        t_stop
+                    } else {
+                        self.t + h
+                    }
+                }
             }
         } else {
             t_stop
         };
         let (t, y) = (self.t, &self.y);
-        let floor = self
-            .opts
-            .h_min
-            .max(16.0 * f64::EPSILON * t.abs())
-            .max(f64::MIN_POSITIVE);
+        let floor = step_floor(self.opts.h_min, t).max(f64::MIN_POSITIVE);
         if self.tstop != Some(want) {
             with_solver!(&mut *solver, s => s.set_stop_time(want))
                 .map_err(|e| map_err(e, t, h_now, y))?;
@@ -685,9 +689,16 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
         } else {
             t_new
         };
-        let solver = self.solver.as_ref().expect("solver present");
-        let y_new = with_solver!(solver, s => s.state().y.inner().as_slice().to_vec());
-        if !y_new.iter().all(|v| v.is_finite()) {
+        let finite = with_solver!(&*solver, s => {
+            let y_new = s.state().y.inner().as_slice();
+            if y_new.iter().all(|v| v.is_finite()) {
+                self.y.copy_from_slice(y_new);
+                true
+            } else {
+                false
+            }
+        });
+        if !finite {
             self.update_stats();
             return Err(SolveError::NonFiniteState {
                 t: self.t,
@@ -696,9 +707,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
         }
         self.t_prev = self.t;
         self.t = t_new;
-        self.y = y_new;
         let h = self.t - self.t_prev;
-        self.h_last = Some(h);
         self.update_stats();
         self.stats.record_step_size(h);
         Ok(())
@@ -735,18 +744,14 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, S> {
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         self.sliver = None;
         self.update_stats();
-        self.base = self.stats.clone();
-        let h = self.h_last.map(|h| h.min(self.opts.h_max));
-        self.start(t, y, h)?;
+        self.base = self.stats;
+        self.start(t, y)?;
         self.update_stats();
         Ok(())
     }
 
-    fn stats(&self) -> &Stats {
-        &self.stats
-    }
-    fn stats_mut(&mut self) -> &mut Stats {
-        &mut self.stats
+    fn stats(&self) -> Stats {
+        self.stats
     }
 }
 

@@ -9,8 +9,9 @@
 //! - [`OdeSystem`]: the problem (right-hand side, optional Jacobian, event functions and the
 //!   hook an event runs).
 //! - [`SolverOptions`]: method, tolerances, step limits, controller, output, events.
-//! - [`solve`] integrates a span; [`Integrator`] steps one step at a time and says where the
-//!   state is after each ([`StepOutcome`]).
+//! - [`solve`] integrates a span; a [`Problem`] (system + validated options) builds an
+//!   [`Integrator`], which steps one step at a time and says where the state is after each
+//!   ([`StepOutcome`]).
 //! - [`Stats`] counts the work; [`SolveError`] says why a run failed, with time and state.
 //!
 //! Methods: the paper's fixed-step RK4 ([`rk4`]); the explicit embedded pairs Bogacki–Shampine
@@ -23,6 +24,84 @@
 //!
 //! Analysis ([`analysis`]): stiffness diagnostics (Jacobian eigenvalues, RK4 stability limits
 //! predicted and measured) and the largest Lyapunov exponent (Benettin's method).
+//!
+//! One step driver ([`onestep`]) runs every one-step method (the explicit pairs, Rodas5P):
+//! step-size control, rejections, landing on the stop time, budgets and counters are written
+//! once. After every located event the integrator restarts the method with a freshly chosen
+//! first step and samples the event functions inside every step, so a bounce is not missed
+//! (see [`integrator`]).
+//!
+//! # Van der Pol with a stiff method
+//!
+//! ```
+//! use lash_solver::{solve, Method, OdeSystem, Output, SolverOptions, Atol};
+//!
+//! /// y1' = y2,  y2' = μ (1 − y1²) y2 − y1  with μ = 1000: relaxation oscillations whose
+//! /// fast jumps make the problem stiff (HNW II §IV.1).
+//! struct VanDerPol;
+//! impl OdeSystem for VanDerPol {
+//!     fn dim(&self) -> usize { 2 }
+//!     fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+//!         dy[0] = y[1];
+//!         dy[1] = 1000.0 * (1.0 - y[0] * y[0]) * y[1] - y[0];
+//!     }
+//! }
+//!
+//! let opts = SolverOptions {
+//!     method: Method::Rodas5p,
+//!     rtol: 1e-8,
+//!     atol: Atol::Scalar(1e-11),
+//!     output: Output::Final,
+//!     ..Default::default()
+//! };
+//! let sol = solve(&VanDerPol, (0.0, 2000.0), &[2.0, 0.0], &opts).unwrap();
+//! // Reference y1(2000) of the IVP Test Set (Mazzia & Magherini, problem VDPOLM).
+//! let reference = 1.706167732170469;
+//! assert!((sol.y_final[0] - reference).abs() < 1e-6 * reference);
+//! // An explicit method would need steps below ~2.8/|λ| ≈ 1e-3 over much of the span.
+//! assert!(sol.stats.accepted < 5_000, "{:?}", sol.stats);
+//! ```
+//!
+//! # A bouncing ball with an event
+//!
+//! ```
+//! use lash_solver::*;
+//!
+//! /// Height and velocity under gravity; the event h = 0 (falling) reverses the velocity
+//! /// with restitution 0.8.
+//! struct Ball;
+//! impl OdeSystem for Ball {
+//!     fn dim(&self) -> usize { 2 }
+//!     fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+//!         dy[0] = y[1];
+//!         dy[1] = -9.81;
+//!     }
+//!     fn n_events(&self) -> usize { 1 }
+//!     fn event_spec(&self, _i: usize) -> EventSpec {
+//!         EventSpec { direction: Direction::Falling, action: EventAction::Continue }
+//!     }
+//!     fn events(&self, _t: f64, y: &[f64], g: &mut [f64]) { g[0] = y[0]; }
+//!     fn on_event(&self, _hit: &EventHit, y: &mut [f64]) -> EventAction {
+//!         y[1] *= -0.8;
+//!         EventAction::Continue
+//!     }
+//! }
+//!
+//! let sol = solve(&Ball, (0.0, 2.5), &[1.0, 0.0], &SolverOptions::with_method(Method::Dopri54))
+//!     .unwrap();
+//! // Closed form from 1 m at rest: t1 = √(2/g), each flight lasts 2 e v_k / g.
+//! let t1 = (2.0 / 9.81f64).sqrt();
+//! let mut expected = vec![t1];
+//! let mut v = 9.81 * t1;
+//! while expected.len() < sol.events.len() {
+//!     v *= 0.8;
+//!     expected.push(expected.last().unwrap() + 2.0 * v / 9.81);
+//! }
+//! assert_eq!(sol.events.len(), 4);
+//! for (hit, t) in sol.events.iter().zip(&expected) {
+//!     assert!((hit.t - t).abs() < 1e-9 * t);
+//! }
+//! ```
 
 #![warn(missing_docs)]
 
@@ -33,6 +112,7 @@ pub mod erk;
 pub mod error;
 pub mod integrator;
 pub mod jacobian;
+pub mod onestep;
 pub mod options;
 pub mod rk4;
 pub mod rosenbrock;
@@ -43,7 +123,7 @@ pub mod testset;
 
 pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
 pub use error::SolveError;
-pub use integrator::{solve, Integrator, Solution, StepOutcome};
+pub use integrator::{solve, Integrator, Problem, Solution, StepOutcome};
 pub use options::{Atol, Method, Output, SolverOptions};
 pub use stats::Stats;
 pub use stepper::{make_stepper, Stepper};

@@ -165,11 +165,14 @@ pub struct SolverOptions {
     /// Relative time tolerance of event location: the bracket is shrunk below
     /// `event_rtol · max(|t|, |h|)`. Default 1e-13; range [1e-15, 1e-3].
     pub event_rtol: f64,
-    /// Interior points sampled in each step to catch two crossings inside one step.
-    /// Default 0; ≤ 64.
+    /// Interior points of every step at which the event functions are also evaluated (on the
+    /// dense output), to catch two crossings inside one step: an excursion of g to the other
+    /// side and back that lasts longer than h/(s + 1) cannot hide inside a step of size h.
+    /// Default 4; ≤ 64; 0 looks at the step ends only. Costs s dense-output and event
+    /// evaluations per step, and nothing for a system without event functions.
     pub event_samples: usize,
-    /// Wall-clock budget in seconds; None for no budget. When it runs out the solve fails with
-    /// `BudgetExhausted`.
+    /// Wall-clock budget in seconds, counted from the construction of the integrator; None for
+    /// no budget. When it runs out the solve fails with `BudgetExhausted`.
     pub max_wall_time: Option<f64>,
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
@@ -198,7 +201,7 @@ impl Default for SolverOptions {
             output: Output::Steps,
             events: true,
             event_rtol: 1e-13,
-            event_samples: 0,
+            event_samples: 4,
             max_wall_time: None,
             divergence_bound: 1e100,
             rk4_instability_steps: 0,

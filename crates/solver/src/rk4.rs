@@ -8,7 +8,7 @@
 //! y_{n+1} = y_n + h/6 (k1 + 2 k2 + 2 k3 + k4)
 //! ```
 //! Kutta (1901); HNW I, Table 1.2 (p. 138). The step is fixed; only the last step is shortened
-//! to land on the stop time. Dense output is the cubic Hermite interpolant through
+//! to land on the stop time (the landing rule of [`crate::stepper::landing_step`]). Dense output is the cubic Hermite interpolant through
 //! (y_n, f_n) and (y_{n+1}, f_{n+1}) (order 3, continuous derivative); f_{n+1} is the next
 //! step's k1, so it costs nothing extra: 4 RHS evaluations per step, plus 1 at the start.
 //!
@@ -39,7 +39,7 @@
 use crate::error::SolveError;
 use crate::options::{Method, SolverOptions};
 use crate::stats::Stats;
-use crate::stepper::Stepper;
+use crate::stepper::{check_stop, landing_step, Budget, Stepper};
 use crate::system::OdeSystem;
 
 /// Radius r of RK4's stability region on the negative real axis: −r is the real root of
@@ -54,7 +54,7 @@ pub const RK4_STABILITY_RADIUS: f64 = 2.785_293_563_405_282;
 pub struct Rk4<'a, S: OdeSystem + ?Sized> {
     sys: &'a S,
     h: f64,
-    max_steps: usize,
+    budget: Budget,
     /// Consecutive flagged steps that fail the run (0: no check).
     instability_steps: usize,
     /// Flagged steps in a row so far.
@@ -84,7 +84,7 @@ impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
         let mut s = Rk4 {
             sys,
             h,
-            max_steps: opts.max_steps,
+            budget: Budget::new(opts),
             instability_steps: opts.rk4_instability_steps,
             unstable_run: 0,
             t: t0,
@@ -150,27 +150,9 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
     }
 
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        if self.stats.steps >= self.max_steps {
-            return Err(SolveError::TooManySteps {
-                t: self.t,
-                steps: self.stats.steps,
-                y: self.y.clone(),
-            });
-        }
-        let remaining = t_stop - self.t;
-        // Land exactly on t_stop when the last step would leave a sliver below 1e-10·h.
-        let h = if remaining <= self.h * (1.0 + 1e-10) {
-            remaining
-        } else {
-            self.h
-        };
-        if h.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return Err(SolveError::StepSizeTooSmall {
-                t: self.t,
-                h,
-                y: self.y.clone(),
-            });
-        }
+        check_stop(self.t, t_stop)?;
+        self.budget.check(self.stats.steps, self.t, &self.y)?;
+        let (h, lands) = landing_step(self.t, t_stop, self.h);
         let n = self.y.len();
         let (t, sys) = (self.t, self.sys);
         // k1 = self.f
@@ -207,7 +189,7 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
             self.y[i] += h / 6.0 * (self.f[i] + 2.0 * self.k2[i] + 2.0 * self.k3[i] + self.k4[i]);
         }
         self.t_prev = t;
-        self.t = if h == remaining { t_stop } else { t + h };
+        self.t = if lands { t_stop } else { t + h };
         self.stats.accepted += 1;
         self.stats.record_step_size(h);
         if !self.y.iter().all(|v| v.is_finite()) {
@@ -250,10 +232,7 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
         Ok(())
     }
 
-    fn stats(&self) -> &Stats {
-        &self.stats
-    }
-    fn stats_mut(&mut self) -> &mut Stats {
-        &mut self.stats
+    fn stats(&self) -> Stats {
+        self.stats
     }
 }

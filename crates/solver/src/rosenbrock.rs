@@ -34,26 +34,26 @@
 //! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
 //! h0 on every step, the error estimate ignored.
 //!
-//! Step size: only through [`StepSizeControl`] (default controller Gustafsson's predictive
-//! one, any [`crate::ControllerKind`] accepted), with error order p̂ = 4. A singular W (a zero
-//! or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4; non-finite
-//! stages reject it as an error-test failure with ε = ∞. When h falls below
+//! Step size: the loop of [`crate::onestep::OneStepDriver`] (default controller Gustafsson's
+//! predictive one, any [`crate::ControllerKind`] accepted), with error order p̂ = 4. A singular
+//! W (a zero or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4;
+//! non-finite stages reject it as an error-test failure with ε = ∞. When h falls below
 //! max(h_min, 16 ε |t|) the step fails with `NewtonFailure` (the last failure was a singular
-//! W), `NonFiniteState` (non-finite stages) or `StepSizeTooSmall`. A one-step method has no
-//! history: `restart` resets the controller and starts again from the last accepted step size.
+//! W), `NonFiniteState` (non-finite stages) or `StepSizeTooSmall`. After a restart the first
+//! step is chosen as at t0.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::{Mat, MatMut, Par};
 
-use crate::controller::StepSizeControl;
-use crate::controller::{ControllerKind, StepLimits};
+use crate::controller::ControllerKind;
 use crate::error::SolveError;
 use crate::jacobian::JacobianEvaluator;
-use crate::options::{Method, SolverOptions};
+use crate::onestep::{Attempt, OneStepMethod};
+use crate::options::{Atol, Method, SolverOptions};
 use crate::stats::Stats;
-use crate::stepper::{error_norm, initial_step, Stepper};
+use crate::stepper::error_norm;
 use crate::system::OdeSystem;
 
 /// Number of stages.
@@ -426,16 +426,7 @@ impl SmallLu {
     }
 }
 
-/// Why the last attempt was rejected (decides the error when h underflows).
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Failure {
-    None,
-    Error,
-    Singular,
-    NonFinite,
-}
-
-/// Our own Rosenbrock stepper, Rodas5P.
+/// Rodas5P as a method of the [`crate::onestep::OneStepDriver`].
 ///
 /// ```text
 /// (I/(hγ) − J) k_i = f(t + c_i h, y + Σ a_ij k_j) + d_i h f_t + Σ (C_ij/h) k_j,  i = 1..8
@@ -443,21 +434,10 @@ enum Failure {
 /// ```
 /// Steinebach 2023 (BIT 63:27); see the module documentation for the tableau's source, the
 /// dense output and the failure handling.
-pub struct Rodas5p<'a, Sy: OdeSystem + ?Sized> {
-    sys: &'a Sy,
-    opts: SolverOptions,
+pub struct Rodas5pMethod {
     autonomous: bool,
-    control: StepSizeControl,
-    t: f64,
-    t_prev: f64,
-    y: Vec<f64>,
-    y_prev: Vec<f64>,
-    /// Next trial step (None: estimate it at the next step).
-    h: Option<f64>,
-    /// Last accepted step size (for restarts).
-    h_last: Option<f64>,
-    /// f(t, y), J, f_t are valid for the current (t, y).
-    prepared: bool,
+    rtol: f64,
+    atol: Atol,
     f0: Vec<f64>,
     dfdt: Vec<f64>,
     jac: Mat<f64>,
@@ -468,36 +448,18 @@ pub struct Rodas5p<'a, Sy: OdeSystem + ?Sized> {
     u: Vec<f64>,
     fu: Vec<f64>,
     y_new: Vec<f64>,
-    stats: Stats,
 }
 
-impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
-    /// Builds the stepper at (t0, y0). Options must be validated; `opts.controller` defaults
-    /// to Gustafsson's. Nothing is evaluated before the first step.
-    pub fn new(sys: &'a Sy, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
-        let n = y0.len();
-        if n != sys.dim() {
-            return Err(SolveError::InvalidOptions(format!(
-                "y0 has {n} entries, the system {}",
-                sys.dim()
-            )));
-        }
-        let kind = opts.controller.unwrap_or(ControllerKind::Gustafsson);
-        let limits: StepLimits = opts.limits.clone();
-        let control = StepSizeControl::new(Box::new(kind.build()), limits);
+impl Rodas5pMethod {
+    /// The method for `sys` with the tolerances of `opts` (the finite-difference increments of
+    /// the Jacobian are floored at atol_i/rtol). Nothing is evaluated before the first step.
+    pub fn new<Sy: OdeSystem + ?Sized>(sys: &Sy, opts: &SolverOptions) -> Self {
+        let n = sys.dim();
         let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
-        Ok(Rodas5p {
-            sys,
-            opts: opts.clone(),
+        Rodas5pMethod {
             autonomous: sys.is_autonomous(),
-            control,
-            t: t0,
-            t_prev: t0,
-            y: y0.to_vec(),
-            y_prev: y0.to_vec(),
-            h: None,
-            h_last: None,
-            prepared: false,
+            rtol: opts.rtol,
+            atol: opts.atol.clone(),
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
             jac: Mat::zeros(n, n),
@@ -508,63 +470,67 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
             u: vec![0.0; n],
             fu: vec![0.0; n],
             y_new: vec![0.0; n],
-            stats: Stats::default(),
-        })
+        }
+    }
+}
+
+impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
+    fn method(&self) -> Method {
+        Method::Rodas5p
+    }
+    fn error_order(&self) -> usize {
+        P_HAT
+    }
+    fn default_controller(&self) -> ControllerKind {
+        ControllerKind::Gustafsson
     }
 
-    /// Evaluates f(t, y), J and f_t at the current state.
-    fn prepare(&mut self) -> Result<(), SolveError> {
-        let (sys, t) = (self.sys, self.t);
-        sys.rhs(t, &self.y, &mut self.f0);
-        self.stats.rhs_evals += 1;
+    /// Evaluates f(t, y), J and f_t at the step's start (reused by every attempt).
+    fn start(&mut self, sys: &Sy, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), SolveError> {
+        sys.rhs(t, y, &mut self.f0);
+        stats.rhs_evals += 1;
         if !self.f0.iter().all(|v| v.is_finite()) {
-            return Err(SolveError::NonFiniteState {
-                t,
-                y: self.y.clone(),
-            });
+            return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
         }
-        self.jac_eval.jacobian(
-            sys,
-            t,
-            &self.y,
-            &self.f0,
-            self.jac.as_mut(),
-            &mut self.stats,
-        );
+        self.jac_eval
+            .jacobian(sys, t, y, &self.f0, self.jac.as_mut(), stats);
         if self.autonomous {
             self.dfdt.fill(0.0);
         } else {
-            self.jac_eval.time_derivative(
-                sys,
-                t,
-                &self.y,
-                &self.f0,
-                &mut self.dfdt,
-                &mut self.stats,
-            );
+            self.jac_eval
+                .time_derivative(sys, t, y, &self.f0, &mut self.dfdt, stats);
         }
-        self.prepared = true;
         Ok(())
     }
 
-    /// One attempt with step h: fills `k`, `y_new`. Returns the failure kind or the scaled
-    /// error norm.
-    fn attempt(&mut self, h: f64) -> Result<f64, Failure> {
-        let n = self.y.len();
+    fn f_start(&self) -> &[f64] {
+        &self.f0
+    }
+
+    /// One attempt with step h: fills `k` and `y_new`; the error norm is ‖k_8‖.
+    fn attempt(
+        &mut self,
+        sys: &Sy,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        estimate: bool,
+        stats: &mut Stats,
+    ) -> Attempt {
+        let n = y.len();
         // W = I/(hγ) − J
         let diag = 1.0 / (h * GAMMA);
         self.w.set_shifted(&self.jac, diag);
-        self.stats.lu_factorizations += 1;
+        stats.lu_factorizations += 1;
         if !self.w.factor() {
-            return Err(Failure::Singular);
+            return Attempt::Singular;
         }
-        let (sys, t) = (self.sys, self.t);
         for i in 0..S {
             // Stage value and its right-hand side.
             if i == 0 {
                 self.fu.copy_from_slice(&self.f0);
             } else {
-                self.u.copy_from_slice(&self.y);
+                self.u.copy_from_slice(y);
                 for j in 0..i {
                     let a = A[i][j];
                     if a != 0.0 {
@@ -575,7 +541,7 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
                     }
                 }
                 sys.rhs(t + C_TIME[i] * h, &self.u, &mut self.fu);
-                self.stats.rhs_evals += 1;
+                stats.rhs_evals += 1;
             }
             let (done, rest) = self.k.split_at_mut(i);
             let ki = &mut rest[0];
@@ -589,192 +555,60 @@ impl<'a, Sy: OdeSystem + ?Sized> Rodas5p<'a, Sy> {
             }
             self.w.solve(ki);
             if !ki.iter().all(|v| v.is_finite()) {
-                return Err(Failure::NonFinite);
+                return Attempt::Error(f64::INFINITY);
             }
         }
         for l in 0..n {
-            let mut v = self.y[l];
+            let mut v = y[l];
             for j in 0..S {
                 v += M[j] * self.k[j][l];
             }
             self.y_new[l] = v;
         }
-        Ok(error_norm(&self.k[S - 1], &self.y, &self.y_new, &self.opts))
-    }
-
-    fn underflow_error(&self, h: f64, last: Failure) -> SolveError {
-        match last {
-            Failure::Singular => SolveError::NewtonFailure {
-                t: self.t,
-                y: self.y.clone(),
-                reason: format!("W = I/(hγ) − J is singular for every step size down to {h:e}"),
-            },
-            Failure::NonFinite => SolveError::NonFiniteState {
-                t: self.t,
-                y: self.y.clone(),
-            },
-            Failure::None | Failure::Error => SolveError::StepSizeTooSmall {
-                t: self.t,
-                h,
-                y: self.y.clone(),
-            },
+        if !self.y_new.iter().all(|v| v.is_finite()) {
+            return Attempt::Error(f64::INFINITY);
         }
-    }
-}
-
-impl<Sy: OdeSystem + ?Sized> Stepper for Rodas5p<'_, Sy> {
-    fn method(&self) -> Method {
-        Method::Rodas5p
-    }
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn y(&self) -> &[f64] {
-        &self.y
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-
-    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        let remaining = t_stop - self.t;
-        if !(remaining > 0.0) {
-            return Err(SolveError::StepSizeTooSmall {
-                t: self.t,
-                h: remaining,
-                y: self.y.clone(),
-            });
-        }
-        if !self.prepared {
-            self.prepare()?;
-        }
-        let adaptive = self.opts.adaptive;
-        let mut h = if !adaptive {
-            self.opts.h0.unwrap_or(remaining)
-        } else if let Some(h) = self.h {
-            h
-        } else if let Some(h0) = self.opts.h0 {
-            h0
+        Attempt::Error(if estimate {
+            error_norm(&self.k[S - 1], y, &self.y_new, self.rtol, &self.atol)
         } else {
-            let h = initial_step(
-                self.sys, self.t, &self.y, &self.f0, P_HAT, &self.opts, t_stop,
-            );
-            self.stats.rhs_evals += 1;
-            // Hairer's estimate is a heuristic: raise it to h_min (only a rejection below
-            // h_min is a failure).
-            h.max(self.opts.h_min)
-        };
-        h = h.min(self.opts.h_max);
-        let mut last = Failure::None;
-        loop {
-            if self.stats.steps >= self.opts.max_steps {
-                return Err(SolveError::TooManySteps {
-                    t: self.t,
-                    steps: self.stats.steps,
-                    y: self.y.clone(),
-                });
-            }
-            // Land exactly on t_stop when the step would reach it or leave a sliver below
-            // 10⁻¹⁰ h (the rule of the RK4 stepper).
-            let lands = remaining <= h * (1.0 + 1e-10);
-            let h_try = if lands { remaining } else { h };
-            let floor = self.opts.h_min.max(16.0 * f64::EPSILON * self.t.abs());
-            if !lands && h_try < floor || !(h_try > 0.0) {
-                return Err(self.underflow_error(h_try, last));
-            }
-            self.stats.steps += 1;
-            match self.attempt(h_try) {
-                Ok(err) if err <= 1.0 || !adaptive => {
-                    if !adaptive && !err.is_finite() {
-                        return Err(SolveError::NonFiniteState {
-                            t: self.t,
-                            y: self.y.clone(),
-                        });
-                    }
-                    self.t_prev = self.t;
-                    self.t = if lands { t_stop } else { self.t + h_try };
-                    std::mem::swap(&mut self.y_prev, &mut self.y);
-                    std::mem::swap(&mut self.y, &mut self.y_new);
-                    for (r, dr) in self.dense.iter_mut().enumerate() {
-                        for l in 0..dr.len() {
-                            let mut v = 0.0;
-                            for j in 0..S {
-                                v += H[r][j] * self.k[j][l];
-                            }
-                            dr[l] = v;
-                        }
-                    }
-                    self.stats.accepted += 1;
-                    self.stats.record_step_size(h_try);
-                    self.h_last = Some(h_try);
-                    if adaptive {
-                        let next = self.control.accept(h_try, err, P_HAT);
-                        self.h = Some(next.min(self.opts.h_max));
-                    }
-                    self.prepared = false;
-                    return Ok(());
+            0.0
+        })
+    }
+
+    fn y_new(&self) -> &[f64] {
+        &self.y_new
+    }
+
+    fn accept(&mut self, _h: f64) {
+        for (r, dr) in self.dense.iter_mut().enumerate() {
+            for l in 0..dr.len() {
+                let mut v = 0.0;
+                for j in 0..S {
+                    v += H[r][j] * self.k[j][l];
                 }
-                Ok(err) => {
-                    self.stats.rejected_error += 1;
-                    last = if err.is_finite() {
-                        Failure::Error
-                    } else {
-                        Failure::NonFinite
-                    };
-                    h = self.control.reject(h_try, err, P_HAT);
-                }
-                Err(Failure::Singular) => {
-                    self.stats.rejected_newton += 1;
-                    if !adaptive {
-                        return Err(self.underflow_error(h_try, Failure::Singular));
-                    }
-                    last = Failure::Singular;
-                    h = self.control.reject_newton(h_try);
-                }
-                Err(f) => {
-                    if !adaptive {
-                        return Err(self.underflow_error(h_try, Failure::NonFinite));
-                    }
-                    self.stats.rejected_error += 1;
-                    last = f;
-                    h = self.control.reject(h_try, f64::INFINITY, P_HAT);
-                }
+                dr[l] = v;
             }
         }
     }
 
-    fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let h = self.t - self.t_prev;
-        if h == 0.0 {
-            out.copy_from_slice(&self.y);
-            return;
-        }
-        let th = (t - self.t_prev) / h;
+    fn interpolate(
+        &self,
+        _sys: &Sy,
+        _t_prev: f64,
+        _h: f64,
+        y_prev: &[f64],
+        y: &[f64],
+        th: f64,
+        out: &mut [f64],
+    ) {
         let th1 = 1.0 - th;
         let [k1, k2, k3] = &self.dense;
         for (i, o) in out.iter_mut().enumerate() {
-            *o =
-                th1 * self.y_prev[i] + th * (self.y[i] + th1 * (k1[i] + th * (k2[i] + th * k3[i])));
+            *o = th1 * y_prev[i] + th * (y[i] + th1 * (k1[i] + th * (k2[i] + th * k3[i])));
         }
     }
 
-    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
-        self.t = t;
-        self.t_prev = t;
-        self.y.copy_from_slice(y);
-        self.y_prev.copy_from_slice(y);
-        self.control.reset();
-        self.prepared = false;
-        self.h = self.h_last.map(|h| h.min(self.opts.h_max));
-        Ok(())
-    }
-
-    fn stats(&self) -> &Stats {
-        &self.stats
-    }
-    fn stats_mut(&mut self) -> &mut Stats {
-        &mut self.stats
-    }
+    fn reset(&mut self) {}
 }
 
 #[cfg(test)]

@@ -1,8 +1,8 @@
 //! Integration counters, one serialisable struct (names follow CVODE's counters where one
-//! exists).
+//! exists). `Stats` is `Copy` and is read by value: asking for the counters never changes them.
 
 /// Counters of one integration.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stats {
     /// Step attempts (accepted + rejected); CVODE `nst` counts accepted only.
     pub steps: usize,

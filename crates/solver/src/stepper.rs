@@ -1,12 +1,29 @@
-//! The one-step interface every method implements, and the factory that builds a stepper for
-//! a [`Method`].
+//! The interface every method implements, the rules they share, and the factory that builds
+//! a stepper for a [`Method`].
 //!
 //! A stepper owns the state (t, y) and the dense output of its last accepted step. It never
 //! sees events or output requests: the [`crate::Integrator`] drives it, locates events on its
 //! dense output, and restarts it at event states.
+//!
+//! ```text
+//! one-step methods (explicit pairs, Rodas5P)  →  crate::onestep::OneStepDriver (one loop)
+//! RK4 (fixed step)                            →  crate::rk4::Rk4
+//! diffsol's BDF, TR-BDF2, ESDIRK3(4)          →  crate::diffsol_backend::DiffsolStepper
+//! ```
+//!
+//! Rules every stepper follows (one function each, below):
+//! - landing ([`landing_step`]): a step that would end within max(10⁻¹⁰ h, 16 ε |t_stop|) of
+//!   the stop time ends exactly on it, so no sliver is left for a later step;
+//! - the stop time must lie after t ([`check_stop`]), else [`SolveError::InvalidOptions`];
+//! - the smallest step is max(h_min, 16 ε |t|) ([`step_floor`]);
+//! - budgets ([`Budget`]): `max_steps` attempts (accepted and rejected) and the wall-clock
+//!   budget `max_wall_time`, counted from the stepper's construction.
+
+use std::time::{Duration, Instant};
 
 use crate::error::SolveError;
-use crate::options::{Method, SolverOptions};
+use crate::integrator::Problem;
+use crate::options::{Atol, Method, SolverOptions};
 use crate::stats::Stats;
 use crate::system::OdeSystem;
 
@@ -21,40 +38,132 @@ pub trait Stepper {
     /// Start of the last accepted step (equals `t()` right after construction or a restart).
     fn t_prev(&self) -> f64;
     /// Takes one accepted step (retrying rejected attempts inside), never past `t_stop`; a step
-    /// that would end within a few ulps of `t_stop` ends exactly on it. Fails with a typed
-    /// error when the step size underflows, `max_steps` attempts are used, the Newton iteration
-    /// cannot converge, or the state becomes non-finite.
+    /// that would end within the landing margin of `t_stop` ends exactly on it
+    /// ([`landing_step`]). Fails with a typed error when the step size underflows, a budget
+    /// runs out, the Newton iteration cannot converge, or the state becomes non-finite.
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError>;
     /// Dense output: writes y(t) for t in [t_prev, t] into `out`.
     fn interpolate(&self, t: f64, out: &mut [f64]);
     /// Restarts from (t, y), discarding all history (FSAL stage, controller history, multistep
-    /// history and order). The next trial step is min(last accepted step, h_max) when a step
-    /// was accepted before, the starting-step estimate otherwise.
+    /// history and order). The next trial step is chosen as at the start: `opts.h0` when
+    /// given, else the starting-step algorithm ([`initial_step`] or diffsol's equivalent).
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError>;
-    /// Counters so far.
-    fn stats(&self) -> &Stats;
-    /// Mutable counters (the integrator adds event counters).
-    fn stats_mut(&mut self) -> &mut Stats;
+    /// Counters so far, by value. Reading them never changes them.
+    fn stats(&self) -> Stats;
 }
 
-/// Builds the stepper of `opts.method` at (t0, y0). Options must already be validated.
-pub fn make_stepper<'a, S: OdeSystem + ?Sized>(
-    sys: &'a S,
+/// Builds the stepper of the problem's method at (t0, y0). The problem's options are
+/// validated.
+pub fn make_stepper<'p, S: OdeSystem + ?Sized>(
+    problem: &'p Problem<'_, S>,
     t0: f64,
     y0: &[f64],
-    opts: &SolverOptions,
-) -> Result<Box<dyn Stepper + 'a>, SolveError> {
+) -> Result<Box<dyn Stepper + 'p>, SolveError> {
+    let (sys, opts) = (problem.system(), problem.options());
     match opts.method {
         Method::Rk4 => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, opts)?)),
         Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
-            Ok(Box::new(crate::erk::ErkStepper::new(sys, t0, y0, opts)?))
+            let m = crate::erk::ErkMethod::new(opts.method, opts, y0.len())?;
+            Ok(Box::new(crate::onestep::OneStepDriver::new(
+                sys, m, t0, y0, opts,
+            )))
         }
-        Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => Ok(Box::new(
-            crate::diffsol_backend::DiffsolStepper::new(sys, t0, y0, opts)?,
-        )),
-        Method::Rodas5p => Ok(Box::new(crate::rosenbrock::Rodas5p::new(
-            sys, t0, y0, opts,
-        )?)),
+        Method::Rodas5p => {
+            let m = crate::rosenbrock::Rodas5pMethod::new(sys, opts);
+            Ok(Box::new(crate::onestep::OneStepDriver::new(
+                sys, m, t0, y0, opts,
+            )))
+        }
+        Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => {
+            let backend = problem.diffsol().ok_or_else(|| {
+                SolveError::InvalidOptions(format!("{} needs its diffsol problem", opts.method))
+            })?;
+            Ok(Box::new(crate::diffsol_backend::DiffsolStepper::new(
+                backend, t0, y0, opts,
+            )?))
+        }
+    }
+}
+
+/// The landing rule of every stepper: the step to try from `t` towards `t_stop` with the
+/// proposed size `h`, and whether it lands on `t_stop`.
+///
+/// ```text
+/// r = t_stop − t,  sliver = max(10⁻¹⁰ h, 16 ε |t_stop|)
+/// r − h ≤ sliver  →  (r, lands)         else  (h, not lands)
+/// ```
+/// A step that lands ends exactly on `t_stop` (the caller sets t = t_stop, not t + r).
+pub fn landing_step(t: f64, t_stop: f64, h: f64) -> (f64, bool) {
+    let remaining = t_stop - t;
+    let sliver = (1e-10 * h).max(16.0 * f64::EPSILON * t_stop.abs());
+    if remaining - h <= sliver {
+        (remaining, true)
+    } else {
+        (h, false)
+    }
+}
+
+/// The precondition of [`Stepper::step`]: the stop time lies after t. Every stepper reports
+/// its violation the same way, as [`SolveError::InvalidOptions`].
+pub fn check_stop(t: f64, t_stop: f64) -> Result<(), SolveError> {
+    if t_stop > t {
+        Ok(())
+    } else {
+        Err(SolveError::InvalidOptions(format!(
+            "step: stop time {t_stop} is not after t = {t}"
+        )))
+    }
+}
+
+/// The smallest step a stepper may take at time t: max(h_min, 16 ε |t|) (below 16 ulps of t
+/// a step no longer moves t reliably).
+pub fn step_floor(h_min: f64, t: f64) -> f64 {
+    h_min.max(16.0 * f64::EPSILON * t.abs())
+}
+
+/// The budgets of one integration: step attempts and wall-clock time.
+///
+/// ```text
+/// attempts ≥ max_steps      → TooManySteps
+/// now ≥ start + max_wall    → BudgetExhausted
+/// ```
+#[derive(Clone, Debug)]
+pub struct Budget {
+    max_steps: usize,
+    deadline: Option<(Instant, f64)>,
+}
+
+impl Budget {
+    /// The budgets of `opts`, the wall clock starting now.
+    pub fn new(opts: &SolverOptions) -> Self {
+        Budget {
+            max_steps: opts.max_steps,
+            deadline: opts
+                .max_wall_time
+                .map(|w| (Instant::now() + Duration::from_secs_f64(w), w)),
+        }
+    }
+
+    /// Checks the budgets before an attempt, with `attempts` made so far; the error carries
+    /// the time and state of the last accepted step.
+    pub fn check(&self, attempts: usize, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        if attempts >= self.max_steps {
+            return Err(SolveError::TooManySteps {
+                t,
+                steps: attempts,
+                y: y.to_vec(),
+            });
+        }
+        if let Some((deadline, w)) = self.deadline {
+            if Instant::now() >= deadline {
+                return Err(SolveError::BudgetExhausted {
+                    t,
+                    y: y.to_vec(),
+                    reason: format!("wall-clock budget of {w} s used"),
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -103,11 +212,11 @@ pub fn initial_step<S: OdeSystem + ?Sized>(
 
 /// Weighted RMS norm of an error vector: sqrt(mean((err_i / (atol_i + rtol·max(|y_i|, |ŷ_i|)))²)),
 /// the norm of HNW I (4.11). NaN in `err` gives +∞ (the step is rejected).
-pub fn error_norm(err: &[f64], y_old: &[f64], y_new: &[f64], opts: &SolverOptions) -> f64 {
+pub fn error_norm(err: &[f64], y_old: &[f64], y_new: &[f64], rtol: f64, atol: &Atol) -> f64 {
     let n = err.len();
     let mut s = 0.0;
     for i in 0..n {
-        let sc = opts.atol.get(i) + opts.rtol * y_old[i].abs().max(y_new[i].abs());
+        let sc = atol.get(i) + rtol * y_old[i].abs().max(y_new[i].abs());
         let r = err[i] / sc;
         s += r * r;
     }

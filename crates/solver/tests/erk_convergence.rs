@@ -120,7 +120,9 @@ fn dense_error(method: Method, h: f64, e: f64) -> f64 {
     let sys = Kepler { e };
     let t0 = 0.7;
     let y0 = sys.exact(t0);
-    let mut it = Integrator::new(&sys, t0, t0 + h, &y0, &fixed(method, h)).unwrap();
+    let o = fixed(method, h);
+    let problem = Problem::new(&sys, &o).unwrap();
+    let mut it = problem.integrator(t0, t0 + h, &y0).unwrap();
     let out = it.step().unwrap();
     assert_eq!(out, StepOutcome::StopTime { t: t0 + h });
     let mut worst: f64 = 0.0;

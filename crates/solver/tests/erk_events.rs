@@ -189,7 +189,9 @@ impl OdeSystem for Twin {
 #[test]
 fn simultaneous_events_are_reported_together() {
     for (m, _) in PAIRS {
-        let mut it = Integrator::new(&Twin, 0.0, 2.0, &[1.0, 0.0], &adaptive(m, 1e-10)).unwrap();
+        let o = adaptive(m, 1e-10);
+        let problem = Problem::new(&Twin, &o).unwrap();
+        let mut it = problem.integrator(0.0, 2.0, &[1.0, 0.0]).unwrap();
         let mut outcomes = Vec::new();
         loop {
             match it.step().unwrap() {
@@ -250,6 +252,7 @@ fn stop_action_ends_the_integration_at_the_event() {
 
 #[test]
 fn event_location_costs_a_few_evaluations_per_event() {
+    // Without interior samples (event_samples = 0):
     // event_evals = 1 (at t0) + 1 per accepted step (g at its end) + per event: the root
     // finder's evaluations + 1 after the hook. Illinois with exact bracket values and a
     // minimal step of tol/2 needs about 3 evaluations per event; before the fixes of
@@ -272,7 +275,11 @@ fn event_location_costs_a_few_evaluations_per_event() {
         }
     }
     for (m, _) in PAIRS {
-        let s = solve(&Cos, (0.0, 12.0), &[1.0, 0.0], &adaptive(m, 1e-10)).unwrap();
+        let o = SolverOptions {
+            event_samples: 0,
+            ..adaptive(m, 1e-10)
+        };
+        let s = solve(&Cos, (0.0, 12.0), &[1.0, 0.0], &o).unwrap();
         assert_eq!(s.events.len(), 4, "{m}");
         let root_evals = s.stats.event_evals - 1 - s.stats.accepted - s.stats.events;
         assert!(

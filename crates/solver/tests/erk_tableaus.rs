@@ -375,16 +375,7 @@ fn shapes_are_validated() {
         a: &[&[], &[0.5], &[1.0]],
         ..BS32
     };
-    struct Zero;
-    impl lash_solver::OdeSystem for Zero {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn rhs(&self, _t: f64, _y: &[f64], dy: &mut [f64]) {
-            dy[0] = 0.0;
-        }
-    }
     let opts = lash_solver::SolverOptions::default();
-    let r = lash_solver::erk::ErkStepper::with_tableau(&Zero, 0.0, &[1.0], &opts, &BROKEN);
+    let r = lash_solver::erk::ErkMethod::with_tableau(lash_solver::Method::Bs32, &opts, 1, &BROKEN);
     assert!(matches!(r, Err(lash_solver::SolveError::InvalidOptions(_))));
 }

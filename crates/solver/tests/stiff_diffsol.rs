@@ -20,7 +20,8 @@ fn bdf_restart_resets_the_order_and_forgets_the_history() {
     // t = 2) and go on to t = 4. Stale history from the first trajectory would leave an error
     // of the size of the jump (~0.3); a clean restart keeps it at the tolerance.
     let o = opts(Method::Bdf, 1e-8, 1e-10);
-    let mut st = DiffsolStepper::new(&Logistic, 0.0, &[0.1], &o).unwrap();
+    let problem = Problem::new(&Logistic, &o).unwrap();
+    let mut st = DiffsolStepper::new(problem.diffsol().unwrap(), 0.0, &[0.1], &o).unwrap();
     assert_eq!(st.order(), 1);
     while st.t() < 2.0 {
         st.step(2.0).unwrap();
@@ -45,7 +46,8 @@ fn bdf_restart_resets_the_order_and_forgets_the_history() {
 fn sdirk_restart_starts_from_the_new_state() {
     for method in [Method::Trbdf2, Method::Esdirk34] {
         let o = opts(method, 1e-8, 1e-10);
-        let mut st = DiffsolStepper::new(&Logistic, 0.0, &[0.1], &o).unwrap();
+        let problem = Problem::new(&Logistic, &o).unwrap();
+        let mut st = DiffsolStepper::new(problem.diffsol().unwrap(), 0.0, &[0.1], &o).unwrap();
         while st.t() < 2.0 {
             st.step(2.0).unwrap();
         }
@@ -63,7 +65,8 @@ fn sdirk_restart_starts_from_the_new_state() {
 fn dense_output_stays_inside_the_last_step_and_is_accurate() {
     for method in DIFFSOL {
         let o = opts(method, 1e-8, 1e-10);
-        let mut st = DiffsolStepper::new(&Logistic, 0.0, &[0.1], &o).unwrap();
+        let problem = Problem::new(&Logistic, &o).unwrap();
+        let mut st = DiffsolStepper::new(problem.diffsol().unwrap(), 0.0, &[0.1], &o).unwrap();
         let mut worst: f64 = 0.0;
         let mut buf = [0.0];
         while st.t() < 4.0 {
@@ -228,7 +231,8 @@ fn max_steps_is_a_typed_error() {
 fn a_stop_time_within_round_off_is_bridged() {
     for method in DIFFSOL {
         let o = opts(method, 1e-8, 1e-10);
-        let mut st = DiffsolStepper::new(&Logistic, 0.0, &[0.1], &o).unwrap();
+        let problem = Problem::new(&Logistic, &o).unwrap();
+        let mut st = DiffsolStepper::new(problem.diffsol().unwrap(), 0.0, &[0.1], &o).unwrap();
         while st.t() < 1.0 {
             st.step(1.0).unwrap();
         }

@@ -10,7 +10,7 @@
 //!                               states, events, energy totals, ideal slider-crank }
 //!
 //! the integration loop (Integrator, one accepted step at a time):
-//!   wall time     = time spent in Integrator::new and Integrator::step only (no output, no
+//!   wall time     = time spent in Problem::new, Problem::integrator and Integrator::step only (no output, no
 //!                   energy quadrature, no I/O)
 //!   outputs       = dense output at every requested time; mechanism samples are evaluated
 //!                   at once (so a contact law's stored impact velocity is the one in force)
@@ -87,7 +87,7 @@ use std::time::{Duration, Instant};
 use lash_model::scene::JointSpec;
 use lash_model::{IdealSliderCrank, Mechanism, Scene};
 use lash_solver::{
-    testset, Atol, EventHit, Integrator, Method, OdeSystem, Solution, SolverOptions, Stats,
+    testset, Atol, EventHit, Method, OdeSystem, Problem, Solution, SolverOptions, Stats,
     StepOutcome,
 };
 
@@ -882,7 +882,7 @@ struct Drive {
 impl Drive {
     /// Copies the end of the run (stats, located events, final time and state) into `s`.
     fn finish(&self, s: &mut Solution) {
-        s.stats = self.stats.clone();
+        s.stats = self.stats;
         s.events = self.hits.clone();
         s.t_final = self.t_final;
         s.y_final = self.y_final.clone();
@@ -894,7 +894,7 @@ impl Drive {
             &p.case,
             opts,
             t_end,
-            self.stats.clone(),
+            self.stats,
             self.wall,
             self.hits.len(),
         )
@@ -921,7 +921,8 @@ fn drive<S: OdeSystem + ?Sized>(
     let n = y0.len();
     let mut wall = Duration::ZERO;
     let clock = Instant::now();
-    let mut it = Integrator::new(sys, t0, t_end, y0, opts)?;
+    let problem = Problem::new(sys, opts)?;
+    let mut it = problem.integrator(t0, t_end, y0)?;
     wall += clock.elapsed();
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
@@ -1017,7 +1018,7 @@ fn drive<S: OdeSystem + ?Sized>(
     if let Some(q) = quad.as_mut() {
         q.finish();
     }
-    let stats = it.final_stats();
+    let stats = it.stats();
     Ok(Drive {
         steps,
         hits,

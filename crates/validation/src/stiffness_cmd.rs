@@ -43,7 +43,7 @@ use lash_solver::analysis::stiffness::{
     StateCheck, StiffnessOptions, StiffnessSummary, Verdict,
 };
 use lash_solver::analysis::AnalysisError;
-use lash_solver::{Integrator, Method, OdeSystem, SolverOptions, Stats, StepOutcome};
+use lash_solver::{Method, OdeSystem, Problem, SolverOptions, Stats, StepOutcome};
 
 use crate::error::{Error, OptionError};
 use crate::io;
@@ -250,7 +250,8 @@ pub fn sample_along<S: OdeSystem + ?Sized>(
     let clock = Instant::now();
     let mut o = opts.clone();
     o.output = lash_solver::Output::Final;
-    let mut it = Integrator::new(sys, t_span.0, t_span.1, y0, &o)?;
+    let problem = Problem::new(sys, &o)?;
+    let mut it = problem.integrator(t_span.0, t_span.1, y0)?;
     let mut points = Vec::with_capacity(times.len());
     let mut analyse = |t: f64, y: &[f64]| -> Result<(), Error> {
         let s = analyze(sys, t, y, sopts).map_err(analysis_error)?;
@@ -287,7 +288,7 @@ pub fn sample_along<S: OdeSystem + ?Sized>(
     Ok(Sampled {
         points,
         steps,
-        stats: it.final_stats(),
+        stats: it.stats(),
         wall_time_s: clock.elapsed().as_secs_f64(),
     })
 }
@@ -727,7 +728,7 @@ fn build_report(
         growing_modes_max: growing,
         samples_with_growing_modes: pts.iter().filter(|q| q.n_unstable > 0).count(),
         verdict: v,
-        stats: sampled.stats.clone(),
+        stats: sampled.stats,
         wall_time_analysis_s: sampled.wall_time_s,
         wall_time_measurement_s: measurement.wall_time_s,
     })

@@ -851,7 +851,7 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
             reference: ensemble(&refr),
             loose: ensemble(&loose),
             solver: SolverRecord {
-                stats: nominal.solver.0.clone(),
+                stats: nominal.solver.0,
                 events: nominal.solver.1,
                 wall_time_s: nominal.solver.2,
                 total_wall_time_s: total,

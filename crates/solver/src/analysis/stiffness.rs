@@ -31,7 +31,7 @@ use faer::{Mat, MatMut, MatRef};
 
 use super::AnalysisError;
 use crate::error::SolveError;
-use crate::integrator::{solve, Integrator, Solution, StepOutcome};
+use crate::integrator::{solve, Problem, Solution, StepOutcome};
 use crate::options::{Method, Output, SolverOptions};
 use crate::system::OdeSystem;
 
@@ -728,7 +728,8 @@ fn rk4_probe<S: OdeSystem + ?Sized>(
     o.step = Some(h);
     o.controller = None;
     o.output = Output::Final;
-    let mut it = Integrator::new(sys, t_span.0, t_span.1, y0, &o)?;
+    let problem = Problem::new(sys, &o)?;
+    let mut it = problem.integrator(t_span.0, t_span.1, y0)?;
     let norm = |y: &[f64]| y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut size = norm(y0);
     loop {

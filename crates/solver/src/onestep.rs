@@ -1,0 +1,323 @@
+//! The one adaptive driver of every one-step method (the explicit pairs, Rodas5P, and any
+//! one-step method added later).
+//!
+//! ```text
+//! method (OneStepMethod): start(t, y)          what belongs to the step's start (f(t, y), J, ∂f/∂t)
+//!                         attempt(h) → ε       one trial step to t + h, its error norm
+//!                         accept(h)            commit the trial (dense output, FSAL stage)
+//!                         interpolate(θ)       dense output over the accepted step
+//!                         reset()              forget everything tied to the state (restart)
+//!
+//! driver (OneStepDriver): owns t, y, h, the controller, the landing rule, h_min, h_max,
+//! the budgets and the counters:
+//!   h  = opts.h0, else the starting-step algorithm (HNW I §II.4)     at t0 and after a restart
+//!   loop: budgets; (h_try, lands) = landing_step(t, t_stop, h); h_try ≥ floor or fail
+//!         ε = attempt(h_try)
+//!         ε ≤ 1 → accept; t ← t_stop if lands else t + h_try; h ← clamp(controller, h_min, h_max)
+//!         ε > 1 → reject; h ← controller.reject (ε = ∞ for non-finite stages)
+//!         singular iteration matrix → reject; h ← h/4
+//!         proposal below h_min → one try at h_min; a rejection there fails
+//! ```
+//!
+//! Failures (typed, with the time and state of the last accepted step): the step size fell
+//! below max(h_min, 16 ε |t|) → `StepSizeTooSmall`, or `NonFiniteState` when the last attempt
+//! had non-finite stages, or `NewtonFailure` when its iteration matrix was singular; a budget
+//! ran out → `TooManySteps` / `BudgetExhausted`.
+//!
+//! With `opts.adaptive == false` every step is `opts.h0` (the last one shortened by the
+//! landing rule), no error estimate is used and nothing is rejected: a non-finite attempt
+//! fails with `NonFiniteState` (`NewtonFailure` for a singular iteration matrix). This is the
+//! mode of fixed-step convergence-order tests.
+
+use crate::controller::{ControllerKind, StepSizeControl};
+use crate::error::SolveError;
+use crate::options::{Method, SolverOptions};
+use crate::stats::Stats;
+use crate::stepper::{check_stop, initial_step, landing_step, step_floor, Budget, Stepper};
+use crate::system::OdeSystem;
+
+/// What one trial step gave.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Attempt {
+    /// The scaled error norm of the trial (≤ 1 passes the error test; +∞ when a stage or the
+    /// result is non-finite). Without error estimation (`estimate == false`), 0 for a finite
+    /// trial.
+    Error(f64),
+    /// The iteration matrix of an implicit method could not be factored (a zero or non-finite
+    /// pivot).
+    Singular,
+}
+
+/// A one-step method as the [`OneStepDriver`] sees it. The driver owns t, y and the step
+/// size; the method owns its stages and dense-output coefficients.
+pub trait OneStepMethod<S: OdeSystem + ?Sized> {
+    /// The method's name.
+    fn method(&self) -> Method;
+    /// Order p̂ of the error estimate (the controller's exponent is 1/(p̂ + 1)).
+    fn error_order(&self) -> usize;
+    /// Controller used when the options name none.
+    fn default_controller(&self) -> ControllerKind;
+    /// Prepares a step from (t, y): what belongs to the step's start and is reused by every
+    /// attempt (f(t, y), and for a Rosenbrock method J and ∂f/∂t). Called once per step, before
+    /// the first attempt. Fails with `NonFiniteState` when f(t, y) is not finite.
+    fn start(&mut self, sys: &S, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), SolveError>;
+    /// f(t, y) at the step's start (valid after [`OneStepMethod::start`]).
+    fn f_start(&self) -> &[f64];
+    /// One trial step of size h from (t, y). With `estimate == false` no error estimate is
+    /// needed.
+    fn attempt(
+        &mut self,
+        sys: &S,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        estimate: bool,
+        stats: &mut Stats,
+    ) -> Attempt;
+    /// The result y_{n+1} of the last attempt.
+    fn y_new(&self) -> &[f64];
+    /// Commits the last attempt (of size h) as the accepted step.
+    fn accept(&mut self, h: f64);
+    /// Dense output over the accepted step [t_prev, t_prev + h] at θ ∈ [0, 1].
+    #[allow(clippy::too_many_arguments)]
+    fn interpolate(
+        &self,
+        sys: &S,
+        t_prev: f64,
+        h: f64,
+        y_prev: &[f64],
+        y: &[f64],
+        theta: f64,
+        out: &mut [f64],
+    );
+    /// Forgets everything tied to the current state (a restart).
+    fn reset(&mut self);
+    /// RHS evaluations made by [`OneStepMethod::interpolate`] so far (lazy dense stages),
+    /// which the driver adds to its counters when they are read.
+    fn lazy_rhs_evals(&self) -> usize {
+        0
+    }
+}
+
+/// Why the last attempt was rejected (decides the error when h underflows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Failure {
+    None,
+    Error,
+    Singular,
+    NonFinite,
+}
+
+/// The adaptive step loop of every one-step method (module documentation).
+pub struct OneStepDriver<'a, S: OdeSystem + ?Sized, M> {
+    sys: &'a S,
+    m: M,
+    opts: SolverOptions,
+    control: StepSizeControl,
+    budget: Budget,
+    t: f64,
+    t_prev: f64,
+    y: Vec<f64>,
+    y_prev: Vec<f64>,
+    /// Trial step of the next attempt (None: `opts.h0` or the starting-step algorithm).
+    h_next: Option<f64>,
+    /// Whether `m.start` has run for the current (t, y).
+    started: bool,
+    stats: Stats,
+}
+
+impl<'a, S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'a, S, M> {
+    /// The driver of method `m` at (t0, y0). Options must be validated. Nothing is evaluated
+    /// before the first step.
+    pub fn new(sys: &'a S, m: M, t0: f64, y0: &[f64], opts: &SolverOptions) -> Self {
+        let kind = opts.controller.unwrap_or(m.default_controller());
+        OneStepDriver {
+            sys,
+            control: StepSizeControl::new(Box::new(kind.build()), opts.limits.clone()),
+            m,
+            opts: opts.clone(),
+            budget: Budget::new(opts),
+            t: t0,
+            t_prev: t0,
+            y: y0.to_vec(),
+            y_prev: y0.to_vec(),
+            h_next: None,
+            started: false,
+            stats: Stats::default(),
+        }
+    }
+
+    /// The method.
+    pub fn inner(&self) -> &M {
+        &self.m
+    }
+
+    fn underflow(&self, h: f64, last: Failure) -> SolveError {
+        let (t, y) = (self.t, self.y.clone());
+        match last {
+            Failure::Singular => SolveError::NewtonFailure {
+                t,
+                y,
+                reason: format!(
+                    "the iteration matrix is singular for every step size down to {h:e}"
+                ),
+            },
+            Failure::NonFinite => SolveError::NonFiniteState { t, y },
+            Failure::None | Failure::Error => SolveError::StepSizeTooSmall { t, h, y },
+        }
+    }
+
+    /// The first trial step from the current state: `opts.h0`, else the starting-step
+    /// algorithm (one RHS evaluation), raised to h_min.
+    fn first_step(&mut self, t_stop: f64) -> f64 {
+        match self.opts.h0 {
+            Some(h0) => h0,
+            None => {
+                let h = initial_step(
+                    self.sys,
+                    self.t,
+                    &self.y,
+                    self.m.f_start(),
+                    self.m.error_order(),
+                    &self.opts,
+                    t_stop,
+                );
+                self.stats.rhs_evals += 1;
+                h.max(self.opts.h_min)
+            }
+        }
+    }
+}
+
+impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S, M> {
+    fn method(&self) -> Method {
+        self.m.method()
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        check_stop(self.t, t_stop)?;
+        if !self.started {
+            self.m.start(self.sys, self.t, &self.y, &mut self.stats)?;
+            self.started = true;
+        }
+        let adaptive = self.opts.adaptive;
+        let (h_min, h_max) = (self.opts.h_min, self.opts.h_max);
+        let p_hat = self.m.error_order();
+        let mut h = match self.h_next {
+            Some(h) => h,
+            None => self.first_step(t_stop),
+        };
+        if adaptive {
+            h = h.min(h_max).max(h_min);
+        }
+        let mut last = Failure::None;
+        loop {
+            self.budget.check(self.stats.steps, self.t, &self.y)?;
+            let (h_try, lands) = landing_step(self.t, t_stop, h);
+            let floor = step_floor(0.0, self.t);
+            if !(h_try > 0.0) || (!lands && (!(h_try > floor) || self.t + h_try == self.t)) {
+                return Err(self.underflow(h_try, last));
+            }
+            self.stats.steps += 1;
+            let outcome =
+                self.m
+                    .attempt(self.sys, self.t, &self.y, h_try, adaptive, &mut self.stats);
+            let err = match outcome {
+                Attempt::Error(err) if err <= 1.0 => err,
+                Attempt::Error(err) => {
+                    if !adaptive {
+                        return Err(self.underflow(h_try, Failure::NonFinite));
+                    }
+                    self.stats.rejected_error += 1;
+                    last = if err.is_finite() {
+                        Failure::Error
+                    } else {
+                        Failure::NonFinite
+                    };
+                    let proposal = self.control.reject(h_try, err, p_hat);
+                    h = self.below_h_min(proposal, h_try, last)?;
+                    continue;
+                }
+                Attempt::Singular => {
+                    self.stats.rejected_newton += 1;
+                    if !adaptive {
+                        return Err(self.underflow(h_try, Failure::Singular));
+                    }
+                    last = Failure::Singular;
+                    let proposal = self.control.reject_newton(h_try);
+                    h = self.below_h_min(proposal, h_try, last)?;
+                    continue;
+                }
+            };
+            // Accepted.
+            self.t_prev = self.t;
+            self.t = if lands { t_stop } else { self.t + h_try };
+            std::mem::swap(&mut self.y_prev, &mut self.y);
+            self.y.copy_from_slice(self.m.y_new());
+            self.m.accept(h_try);
+            self.started = false;
+            self.stats.accepted += 1;
+            self.stats.record_step_size(h_try);
+            self.h_next = Some(if adaptive {
+                self.control.accept(h_try, err, p_hat).min(h_max).max(h_min)
+            } else {
+                h
+            });
+            return Ok(());
+        }
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let h = self.t - self.t_prev;
+        if h == 0.0 {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        let theta = (t - self.t_prev) / h;
+        self.m
+            .interpolate(self.sys, self.t_prev, h, &self.y_prev, &self.y, theta, out);
+    }
+
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        self.y_prev.copy_from_slice(y);
+        self.control.reset();
+        self.m.reset();
+        self.started = false;
+        self.h_next = None;
+        Ok(())
+    }
+
+    fn stats(&self) -> Stats {
+        let mut s = self.stats;
+        s.rhs_evals += self.m.lazy_rhs_evals();
+        s
+    }
+}
+
+impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'_, S, M> {
+    /// A rejection's proposal below h_min: one more try at h_min, unless the rejected trial
+    /// was already at h_min (then the step fails).
+    fn below_h_min(&self, proposal: f64, h_try: f64, last: Failure) -> Result<f64, SolveError> {
+        let h_min = self.opts.h_min;
+        if h_min > 0.0 && proposal < h_min {
+            if h_try <= h_min {
+                return Err(self.underflow(proposal, last));
+            }
+            Ok(h_min)
+        } else {
+            Ok(proposal)
+        }
+    }
+}
