@@ -112,6 +112,48 @@ pub struct ClearanceOutput {
     pub film_ft: f64,
 }
 
+/// One body at one instant: its centre of mass and angle, their rates and accelerations
+/// (global frame).
+///
+/// ```text
+/// (x, y, θ), (ẋ, ẏ, θ̇), (ẍ, ÿ, θ̈)   — θ̈ from the right-hand side at (t, y)
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct BodyOutput {
+    /// x of the centre of mass (m).
+    pub x: f64,
+    /// y of the centre of mass (m).
+    pub y: f64,
+    /// Angle θ (rad, not wrapped).
+    pub theta: f64,
+    /// ẋ (m/s).
+    pub vx: f64,
+    /// ẏ (m/s).
+    pub vy: f64,
+    /// θ̇ (rad/s).
+    pub omega: f64,
+    /// ẍ (m/s²).
+    pub ax: f64,
+    /// ÿ (m/s²).
+    pub ay: f64,
+    /// θ̈ (rad/s²).
+    pub alpha: f64,
+}
+
+/// Column suffixes of a body, in the order of [`Outputs::column_values`].
+pub const BODY_COLUMNS: [&str; 9] = ["x", "y", "theta", "vx", "vy", "omega", "ax", "ay", "alpha"];
+/// Column suffixes of a clearance joint, in the order of [`Outputs::column_values`].
+pub const CLEARANCE_COLUMNS: [&str; 6] = [
+    "ex_over_c",
+    "ey_over_c",
+    "delta",
+    "contact_force",
+    "friction_force",
+    "film_force",
+];
+/// Column suffix of a driver.
+pub const DRIVER_COLUMNS: [&str; 1] = ["torque"];
+
 /// Everything one evaluation at (t, y) reports (trajectory.csv columns and more).
 ///
 /// ```text
@@ -128,6 +170,8 @@ pub struct Outputs {
     pub slider_v: Option<f64>,
     /// ẍ of the slider (m/s²), from the right-hand side at (t, y).
     pub slider_a: Option<f64>,
+    /// Every body (integrated and prescribed), in scene order.
+    pub bodies: Vec<BodyOutput>,
     /// Every clearance joint, in scene order.
     pub clearance: Vec<ClearanceOutput>,
     /// Euclidean norm of the position constraints Φ(q, t) of the KKT system.
@@ -183,6 +227,27 @@ pub struct IdealSliderCrank {
     pub theta0: f64,
     /// θ − φ_crank (rad): the geometric crank angle minus the crank body's angle.
     pub offset: f64,
+}
+
+impl Outputs {
+    /// The values of the per-element columns named by [`Mechanism::output_columns`], in the
+    /// same order, appended to `out`.
+    pub fn column_values(&self, out: &mut Vec<f64>) {
+        for b in &self.bodies {
+            out.extend_from_slice(&[b.x, b.y, b.theta, b.vx, b.vy, b.omega, b.ax, b.ay, b.alpha]);
+        }
+        for c in &self.clearance {
+            out.extend_from_slice(&[
+                c.ex_over_c,
+                c.ey_over_c,
+                c.delta,
+                c.contact_force,
+                c.friction_force,
+                c.film_force,
+            ]);
+        }
+        out.extend_from_slice(&self.driver_torques);
+    }
 }
 
 impl IdealSliderCrank {
@@ -284,6 +349,30 @@ impl Mechanism {
         Full { sc, ok, torques }
     }
 
+    /// Names of the per-element output columns, in the order of [`Outputs::column_values`]:
+    ///
+    /// ```text
+    /// <body>.x .y .theta .vx .vy .omega .ax .ay .alpha          every body, scene order
+    /// <joint>.ex_over_c .ey_over_c .delta .contact_force
+    ///        .friction_force .film_force                       every clearance joint
+    /// <driver>.torque                                          every driver joint
+    /// ```
+    pub fn output_columns(&self) -> Vec<String> {
+        let mut names = Vec::new();
+        for b in &self.scene.bodies {
+            names.extend(BODY_COLUMNS.iter().map(|c| format!("{}.{c}", b.name)));
+        }
+        for c in &self.clr {
+            names.extend(CLEARANCE_COLUMNS.iter().map(|s| format!("{}.{s}", c.name)));
+        }
+        for j in &self.scene.joints {
+            if let JointSpec::Driver(d) = j {
+                names.extend(DRIVER_COLUMNS.iter().map(|s| format!("{}.{s}", d.name)));
+            }
+        }
+        names
+    }
+
     /// One evaluation of every output at (t, y). Non-finite values (a singular KKT matrix)
     /// come out as NaN.
     pub fn outputs(&self, t: f64, y: &[f64]) -> Outputs {
@@ -316,6 +405,23 @@ impl Mechanism {
                 film_ft: ev.f_tf,
             })
             .collect();
+        let bodies = (0..self.bodies.len())
+            .map(|k| {
+                let ([x, y, theta], [vx, vy, omega]) = (sc.pose[k], sc.vel[k]);
+                let [ax, ay, alpha] = sc.acc[k].map(nan_if);
+                BodyOutput {
+                    x,
+                    y,
+                    theta,
+                    vx,
+                    vy,
+                    omega,
+                    ax,
+                    ay,
+                    alpha,
+                }
+            })
+            .collect();
         let constraint_violation = sc.phi.iter().map(|v| v * v).sum::<f64>().sqrt();
         let driver_torques = f.torques.iter().map(|x| nan_if(x.1)).collect();
         let mut kinetic = 0.0;
@@ -335,6 +441,7 @@ impl Mechanism {
             slider_x,
             slider_v,
             slider_a,
+            bodies,
             clearance,
             constraint_violation,
             driver_torques,

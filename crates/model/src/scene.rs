@@ -928,6 +928,24 @@ impl Checker {
     }
 }
 
+/// A body or joint name: not empty, and usable as the prefix of a `trajectory.csv` column
+/// (`<name>.x`): no comma, no double quote, no control character.
+fn check_name(path: &str, name: &str) -> Result<(), SceneError> {
+    if name.is_empty() {
+        return Err(invalid(path, "must not be empty"));
+    }
+    if let Some(c) = name
+        .chars()
+        .find(|c| *c == ',' || *c == '"' || c.is_control())
+    {
+        return Err(invalid(
+            path,
+            format!("must not contain {c:?} (names become trajectory.csv column names)"),
+        ));
+    }
+    Ok(())
+}
+
 impl Scene {
     /// Checks every value and every reference; the first failure is returned with its JSON path.
     /// (Constraint rank and assembly are checked by [`crate::Mechanism::from_scene`].)
@@ -938,9 +956,7 @@ impl Scene {
         }
         for (i, b) in self.bodies.iter().enumerate() {
             let p = format!("bodies[{i}]");
-            if b.name.is_empty() {
-                return Err(invalid(format!("{p}.name"), "must not be empty"));
-            }
+            check_name(&format!("{p}.name"), &b.name)?;
             if b.name == GROUND {
                 return Err(invalid(
                     format!("{p}.name"),
@@ -965,9 +981,7 @@ impl Scene {
         }
         for (i, j) in self.joints.iter().enumerate() {
             let p = format!("joints[{i}]");
-            if j.name().is_empty() {
-                return Err(invalid(format!("{p}.name"), "must not be empty"));
-            }
+            check_name(&format!("{p}.name"), j.name())?;
             if self.joints[..i].iter().any(|o| o.name() == j.name()) {
                 return Err(invalid(
                     format!("{p}.name"),

@@ -192,3 +192,51 @@ fn driver_power_equals_the_rate_of_mechanical_energy() {
         }
     }
 }
+
+/// Every body in the outputs: at the exact state of the ideal press at θ = 1 rad, the
+/// per-element columns carry the crank's closed-form motion (centre at r/2 (cos θ, sin θ),
+/// turning at ω with θ̈ = 0), the rod's and slider's exact positions and velocities, the
+/// slider's closed-form acceleration, and the driver's torque; one value per column name.
+#[test]
+fn every_body_and_driver_has_its_named_columns() {
+    let rpm = 150.0;
+    let (w, theta) = (omega(rpm), 1.0);
+    let m = ideal(rpm);
+    let names = m.output_columns();
+    let y = exact_state(theta, w);
+    let o = m.outputs(theta / w, &y);
+    let mut v = Vec::new();
+    o.column_values(&mut v);
+    assert_eq!(names.len(), v.len());
+    assert_eq!(
+        names.len(),
+        3 * 9 + 1,
+        "three bodies, one driver, no clearance joint"
+    );
+    let col = |n: &str| {
+        v[names
+            .iter()
+            .position(|x| x == n)
+            .unwrap_or_else(|| panic!("{n}"))]
+    };
+    let (s, c) = theta.sin_cos();
+    assert!((col("crank.x") - 0.5 * R * c).abs() < 1e-15);
+    assert!((col("crank.y") - 0.5 * R * s).abs() < 1e-15);
+    assert!((col("crank.omega") - w).abs() < 1e-12 * w);
+    assert!(col("crank.alpha").abs() < 1e-9);
+    for (k, name) in ["rod.x", "rod.y", "rod.theta", "slider.x", "slider.y"]
+        .iter()
+        .enumerate()
+    {
+        assert!((col(name) - y[k]).abs() < 1e-15, "{name}");
+    }
+    assert!((col("rod.vx") - y[6]).abs() < 1e-12 && (col("slider.vx") - y[9]).abs() < 1e-12);
+    let a_exact = m.ideal_slider_crank().unwrap().a(theta / w);
+    assert!(
+        rel(col("slider.ax"), a_exact) < 1e-9,
+        "{} vs {a_exact}",
+        col("slider.ax")
+    );
+    assert_eq!(col("slider.ax"), o.slider_a.unwrap());
+    assert_eq!(col("crank_driver.torque"), o.driver_torques[0]);
+}

@@ -442,3 +442,21 @@ fn forces_that_overflow_at_the_initial_state_name_the_joint() {
     );
     assert!(reason.contains("F_N = inf N"), "{reason}");
 }
+
+/// Names become trajectory.csv column prefixes: a comma, a quote or a control character is a
+/// scene error at the name's JSON path.
+#[test]
+fn names_that_would_break_a_csv_header_are_rejected() {
+    for (bad, shown) in [("a,b", "','"), ("a\"b", "'\"'"), ("a\nb", "'\\n'")] {
+        let mut v: serde_json::Value = serde_json::from_str(
+            &lash_model::cases::press_scene(lash_model::cases::PressJoint::Dry, 150.0, 1e-4)
+                .to_json_pretty(),
+        )
+        .unwrap();
+        v["bodies"][1]["name"] = serde_json::Value::String(bad.into());
+        let e = lash_model::Scene::from_json_str(&v.to_string())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bodies[1].name") && e.contains(shown), "{e}");
+    }
+}
