@@ -25,7 +25,7 @@ use lash_benches::{
 use lash_model::Mechanism;
 use lash_solver::{Method, OdeSystem, Output};
 
-/// Grid points of a window (INTERFACES.md metrics).
+/// Grid points of a window (docs/outputs.md, "`metrics`").
 const N_GRID: usize = 2001;
 /// The error target (m/s²).
 const TARGET: f64 = 1e-6;

@@ -17,10 +17,10 @@
 //! lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
 //! ```
 //!
-//! Names and list syntax are the contract of INTERFACES.md: methods and controllers by
-//! [`Method::from_name`] and [`ControllerKind::from_name`], lists comma-separated, `--step` only
-//! for fixed-step methods, `--rtol`/`--atol`/`--controller` only for adaptive ones. Every parse
-//! error becomes one line and exit code 2 ([`parse`]).
+//! Names and list syntax are the contract of docs/outputs.md ("Method and controller names"):
+//! methods and controllers by [`Method::from_name`] and [`ControllerKind::from_name`], lists
+//! comma-separated, `--step` only for fixed-step methods, `--rtol`/`--atol`/`--controller` only for
+//! adaptive ones. Every parse error becomes one line and exit code 2 ([`parse`]).
 //!
 //! Each argument struct converts into the engine's options (`lash_validation::commands`):
 //! `SolverFlags` → [`SolverChoice`], `RunArgs` → `RunOptions`, and so on. The checks that are
@@ -50,7 +50,7 @@ use crate::exit::flagged;
 /// lash [COMMAND]      no command = the default run (module `headline`)
 /// ```
 ///
-/// Source: the issue "The lash command"; names from INTERFACES.md.
+/// Source: the issue "The lash command"; names from docs/outputs.md.
 #[derive(Debug, Parser)]
 #[command(
     name = "lash",
@@ -110,7 +110,7 @@ pub enum Command {
 /// A budget that runs out is a solver failure (exit 3, time and state printed, nothing
 /// written): `--max-steps` as `too many steps`, `--max-wall-time` as `budget exhausted`.
 ///
-/// Source: INTERFACES.md (method and controller names).
+/// Source: docs/outputs.md ("Method and controller names").
 #[derive(Debug, Clone, Default, PartialEq, Args)]
 pub struct SolverFlags {
     /// Integration method (rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p).
@@ -212,7 +212,7 @@ impl RunArgs {
 /// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
 /// ```
 ///
-/// Source: MODEL.md §6.
+/// Source: docs/model.md §6.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StudyName {
     /// The paper's case study: speeds and clearances, dry and lubricated.
@@ -294,7 +294,7 @@ impl CompareArgs {
 ///                          [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: INTERFACES.md (comma-separated lists).
+/// Source: docs/outputs.md ("Method and controller names": comma-separated lists).
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct WorkPrecisionArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -349,7 +349,7 @@ impl WorkPrecisionArgs {
 /// lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SweepArgs {
     /// The sweep file (JSON): a base case and lists of parameter values.
@@ -427,7 +427,7 @@ impl ExtremesArgs {
 /// lash merge DIR... [--out DIR]  →  DIR/merged.csv, DIR/merged.md
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct MergeArgs {
     /// Sweep output directories (or point directories) to join.
@@ -584,7 +584,7 @@ pub fn one_line(msg: &str) -> String {
         .to_string()
 }
 
-/// Parses a method name (INTERFACES.md).
+/// Parses a method name (docs/outputs.md, "Method and controller names").
 pub fn parse_method(s: &str) -> Result<Method, String> {
     Method::from_name(s).ok_or_else(|| {
         let known: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
@@ -592,7 +592,7 @@ pub fn parse_method(s: &str) -> Result<Method, String> {
     })
 }
 
-/// Parses a controller name (INTERFACES.md).
+/// Parses a controller name (docs/outputs.md, "Method and controller names").
 pub fn parse_controller(s: &str) -> Result<ControllerKind, String> {
     ControllerKind::from_name(s).ok_or_else(|| {
         let known: Vec<&str> = ControllerKind::ALL.iter().map(|c| c.name()).collect();

@@ -11,7 +11,7 @@
 //! R_B = 0.05 m, R_J = R_B − c; film: long Gümbel, μ = 0.4 Pa·s, L = 0.1 m, ε_cap = 0.99
 //! g = 9.81 m/s² along −y, α = β = 5 s⁻¹, θ(0) = 0, two crank revolutions
 //! ```
-//! Source: MODEL.md §5–§6 (Peng et al. 2025, §4 and Figure 3; assumed values marked there).
+//! Source: docs/model.md §5–§6 (Peng et al. 2025, §4 and Figure 3; assumed values marked there).
 
 use std::collections::BTreeMap;
 
@@ -40,9 +40,9 @@ pub const BEARING_RADIUS: f64 = 0.05;
 /// Which joint joins the rod and the slider.
 ///
 /// ```text
-/// Ideal       Φ = r_rod^B − r_slider^B = 0              (closed form of MODEL.md §5)
-/// Dry         IMPACT contact + Coulomb friction         (MODEL.md §3)
-/// Lubricated  long-bearing Gümbel film + dry contact    (MODEL.md §4)
+/// Ideal       Φ = r_rod^B − r_slider^B = 0              (closed form of docs/model.md §5)
+/// Dry         IMPACT contact + Coulomb friction         (docs/model.md §3)
+/// Lubricated  long-bearing Gümbel film + dry contact    (docs/model.md §4)
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PressJoint {
@@ -82,7 +82,7 @@ fn body(name: &str, mass: f64, inertia: f64, x: f64, points: &[(&str, [f64; 2])]
     }
 }
 
-/// The press of MODEL.md §5–§6 at `rpm` with the rod–slider joint `joint` and radial clearance
+/// The press of docs/model.md §5–§6 at `rpm` with the rod–slider joint `joint` and radial clearance
 /// `clearance` (m; ignored for [`PressJoint::Ideal`]).
 pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
     let r = CRANK_R;

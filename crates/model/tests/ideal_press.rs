@@ -1,4 +1,4 @@
-//! The ideal press (no clearance) against the closed form of MODEL.md §5, and the consistency
+//! The ideal press (no clearance) against the closed form of docs/model.md §5, and the consistency
 //! of the outputs (slider acceleration = right-hand side; driver torque = power balance).
 mod common;
 use common::*;
@@ -80,7 +80,7 @@ fn assembly_reaches_the_exact_initial_state() {
 
 #[test]
 fn slider_acceleration_at_dead_centres_from_exact_states() {
-    // MODEL.md §5: ẍ(θ=0) = −rω²(1 + r/l), ẍ(θ=π) = rω²(1 − r/l); printed values at θ = 0.
+    // docs/model.md §5: ẍ(θ=0) = −rω²(1 + r/l), ẍ(θ=π) = rω²(1 − r/l); printed values at θ = 0.
     let printed = [
         (120.0, -2.47022),
         (150.0, -3.85972),

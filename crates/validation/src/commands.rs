@@ -99,7 +99,7 @@ pub fn run(o: &RunOptions) -> Result<Written<RunResult>, Error> {
 /// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
 /// ```
 ///
-/// Source: MODEL.md §6.
+/// Source: docs/model.md §6.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StudyOptions {
     /// Output directory; None = `out/study/paper`.
@@ -531,7 +531,7 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
 /// SWEEP.json [jobs] [shard] [out]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SweepRunOptions {
     /// The sweep file (JSON): a base case and lists of parameter values.
@@ -668,7 +668,7 @@ pub fn point_values(mut summary: serde_json::Value) -> PointResult {
 /// DIR... [out]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MergeOptions {
     /// Sweep output directories (or point directories) to join; at least one.

@@ -2,7 +2,7 @@
 //! the error norms, and `lash compare`.
 //!
 //! ```text
-//! error window   dry clearance joint (chaotic, MODEL.md §9): the first half revolution
+//! error window   dry clearance joint (chaotic, docs/model.md §9): the first half revolution
 //!                  [t0, t0 + T/2]   (two correct runs still agree there: 1e-15 m of initial
 //!                  difference grows to ~1e-5 m/s² within one revolution, 4e-2 by the second)
 //!                otherwise: the metrics window (the last revolution)
@@ -21,7 +21,7 @@
 //!                test problems: reference_error (largest relative error over components)
 //! ```
 //!
-//! Source: MODEL.md §9; INTERFACES.md (`reference_error`); the issue "The lash command"
+//! Source: docs/model.md §9; docs/outputs.md (`reference_error`); the issue "The lash command"
 //! (`lash compare`: every method against a converged reference, say how it was obtained).
 
 use std::path::{Path, PathBuf};
@@ -53,7 +53,7 @@ pub const STABLE_PHI_MAX: f64 = 1e-8;
 /// [start, end] sampled at 2001 equally spaced times;  label says which rule chose it
 /// ```
 ///
-/// Source: MODEL.md §9.
+/// Source: docs/model.md §9.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorWindow {
     /// Start, s.

@@ -23,7 +23,7 @@
 //!             lubricated_viscosity_10 bdf and esdirk34 agree to 2e-9 at 1e-12, while every
 //!             method at 1e-10 lands 1.8e-7 away)
 //! window      the error window of compare.rs: dry scenes the first half revolution (chaotic,
-//!             MODEL.md §9), lubricated the last revolution, a run shorter than that whole;
+//!             docs/model.md §9), lubricated the last revolution, a run shorter than that whole;
 //!             2001 equally spaced times
 //! error       e(run; ref) = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v )
 //!             x, v slider position and velocity; s_x = r (crank radius: the amplitude of
@@ -55,7 +55,7 @@
 //! "1e-6 to 1 mm" reads either as 1e-6 m … 1e-3 m or as 1e-6 mm … 1 mm (1e-9 m … 1e-3 m):
 //! the scenes cover both, with clearances of 1e-9, 1e-6 and 1e-3 m.
 //!
-//! Source: the issue "Extremes"; MODEL.md §6, §9; INTERFACES.md (exit codes).
+//! Source: the issue "Extremes"; docs/model.md §6, §9; docs/outputs.md (exit codes).
 
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -92,7 +92,8 @@ pub const QUICK_BUDGET: Budget = Budget {
     max_steps: 100_000,
     max_wall_time: 10.0,
 };
-/// The adaptive methods of the matrix, in the order of INTERFACES.md.
+/// The adaptive methods of the matrix, in the order of docs/outputs.md ("Method and controller
+/// names").
 pub const ADAPTIVE: [Method; 8] = [
     Method::Bs32,
     Method::Dopri54,
@@ -126,7 +127,7 @@ pub const REFERENCE_MAX_WALL_TIME: f64 = 60.0;
 /// of a run being (e − F·E_ref)/rtol^α ([`Cell::measured_c`]), the [`KNOWN_FINDINGS`] left
 /// out. Dry scenes: 5.5e4 (dry_clearance_1mm, dop853 at 1e-10; then dry_speed_1rpm 4.7e4). An impact turns a small
 /// error in the journal's position into an error in the slider's velocity, and the dry press
-/// is chaotic (MODEL.md §9), so its global error is 1e3–5e4 × rtol where the lubricated scenes
+/// is chaotic (docs/model.md §9), so its global error is 1e3–5e4 × rtol where the lubricated scenes
 /// stay within 2e2 × rtol. With this C the promise can fail for rtol ≤ 1e-7; at looser
 /// tolerances C·rtol exceeds any deviation the slider can have, and the check there is that
 /// the result is finite.

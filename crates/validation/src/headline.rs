@@ -13,7 +13,7 @@
 //!                lubricated bdf) at the loosest rtol in 1e-3, 1e-4, …, 1e-11 whose error is
 //!                at most RK4's: the same accuracy, so the costs compare directly
 //!   error      compare::ErrorNorms::headline: relative RMS error of the slider acceleration
-//!                over the first half revolution (dry: chaotic, MODEL.md §9) or the last
+//!                over the first half revolution (dry: chaotic, docs/model.md §9) or the last
 //!                revolution (ideal, lubricated)
 //! returns the table (`lash` prints it); writes validation/reports/default/ (git-ignored):
 //! README.md (the tables), default.json, slider_acceleration.{svg,png} (last revolution, the
@@ -21,7 +21,7 @@
 //! per case the reference run's summary.json, trajectory.csv and figures
 //! ```
 //!
-//! Source: the issue "The lash command" (the default run); MODEL.md §5–§9.
+//! Source: the issue "The lash command" (the default run); docs/model.md §5–§9.
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

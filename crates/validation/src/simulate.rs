@@ -68,18 +68,18 @@
 //!                0.16 instead of 0.34, slider acceleration up to 1.6e4 m/s² instead of 3.9),
 //!                which no bound on the state catches.
 //! events         located for adaptive methods; off for fixed-step methods (the paper's RK4
-//!                runs without event location, MODEL.md §7), whose crossings are counted at
+//!                runs without event location, docs/model.md §7), whose crossings are counted at
 //!                the step ends
 //! ```
 //!
 //! A built-in test problem runs rodas5p at rtol 1e-6 with the problem's own atol (its
 //! reference_error threshold) and records every accepted step as its trajectory.
 //!
-//! Metrics window: the last crank revolution [t_end − T, t_end] (INTERFACES.md); when the run
-//! is shorter than T (a `--t-end` override) or has no crank driver, the whole run.
+//! Metrics window: the last crank revolution [t_end − T, t_end] (docs/outputs.md, "`metrics`");
+//! when the run is shorter than T (a `--t-end` override) or has no crank driver, the whole run.
 //!
-//! Source: INTERFACES.md (summary.json, trajectory.csv, the metrics window, the energy
-//! balance), MODEL.md §5–§7, §9.
+//! Source: docs/outputs.md (summary.json, trajectory.csv, the metrics window, the energy
+//! balance), docs/model.md §5–§7, §9.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -131,7 +131,7 @@ pub const TESTSET_RTOL: f64 = 1e-6;
 /// Mechanism(scene) → Mechanism::from_scene per run (fresh event state) | TestSet(name)
 /// ```
 ///
-/// Source: INTERFACES.md (`case`).
+/// Source: docs/outputs.md (`case`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Model {
     /// A checked scene; each run builds its own `Mechanism` from it.
@@ -146,7 +146,7 @@ pub enum Model {
 /// T = 2π/|ω_crank|,  L = min_k c_k,  dim = 2·3·(integrated bodies)
 /// ```
 ///
-/// Source: MODEL.md §1, §5.
+/// Source: docs/model.md §1, §5.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MechanismInfo {
     /// Crank period T, s (crank driver role with ω ≠ 0).
@@ -161,7 +161,7 @@ pub struct MechanismInfo {
     pub clearance_min: Option<f64>,
     /// The clearance-joint role: its clearance and whether it is lubricated.
     pub joint: Option<JointInfo>,
-    /// Whether some clearance joint has no oil film (dry contact: chaotic, MODEL.md §9).
+    /// Whether some clearance joint has no oil film (dry contact: chaotic, docs/model.md §9).
     pub has_dry_joint: bool,
     /// State dimension.
     pub dim: usize,
@@ -175,7 +175,7 @@ pub struct MechanismInfo {
 /// (case: name and hash, model: scene | test problem, info: what the scene offers)
 /// ```
 ///
-/// Source: INTERFACES.md (`case`, `scene_sha256`).
+/// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prepared {
     /// The case reference (name and sha256 recorded in summary.json).
@@ -444,7 +444,7 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
 /// t_end override, trajectory grid size, extra output times, energy on/off
 /// ```
 ///
-/// Source: INTERFACES.md (`trajectory.csv`, `metrics`, `energy`).
+/// Source: docs/outputs.md (`trajectory.csv`, `metrics`, `energy`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunRequest {
     /// Solver options (from [`Prepared::options`]).
@@ -482,7 +482,7 @@ impl RunRequest {
 /// and at the extra times, with the raw states; events; energy totals; the ideal mechanism
 /// ```
 ///
-/// Source: INTERFACES.md.
+/// Source: docs/outputs.md ("`summary.json`", "`trajectory.csv`").
 #[derive(Clone, Debug)]
 pub struct RunResult {
     /// summary.json content (metrics for mechanisms; final_state and reference_error for test

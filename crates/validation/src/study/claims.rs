@@ -1,5 +1,5 @@
-//! The paper's qualitative claims of §4 (and MODEL.md's cross-checks), each turned into a
-//! criterion on the measured statistics and decided from them.
+//! The paper's qualitative claims of §4 (and the cross-checks of docs/model.md §5, §9), each turned
+//! into a criterion on the measured statistics and decided from them.
 //!
 //! ```text
 //! value(case, q)   = mean over the case's realisations of q          (the verdict)
@@ -8,7 +8,7 @@
 //! realisations     = #{k : criterion true on realisation k} of N
 //! ```
 //!
-//! The dry cases are chaotic (MODEL.md §9): one revolution's maximum, RMS or count depends on
+//! The dry cases are chaotic (docs/model.md §9): one revolution's maximum, RMS or count depends on
 //! the realisation, so every case runs as an ensemble of realisations that differ only by a
 //! micro-radian of initial crank phase, and the claims compare ensemble means. A case with one
 //! realisation (the ideal mechanism, deterministic) takes part in every one.
@@ -20,7 +20,7 @@
 //! chaotic" = the realisations' pointwise acceleration spread below 0.1 % of the ideal peak;
 //! "periodic" = the last revolution's orbit within 5 % of c of the previous one.
 //!
-//! Source: the paper's §4 (quoted per claim), MODEL.md §5 and §9.
+//! Source: the paper's §4 (quoted per claim), docs/model.md §5 and §9.
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -85,11 +85,11 @@ pub const PERIODIC: f64 = 0.05;
 /// A statistic of one realisation of one case that a claim reads.
 ///
 /// ```text
-/// INTERFACES.md metrics (slider_acc_rms_dev_ideal, eps_max, ...) and the study's deviations
+/// metrics of docs/outputs.md (slider_acc_rms_dev_ideal, eps_max, ...) and the study's deviations
 /// (x_dev_max = max |x − x_ideal|, ...); acc_spread = max_i (max_k ẍ_k,i − min_k ẍ_k,i)
 /// ```
 ///
-/// Source: INTERFACES.md (`metrics`); this module's [`super::Deviations`].
+/// Source: docs/outputs.md (`metrics`); this module's [`super::Deviations`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantity {
     /// `slider_acc_rms_dev_ideal`, m/s².
@@ -220,7 +220,7 @@ impl Verdict {
 /// Where a claim comes from.
 ///
 /// ```text
-/// Paper = a sentence of the paper's §4;  Model = a statement of MODEL.md (§5, §9)
+/// Paper = a sentence of the paper's §4;  Model = a statement of docs/model.md (§5, §9)
 /// ```
 ///
 /// Source: this module.
@@ -229,7 +229,7 @@ impl Verdict {
 pub enum Origin {
     /// The paper's §4.
     Paper,
-    /// MODEL.md.
+    /// A statement of docs/model.md (§5, §9).
     Model,
 }
 
@@ -258,12 +258,12 @@ pub struct Number {
 /// statement, quoted source, criterion → numbers → verdict; realisations_holding of realisations
 /// ```
 ///
-/// Source: the paper's §4 (quoted in `source`) or MODEL.md.
+/// Source: the paper's §4 (quoted in `source`) or docs/model.md §5, §9.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Claim {
-    /// Identifier (P1, P2, ... paper; M1, ... MODEL.md).
+    /// Identifier (P1, P2, ... paper; M1, ... docs/model.md §5, §9).
     pub id: String,
-    /// Paper or MODEL.md.
+    /// Paper or docs/model.md.
     pub origin: Origin,
     /// The figure(s) the claim is about.
     pub figure: String,

@@ -2,7 +2,7 @@
 //! quoted source and numbers, the convergence check and the timings.
 //!
 //! ```text
-//! # title · settings · verdict summary · metrics tables · claims · MODEL.md checks ·
+//! # title · settings · verdict summary · metrics tables · claims · docs/model.md checks ·
 //! convergence (study and loose settings against the reference) · solver work and timing ·
 //! figures
 //! ```
