@@ -1,5 +1,5 @@
-//! Measures the performance targets of the issue "Stability at the extremes … and
-//! performance", every claim as a ratio of two measurements taken side by side in one run.
+//! Measures the performance targets (a)–(e) of BENCHMARKS.md ("Results"), every claim as a
+//! ratio of two measurements taken side by side in one run.
 //!
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [--reps N]

@@ -50,7 +50,8 @@ use crate::exit::flagged;
 /// lash [COMMAND]      no command = the default run (module `headline`)
 /// ```
 ///
-/// Source: the issue "The lash command"; names from docs/outputs.md.
+/// Source: README.md ("The `lash` command"); names from docs/outputs.md ("Method and controller
+/// names").
 #[derive(Debug, Parser)]
 #[command(
     name = "lash",
@@ -72,7 +73,7 @@ pub struct Cli {
 /// stiffness | poincare                          (diagnostics)
 /// ```
 ///
-/// Source: the issue "The lash command"; "Stiffness diagnostics", "Chaos diagnostics".
+/// Source: docs/outputs.md ("Files each command writes").
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run one case: DIR/summary.json, DIR/trajectory.csv and figures.
@@ -178,7 +179,7 @@ impl SolverFlags {
 /// lash run CASE [solver flags] [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash run CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct RunArgs {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -225,7 +226,7 @@ pub enum StudyName {
 /// lash study NAME [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash study paper`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct StudyArgs {
     /// Which study.
@@ -252,7 +253,7 @@ impl StudyArgs {
 /// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash compare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct CompareArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -386,7 +387,7 @@ impl SweepArgs {
 ///     reference failed at every rtol of its ladder (nothing written)
 /// ```
 ///
-/// Source: the issue "Extremes"; module `extremes`.
+/// Source: docs/outputs.md ("`lash extremes`"); module `extremes`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct ExtremesArgs {
     /// The quick subset (3 scenes × every method × 3 tolerances), as in the default tests.
@@ -454,7 +455,7 @@ impl MergeArgs {
 /// lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 /// ```
 ///
-/// Source: the issue "Stiffness diagnostics".
+/// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct StiffnessArgs {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -497,7 +498,7 @@ impl StiffnessArgs {
 ///                    [solver flags] [--out DIR]
 /// ```
 ///
-/// Source: the issue "Chaos diagnostics".
+/// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PoincareArgs {
     /// The case: a scene file (JSON) with a crank driver and a clearance joint role.

@@ -1,5 +1,5 @@
-//! Property tests of the scene parser and of random valid mechanisms (issue "Stability at the
-//! extremes": faults and bad input).
+//! Property tests of the scene parser and of random valid mechanisms (faults and bad input;
+//! docs/scene-format.md, "Errors").
 //!
 //! 1. Arbitrary input (bytes, UTF-8 text, JSON values, scene-shaped JSON with random pieces)
 //!    never panics in [`Scene::from_json_str`], [`Mechanism::from_scene`], the first

@@ -21,8 +21,8 @@
 //!                test problems: reference_error (largest relative error over components)
 //! ```
 //!
-//! Source: docs/model.md §9; docs/outputs.md (`reference_error`); the issue "The lash command"
-//! (`lash compare`: every method against a converged reference, say how it was obtained).
+//! Source: docs/model.md §9; docs/outputs.md (`summary.json`: `reference_error`; "`lash compare
+//! CASE`": every method against a converged reference, saying how it was obtained).
 
 use std::path::{Path, PathBuf};
 
@@ -339,7 +339,7 @@ impl Reference {
 /// (method, controller, rtol | step) → error norms, headline error, cost, events
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash compare`).
+/// Source: docs/outputs.md ("`lash compare CASE`").
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Compared {
     /// Method.
@@ -523,7 +523,7 @@ pub fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
 /// { case, reference: how, window, t_end, runs: [Compared] }
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash compare CASE`": compare.json).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Comparison {
     /// Case name.

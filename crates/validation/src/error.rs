@@ -129,7 +129,7 @@ pub enum Piece {
 ///   engine: "rk4 left out (give steps to include it)"
 /// ```
 ///
-/// Source: the issue "One engine, one step driver" (the engine names no command-line flag).
+/// Source: ARCHITECTURE.md ("Invariants": the engine names no command-line flag).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Message {
     /// The pieces, in order.
@@ -194,7 +194,7 @@ impl From<String> for Message {
 ///   engine: "rtol is only for adaptive methods, and rk4 is fixed-step"
 /// ```
 ///
-/// Source: the issue "One engine, one step driver" (engine errors name no command-line flag).
+/// Source: ARCHITECTURE.md ("Invariants": engine errors name no command-line flag).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct OptionError {
     /// The option at fault, by its engine name.

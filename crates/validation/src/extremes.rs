@@ -52,10 +52,10 @@
 //! (p = 2) 2/3, esdirk34 (p = 3) 3/4, bdf (orders 1–5) 5/6 at its highest order. C, C_rk4 and F are measured, not
 //! assumed: [`PROMISE_C_DRY`] documents the measurement.
 //!
-//! "1e-6 to 1 mm" reads either as 1e-6 m … 1e-3 m or as 1e-6 mm … 1 mm (1e-9 m … 1e-3 m):
-//! the scenes cover both, with clearances of 1e-9, 1e-6 and 1e-3 m.
+//! The clearances 1e-9, 1e-6 and 1e-3 m span both 1e-6 m … 1e-3 m and 1e-6 mm … 1 mm.
 //!
-//! Source: the issue "Extremes"; docs/model.md §6, §9; docs/outputs.md (exit codes).
+//! Source: docs/outputs.md ("`lash extremes`", "Exit codes of `lash`"); docs/model.md §6, §9;
+//! BENCHMARKS.md ("Extremes").
 
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -544,7 +544,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
 /// max_wall_time seconds of integration
 /// ```
 ///
-/// Source: the issue "Extremes" (no hang).
+/// Source: docs/outputs.md ("`lash extremes`": every run has a step and a wall-clock budget).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Budget {
     /// Most step attempts of one run.

@@ -21,7 +21,8 @@
 //! per case the reference run's summary.json, trajectory.csv and figures
 //! ```
 //!
-//! Source: the issue "The lash command" (the default run); docs/model.md §5–§9.
+//! Source: docs/outputs.md ("`lash` (no command): the default run"); README.md ("What the
+//! default run shows"); docs/model.md §5–§9.
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

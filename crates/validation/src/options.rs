@@ -9,7 +9,7 @@
 //! Errors name the options by their engine names ([`OptionError`]): `rtol`, `atol`, `step`,
 //! `controller`, `method`, `max_steps`, `max_wall_time`.
 //!
-//! Source: docs/outputs.md ("Method and controller names"); the issue "The lash command".
+//! Source: docs/outputs.md ("Method and controller names", "Defaults of a run").
 
 use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
 

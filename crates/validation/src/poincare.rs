@@ -74,7 +74,7 @@ pub const SIGMAS: f64 = 3.0;
 /// N revolutions ≥ 1, d0 ∈ (0, 1) clearances, R ≥ 1 renormalisations per revolution
 /// ```
 ///
-/// Source: the issue "Chaos diagnostics".
+/// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoincareSettings {
     /// Revolutions N (section points j = 0..N; Lyapunov averaging over N T).

@@ -11,8 +11,8 @@
 //!   joint_forces                   contact force F_N and film force |F_film|   [clearance joint]
 //! ```
 //!
-//! Source: the issue "The lash command" (`lash run` writes DIR/summary.json,
-//! DIR/trajectory.csv and figures).
+//! Source: docs/outputs.md ("`lash run CASE`": DIR/summary.json, DIR/trajectory.csv and
+//! figures).
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

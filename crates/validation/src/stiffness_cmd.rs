@@ -92,7 +92,7 @@ pub const FILES: [&str; 4] = [
 /// probe: growth_bound 10, rel_tol 1e-4 (Rk4ProbeOptions)
 /// ```
 ///
-/// Source: the issue "Stiffness diagnostics".
+/// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Clone, Debug, PartialEq)]
 pub struct StiffnessSettings {
     /// Sample points along the run, both ends included (≥ 2).

@@ -18,7 +18,7 @@
 //! merge(DIR...) = the result.json files found → one table (CSV + markdown)
 //! ```
 //!
-//! Source: docs/outputs.md ("Sweeps") and the issue "The lash command".
+//! Source: docs/outputs.md ("Sweeps").
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -93,7 +93,7 @@ impl fmt::Display for Shard {
 /// grid = speed_rpm × clearance × viscosity × stiffness × (method-dependent solver choices)
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash sweep`).
+/// Source: docs/outputs.md ("Sweeps": the sweep file).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
@@ -237,7 +237,7 @@ pub struct SweepPoint {
 /// SWEEP.json + base case → points() = the grid of the module doc
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug)]
 pub struct SweepSpec {
     /// The parsed file.
@@ -540,7 +540,7 @@ pub fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
 /// values = flatten(object): {"a": {"b": 1}} → {"a.b": 1}; arrays kept as JSON text
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash merge` joins one table).
+/// Source: docs/outputs.md ("Sweeps": point files, merge).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PointResult {
     /// Column name → value (number, string, bool or null).
@@ -622,7 +622,7 @@ pub struct PointRecord {
 /// jobs threads (None = cores), shard I/N
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("Sweeps": `--jobs`, `--shard`).
 #[derive(Clone, Debug)]
 pub struct SweepOptions {
     /// Worker threads; None = one per core.

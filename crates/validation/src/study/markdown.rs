@@ -7,8 +7,8 @@
 //! figures
 //! ```
 //!
-//! Source: the issue "`lash study paper`" (a metrics table per case, each claim: statement,
-//! quoted source sentence, numbers, HOLDS / DOES NOT HOLD).
+//! Source: docs/outputs.md ("`lash study paper`": a metrics table per case, each claim:
+//! statement, quoted source sentence, numbers, HOLDS / DOES NOT HOLD).
 
 use std::fmt::Write as _;
 
