@@ -166,7 +166,8 @@ fn lubricated_c05_case_runs_to_the_end_with_rk4() {
     assert!(s.eps_max > 1.0, "at 0.5 mm the journal reaches the bearing");
 }
 
-/// About 10 s in release: RK4 needs 2e-7 s and 5e-7 s steps for these two cases.
+/// Slow (BENCHMARKS.md, "Test-suite run times"): RK4 needs 2e-7 s and 5e-7 s steps for these
+/// two cases.
 #[test]
 fn lubricated_c02_c03_cases_run_to_the_end_with_rk4() {
     run_case("lubricated_150rpm_c0.2");

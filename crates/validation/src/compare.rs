@@ -3,8 +3,7 @@
 //!
 //! ```text
 //! error window   dry clearance joint (chaotic, docs/model.md §9): the first half revolution
-//!                  [t0, t0 + T/2]   (two correct runs still agree there: 1e-15 m of initial
-//!                  difference grows to ~1e-5 m/s² within one revolution, 4e-2 by the second)
+//!                  [t0, t0 + T/2]   (two correct runs still agree there; docs/model.md §9)
 //!                otherwise: the metrics window (the last revolution)
 //!                sampled on 2001 equally spaced times, both ends
 //! reference      a scene with an oil film (stiff): bdf at rtol 1e-12, checked by esdirk34 at

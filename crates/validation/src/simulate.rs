@@ -29,9 +29,9 @@
 //!
 //! ```text
 //! method         bdf: the one method that is never far from the cheapest in `lash
-//!                work-precision` on the paper's press (the lubricated case, where the film
-//!                makes the explicit pairs stability-bound, 100–200× more RHS evaluations;
-//!                the dry and ideal cases, within 1.5–3× of the best explicit pair)
+//!                work-precision` on the paper's press: on the lubricated case the film makes
+//!                the explicit pairs stability-bound, and on the dry and ideal cases bdf stays
+//!                close to the best explicit pair (BENCHMARKS.md, "Defaults of a run")
 //! rtol           1e-8
 //! atol_i         rtol · s_i, per state component y = (q, q̇), q = (x, y, φ) per integrated body:
 //!                  x, y      s = L                  (m)
@@ -43,18 +43,19 @@
 //!                the floor that applies where y_i passes near 0 (rod angle, velocities at
 //!                reversal, a journal at the centre). Body positions of the press are
 //!                |y_i| ≈ 0.4 m, so there the relative term dominates and positions are
-//!                controlled to about rtol·0.4 m, not rtol·c: the measured error of the
-//!                extremes matrix is 1e3–5e4·rtol on the dry scenes for that reason
-//!                (BENCHMARKS.md, Extremes). atol scales with rtol, so tolerance
+//!                controlled to about rtol·0.4 m, not rtol·c: for that reason the errors of
+//!                the dry scenes of the extremes matrix lie decades above rtol (BENCHMARKS.md,
+//!                "Extremes"). atol scales with rtol, so tolerance
 //!                proportionality holds down to rtol = 1e-13.
 //!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
 //! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
 //!                joint, where nothing can be stepped over): with 4 samples an
 //!                interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot hide
-//!                inside a step. On dry_150rpm_c0.1 the shortest contact lasts 3.5 ms and the
-//!                shortest flight 1 ms; a step over a whole contact would miss both its onset
-//!                and its loss (tests/simulate.rs checks the onset count against a reference).
+//!                inside a step, and the contacts and flights of the dry press are longer
+//!                than that (BENCHMARKS.md, "Defaults of a run"); a step over a whole contact
+//!                would miss both its onset and its loss (tests/simulate.rs checks the onset
+//!                count against a reference).
 //! max_steps      50 000 000
 //! divergence     1e6: a state component (m, rad, m/s, rad/s) beyond 1e6 in magnitude is
 //!  bound         divergence (NonFiniteState), not motion of a mechanism: 1000 km, 1000 km/s,
@@ -64,9 +65,8 @@
 //!  check         outside its stability region (h·ρ > 2.785, lash_solver::rk4). Past the
 //!                limit the oil film of a lubricated joint does not blow up: the numerical
 //!                journal drifts to a lower eccentricity where the step is stable, finite
-//!                and wrong (lubricated_150rpm_c0.1 at h = 5e-6 and 1e-5 s: ε_max 0.28 and
-//!                0.16 instead of 0.34, slider acceleration up to 1.6e4 m/s² instead of 3.9),
-//!                which no bound on the state catches.
+//!                and wrong (BENCHMARKS.md, "Extremes" → "What the matrix found"), which no
+//!                bound on the state catches.
 //! events         located for adaptive methods; off for fixed-step methods (the paper's RK4
 //!                runs without event location, docs/model.md §7), whose crossings are counted at
 //!                the step ends
