@@ -94,7 +94,7 @@ fn slider_acceleration_at_dead_centres_from_exact_states() {
         let api = R * w * w * (1.0 - R / L);
         assert!(
             (a0 - a0_printed).abs() < 5e-6,
-            "closed form {a0} vs MODEL.md {a0_printed}"
+            "closed form {a0} vs docs/model.md §5 {a0_printed}"
         );
         let o0 = m.outputs(0.0, &exact_state(0.0, w));
         let t_pi = std::f64::consts::PI / w;

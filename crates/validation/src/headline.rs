@@ -256,7 +256,7 @@ impl Headline {
         s.push_str(
             "\nerror: relative RMS error of the slider acceleration against the reference on \
              2001 points of the error window (the dry case is chaotic, so it is measured over \
-             the first half revolution; MODEL.md §9). RK4 runs at the largest stable step \
+             the first half revolution; docs/model.md §9). RK4 runs at the largest stable step \
              (ideal 1e-3 s, dry 2e-4 s, lubricated 2e-6 s) without event location, its contact \
              onsets counted at the step ends; the adaptive method runs at the loosest rtol \
              (decades from 1e-3) that matches RK4's error, with event location. Wall times are \
@@ -321,7 +321,7 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
         .collect();
     if let Some((x, y)) = &ideal {
         series.push(Series {
-            name: "closed form (MODEL.md §5)",
+            name: "closed form (docs/model.md §5)",
             x,
             y,
             style: SeriesStyle::Dashed,
