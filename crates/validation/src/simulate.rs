@@ -890,14 +890,7 @@ impl Drive {
 
     /// summary.json of the run, without metrics or test-problem fields.
     fn summary(&self, p: &Prepared, opts: &SolverOptions, t_end: f64) -> Summary {
-        Summary::new(
-            &p.case,
-            opts,
-            t_end,
-            self.stats,
-            self.wall,
-            self.hits.len(),
-        )
+        Summary::new(&p.case, opts, t_end, self.stats, self.wall, self.hits.len())
     }
 }
 
