@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release -p lash-benches --example rodas_order -- [pr] [jac] [eig] [hist]
-//!     [restart] [history] [order]            (none: all; `order` takes ~2 min)
+//!     [restart] [history] [order]            (none: all; `order` is the slow one)
 //! jac    the mechanism Jacobian against Richardson-extrapolated central differences of f
 //! order  error vs accepted steps of Rodas5P (and BDF) on lubricated 150 rpm c 0.1 over the
 //!        second of two revolutions, with (i) the mechanism Jacobian, (ii) the accurate

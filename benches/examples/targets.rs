@@ -1,5 +1,5 @@
-//! Measures the performance targets of the issue "Stability at the extremes … and
-//! performance", every claim as a ratio of two measurements taken side by side in one run.
+//! Measures the performance targets (a)–(e) of BENCHMARKS.md ("Results"), every claim as a
+//! ratio of two measurements taken side by side in one run.
 //!
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [--reps N]
@@ -25,7 +25,7 @@ use lash_benches::{
 use lash_model::Mechanism;
 use lash_solver::{Method, OdeSystem, Output};
 
-/// Grid points of a window (INTERFACES.md metrics).
+/// Grid points of a window (docs/outputs.md, "`metrics`").
 const N_GRID: usize = 2001;
 /// The error target (m/s²).
 const TARGET: f64 = 1e-6;

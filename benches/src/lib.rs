@@ -7,7 +7,7 @@
 //! t_i = a + i (b − a)/(N − 1),  i = 0..N−1   (a uniform grid over a window [a, b])
 //! ```
 //! The acceleration is `Mechanism::outputs(t, y).slider_a`, the right-hand side at the
-//! dense-output state y(t_i) (INTERFACES.md, `metrics`).
+//! dense-output state y(t_i) (docs/outputs.md, "`metrics`").
 
 use std::path::PathBuf;
 use std::time::Instant;

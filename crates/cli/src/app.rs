@@ -7,7 +7,7 @@
 //! stderr: the engine's notes and a sweep's progress bar (StderrProgress), errors
 //! ```
 //!
-//! Source: INTERFACES.md ("Exit codes of `lash`"). Commands whose engine (the model, the
+//! Source: docs/outputs.md ("Exit codes of `lash`"). Commands whose engine (the model, the
 //! adaptive and stiff solvers) is not wired in yet check all their input and then fail with
 //! [`Error::NotYetAvailable`].
 

@@ -17,10 +17,10 @@
 //! lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
 //! ```
 //!
-//! Names and list syntax are the contract of INTERFACES.md: methods and controllers by
-//! [`Method::from_name`] and [`ControllerKind::from_name`], lists comma-separated, `--step` only
-//! for fixed-step methods, `--rtol`/`--atol`/`--controller` only for adaptive ones. Every parse
-//! error becomes one line and exit code 2 ([`parse`]).
+//! Names and list syntax are the contract of docs/outputs.md ("Method and controller names"):
+//! methods and controllers by [`Method::from_name`] and [`ControllerKind::from_name`], lists
+//! comma-separated, `--step` only for fixed-step methods, `--rtol`/`--atol`/`--controller` only for
+//! adaptive ones. Every parse error becomes one line and exit code 2 ([`parse`]).
 //!
 //! Each argument struct converts into the engine's options (`lash_validation::commands`):
 //! `SolverFlags` → [`SolverChoice`], `RunArgs` → `RunOptions`, and so on. The checks that are
@@ -50,7 +50,8 @@ use crate::exit::flagged;
 /// lash [COMMAND]      no command = the default run (module `headline`)
 /// ```
 ///
-/// Source: the issue "The lash command"; names from INTERFACES.md.
+/// Source: README.md ("The `lash` command"); names from docs/outputs.md ("Method and controller
+/// names").
 #[derive(Debug, Parser)]
 #[command(
     name = "lash",
@@ -72,7 +73,7 @@ pub struct Cli {
 /// stiffness | poincare                          (diagnostics)
 /// ```
 ///
-/// Source: the issue "The lash command"; "Stiffness diagnostics", "Chaos diagnostics".
+/// Source: docs/outputs.md ("Files each command writes").
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run one case: DIR/summary.json, DIR/trajectory.csv and figures.
@@ -110,7 +111,7 @@ pub enum Command {
 /// A budget that runs out is a solver failure (exit 3, time and state printed, nothing
 /// written): `--max-steps` as `too many steps`, `--max-wall-time` as `budget exhausted`.
 ///
-/// Source: INTERFACES.md (method and controller names).
+/// Source: docs/outputs.md ("Method and controller names").
 #[derive(Debug, Clone, Default, PartialEq, Args)]
 pub struct SolverFlags {
     /// Integration method (rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p).
@@ -178,7 +179,7 @@ impl SolverFlags {
 /// lash run CASE [solver flags] [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash run CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct RunArgs {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -212,7 +213,7 @@ impl RunArgs {
 /// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
 /// ```
 ///
-/// Source: MODEL.md §6.
+/// Source: docs/model.md §6.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StudyName {
     /// The paper's case study: speeds and clearances, dry and lubricated.
@@ -225,7 +226,7 @@ pub enum StudyName {
 /// lash study NAME [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash study paper`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct StudyArgs {
     /// Which study.
@@ -252,7 +253,7 @@ impl StudyArgs {
 /// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash compare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct CompareArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -294,7 +295,7 @@ impl CompareArgs {
 ///                          [--t-end S] [--out DIR]
 /// ```
 ///
-/// Source: INTERFACES.md (comma-separated lists).
+/// Source: docs/outputs.md ("Method and controller names": comma-separated lists).
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct WorkPrecisionArgs {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -349,7 +350,7 @@ impl WorkPrecisionArgs {
 /// lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SweepArgs {
     /// The sweep file (JSON): a base case and lists of parameter values.
@@ -386,7 +387,7 @@ impl SweepArgs {
 ///     reference failed at every rtol of its ladder (nothing written)
 /// ```
 ///
-/// Source: the issue "Extremes"; module `extremes`.
+/// Source: docs/outputs.md ("`lash extremes`"); module `extremes`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct ExtremesArgs {
     /// The quick subset (3 scenes × every method × 3 tolerances), as in the default tests.
@@ -427,7 +428,7 @@ impl ExtremesArgs {
 /// lash merge DIR... [--out DIR]  →  DIR/merged.csv, DIR/merged.md
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct MergeArgs {
     /// Sweep output directories (or point directories) to join.
@@ -454,7 +455,7 @@ impl MergeArgs {
 /// lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 /// ```
 ///
-/// Source: the issue "Stiffness diagnostics".
+/// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct StiffnessArgs {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -497,7 +498,7 @@ impl StiffnessArgs {
 ///                    [solver flags] [--out DIR]
 /// ```
 ///
-/// Source: the issue "Chaos diagnostics".
+/// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PoincareArgs {
     /// The case: a scene file (JSON) with a crank driver and a clearance joint role.
@@ -584,7 +585,7 @@ pub fn one_line(msg: &str) -> String {
         .to_string()
 }
 
-/// Parses a method name (INTERFACES.md).
+/// Parses a method name (docs/outputs.md, "Method and controller names").
 pub fn parse_method(s: &str) -> Result<Method, String> {
     Method::from_name(s).ok_or_else(|| {
         let known: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
@@ -592,7 +593,7 @@ pub fn parse_method(s: &str) -> Result<Method, String> {
     })
 }
 
-/// Parses a controller name (INTERFACES.md).
+/// Parses a controller name (docs/outputs.md, "Method and controller names").
 pub fn parse_controller(s: &str) -> Result<ControllerKind, String> {
     ControllerKind::from_name(s).ok_or_else(|| {
         let known: Vec<&str> = ControllerKind::ALL.iter().map(|c| c.name()).collect();

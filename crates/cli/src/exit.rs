@@ -10,7 +10,7 @@
 //! The engine names options by its own names (`rtol`, `t_end`); `lash` spells them as its
 //! flags (`--rtol`, `--t-end`: [`flag`]).
 //!
-//! Source: the exit-code contract of INTERFACES.md ("Exit codes of `lash`").
+//! Source: the exit-code contract of docs/outputs.md ("Exit codes of `lash`").
 
 use lash_validation::{Error, ErrorKind};
 
@@ -39,9 +39,9 @@ pub fn flagged(e: Error) -> Error {
 
 /// What `lash` makes of an engine error: its exit code and what it prints.
 ///
-/// Source: INTERFACES.md ("Exit codes of `lash`").
+/// Source: docs/outputs.md ("Exit codes of `lash`").
 pub trait ExitStatus {
-    /// The exit code (INTERFACES.md).
+    /// The exit code (docs/outputs.md, "Exit codes of `lash`").
     fn exit_code(&self) -> u8;
 
     /// What `lash` prints on standard error: `error: MESSAGE` on one line (options spelled as

@@ -8,7 +8,8 @@
 //! clear()       → the bar disappears (before the command's closing line)
 //! ```
 //!
-//! Source: the issue "One engine, one step driver" (the CLI draws what the engine reports).
+//! Source: ARCHITECTURE.md ("Invariants": the engine prints nothing; the CLI draws what it
+//! reports).
 
 use std::io::IsTerminal;
 use std::sync::OnceLock;

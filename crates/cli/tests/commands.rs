@@ -1,6 +1,6 @@
 //! End-to-end: every command of the built `lash` binary on small cases — exit codes, the files
 //! written, and the contents of summary.json, trajectory.csv and the comparison tables
-//! (INTERFACES.md).
+//! (docs/outputs.md: "`summary.json`", "`trajectory.csv`", "Files each command writes").
 
 mod common;
 use common::{json, lash, ok};
@@ -75,7 +75,8 @@ fn run_writes_summary_trajectory_and_figures() {
     assert!(w > 100.0, "{e}");
     assert!(e["balance_error"].as_f64().unwrap().abs() < 1e-6 * w, "{e}");
     assert!(s["final_state"].is_null() && s["reference_error"].is_null());
-    // trajectory.csv: the header of INTERFACES.md; 2000 rows per revolution (T = 0.4 s) + 1.
+    // trajectory.csv: the header of docs/outputs.md ("`trajectory.csv`"); 2000 rows per revolution
+    // (T = 0.4 s) + 1.
     let csv = std::fs::read_to_string(o.join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
@@ -100,7 +101,7 @@ fn run_lubricated_and_dry_cases() {
     let lub = press_case(Path::new("lubricated_150rpm_c0.1.json"));
     ok(&["run", lub.to_str().unwrap(), "--out", "lub"], d.path());
     let m = &json(&d.path().join("lub/summary.json"))["metrics"];
-    // MODEL.md §9: the film keeps the journal off the bearing.
+    // docs/model.md §9: the film keeps the journal off the bearing.
     assert!(m["eps_max"].as_f64().unwrap() < 1.0);
     assert_eq!(m["contact_onsets"], 0);
     assert!(m["film_thickness_min"].as_f64().unwrap() > 0.0);

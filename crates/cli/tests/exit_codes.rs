@@ -1,5 +1,5 @@
 //! End-to-end: the built `lash` binary turns bad input into exit code 2 and one line on
-//! standard error (INTERFACES.md, "Exit codes of `lash`").
+//! standard error (docs/outputs.md, "Exit codes of `lash`").
 
 mod common;
 use common::lash;
@@ -145,8 +145,8 @@ fn merge_of_an_empty_sweep_writes_a_header_only_table() {
     assert_eq!(csv, "id,index,status,error\n");
 }
 
-/// Asserts exit code 3, nothing written to `out`, and a two-line report: the solver's typed
-/// error containing `needle`, then the time and the state (INTERFACES.md).
+/// Asserts exit code 3, nothing written to `out`, and a two-line report: the solver's typed error
+/// containing `needle`, then the time and the state (docs/outputs.md, "Exit codes of `lash`").
 fn budget_error(args: &[&str], cwd: &Path, out: &str, needle: &str) {
     let o = lash(args, cwd);
     let err = String::from_utf8_lossy(&o.stderr);

@@ -11,7 +11,7 @@
 //! R_B = 0.05 m, R_J = R_B − c; film: long Gümbel, μ = 0.4 Pa·s, L = 0.1 m, ε_cap = 0.99
 //! g = 9.81 m/s² along −y, α = β = 5 s⁻¹, θ(0) = 0, two crank revolutions
 //! ```
-//! Source: MODEL.md §5–§6 (Peng et al. 2025, §4 and Figure 3; assumed values marked there).
+//! Source: docs/model.md §5–§6 (Peng et al. 2025, §4 and Figure 3; assumed values marked there).
 
 use std::collections::BTreeMap;
 
@@ -40,9 +40,9 @@ pub const BEARING_RADIUS: f64 = 0.05;
 /// Which joint joins the rod and the slider.
 ///
 /// ```text
-/// Ideal       Φ = r_rod^B − r_slider^B = 0              (closed form of MODEL.md §5)
-/// Dry         IMPACT contact + Coulomb friction         (MODEL.md §3)
-/// Lubricated  long-bearing Gümbel film + dry contact    (MODEL.md §4)
+/// Ideal       Φ = r_rod^B − r_slider^B = 0              (closed form of docs/model.md §5)
+/// Dry         IMPACT contact + Coulomb friction         (docs/model.md §3)
+/// Lubricated  long-bearing Gümbel film + dry contact    (docs/model.md §4)
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PressJoint {
@@ -82,7 +82,7 @@ fn body(name: &str, mass: f64, inertia: f64, x: f64, points: &[(&str, [f64; 2])]
     }
 }
 
-/// The press of MODEL.md §5–§6 at `rpm` with the rod–slider joint `joint` and radial clearance
+/// The press of docs/model.md §5–§6 at `rpm` with the rod–slider joint `joint` and radial clearance
 /// `clearance` (m; ignored for [`PressJoint::Ideal`]).
 pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
     let r = CRANK_R;
@@ -144,10 +144,10 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         }),
     ];
     let mut notes = vec![
-        "Peng et al. 2025 (Lubricants 13(3) 124), slider-crank press of Figure 3; values of MODEL.md §6."
+        "Peng et al. 2025 (Lubricants 13(3) 124), slider-crank press of Figure 3; values of docs/model.md §6."
             .to_string(),
         "From the paper: r = 0.015 m, l = 0.35 m, masses 453.87 / 412.53 / 2700.71 kg.".into(),
-        "Assumed: centres of mass at mid-length of crank and rod, slider at its pin; inertias crank m r^2/12 = 0.0085100625, rod m l^2/12 = 4.21124375 (MODEL.md: 4.211244), slider 1 kg m^2 (its rotation is locked).".into(),
+        "Assumed: centres of mass at mid-length of crank and rod, slider at its pin; inertias crank m r^2/12 = 0.0085100625, rod m l^2/12 = 4.21124375, slider 1 kg m^2 (its rotation is locked).".into(),
         "Assumed: gravity 9.81 m/s^2 along -y (horizontal slide), Baumgarte alpha = beta = 5 1/s, theta(0) = 0, two crank revolutions.".into(),
     ];
     let description;
@@ -158,7 +158,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
     };
     match joint {
         PressJoint::Ideal => {
-            description = format!("Slider-crank press at {rpm} rpm with ideal joints (no clearance): the closed form of MODEL.md §5 holds.");
+            description = format!("Slider-crank press at {rpm} rpm with ideal joints (no clearance): the closed form of docs/model.md §5 holds.");
             joints.push(JointSpec::Revolute(RevoluteSpec {
                 name: "rod_slider".into(),
                 a: attach("rod", "B"),
@@ -176,7 +176,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
             notes.push("Assumed: friction thresholds v0 = 1e-4 m/s, v1 = 2e-4 m/s (Ambrosio); bearing radius R_B = 0.05 m, journal radius R_J = R_B - c; the journal starts centred (e = 0) in the ideally assembled mechanism.".into());
             if lub {
                 notes.push("Assumed film: long-bearing Guembel model as the paper prints it (long_gumbel), viscosity 0.4 Pa s (ISO VG 460 at 40 C), bearing length L = 0.1 m, eps_cap = 0.99; dry contact is added whenever the journal penetrates.".into());
-                notes.push("Caveat (MODEL.md §4): L = 0.1 m equals the bearing diameter (L/D = 1), where the infinitely-long-bearing model over-predicts the film force; the paper's model is kept as the default.".into());
+                notes.push("Caveat (docs/model.md §4): L = 0.1 m equals the bearing diameter (L/D = 1), where the infinitely-long-bearing model over-predicts the film force; the paper's model is kept as the default.".into());
             }
             roles.clearance_joint = Some("rod_slider".into());
             joints.push(JointSpec::Clearance(ClearanceSpec {

@@ -1,4 +1,4 @@
-//! Kinematics of a revolute clearance joint (MODEL.md §2), unit-testable on its own.
+//! Kinematics of a revolute clearance joint (docs/model.md §2), unit-testable on its own.
 //!
 //! ```text
 //! e   = r_J^P − r_B^P               eccentricity (bearing centre → journal centre)
@@ -10,7 +10,7 @@
 //! v_T = t·ė + R_J φ̇_J − R_B φ̇_B     slip of the material contact points
 //! ε   = |e|/c,  ε̇ = δ̇/c
 //! γ̇   = (e_x ė_y − e_y ė_x)/|e|²    (0 when |e| < 1e-12·c)
-//! Ω   = φ̇_J + φ̇_B − 2γ̇              (film wedge speed, MODEL.md §4)
+//! Ω   = φ̇_J + φ̇_B − 2γ̇              (film wedge speed, docs/model.md §4)
 //! ```
 
 /// Everything the force laws need about one clearance joint at one instant.
@@ -19,8 +19,8 @@
 /// e = r_J^P − r_B^P,  n = e/|e|,  t = (−n_y, n_x),  δ = |e| − c,  δ̇ = n·ė
 /// v_T = t·ė + R_J φ̇_J − R_B φ̇_B,  ε = |e|/c,  ε̇ = δ̇/c,  Ω = φ̇_J + φ̇_B − 2γ̇
 /// ```
-/// MODEL.md §2 and §4 (Peng et al. 2025, Lubricants 13(3) 124, §2.1 and §2.3, with the
-/// material-point slip of MODEL.md §2 in v_T).
+/// docs/model.md §2 and §4 (Peng et al. 2025, Lubricants 13(3) 124, §2.1 and §2.3, with the
+/// material-point slip of docs/model.md §2 in v_T).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClearanceState {
     /// Eccentricity vector e (m).
@@ -51,7 +51,7 @@ pub struct ClearanceState {
 /// r_k^P = r_k + A(φ_k) s'_k,   ṙ_k^P = ṙ_k + φ̇_k k × (A(φ_k) s'_k),   k = J, B
 /// ```
 /// The joint centres and their velocities, already transformed to the global frame
-/// (MODEL.md §1; Peng et al. 2025 §3); radii satisfy R_B > R_J > 0.
+/// (docs/model.md §1; Peng et al. 2025 §3); radii satisfy R_B > R_J > 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClearanceInput {
     /// Global position of the journal centre P_J.
@@ -73,7 +73,7 @@ pub struct ClearanceInput {
 }
 
 impl ClearanceState {
-    /// Evaluates the clearance kinematics of MODEL.md §2 (see the type's equations).
+    /// Evaluates the clearance kinematics of docs/model.md §2 (see the type's equations).
     ///
     /// Centred guard: when |e| < 1e-12·c (or |e| = 0) the normal is n = (1, 0) and γ̇ = 0, so
     /// Ω = φ̇_J + φ̇_B. The result is finite for finite input with R_B > R_J.

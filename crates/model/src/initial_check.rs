@@ -30,7 +30,7 @@
 //! pivot 1/(1 + m|s'|²/I) at angles where the constraint directions mix the two eigenvectors
 //! (at the start they may happen to be aligned with them, and check 2 would pass).
 //!
-//! Source: MODEL.md §1 (the KKT system and its Schur complement); docs/scene-format.md,
+//! Source: docs/model.md §1 (the KKT system and its Schur complement); docs/scene-format.md,
 //! "Errors".
 
 use lash_solver::OdeSystem;

@@ -26,7 +26,8 @@
 //! Differencing in e, ė directly with increments relative to |e| and |δ| has no such limit and
 //! no cancellation (e is not recomputed from positions of size 0.35 m). The constraint part
 //! varies on the scale of the links (≥ 1.5 cm), where 10⁻⁸ is accurate to ~1e-8 relative.
-//! MODEL.md allows finite differences for the KKT part; the closed forms above are exact.
+//! docs/model.md §1 (1.7) allows finite differences for the constraint part; the closed forms
+//! above are exact.
 
 use faer::MatMut;
 

@@ -1,4 +1,4 @@
-//! Force laws of the clearance joint: normal contact (MODEL.md §3), friction (§3) and the
+//! Force laws of the clearance joint: normal contact (docs/model.md §3), friction (§3) and the
 //! hydrodynamic film (§4). Each law is a small `Copy` value with a pure `force` method.
 
 use serde::{Deserialize, Serialize};
@@ -6,11 +6,12 @@ use serde::{Deserialize, Serialize};
 /// A force-law parameter outside its valid range.
 ///
 /// ```text
-/// K > 0, c_max ≥ 0, d_max > 0, 0 < c_r ≤ 1              (normal laws, MODEL.md §3)
-/// μ_d ≥ 0, 0 ≤ v₀ ≤ v₁                                  (friction, MODEL.md §3)
-/// μ > 0, L > 0, R > 0, c > 0, 0 < ε_cap < 1             (film, MODEL.md §4)
+/// K > 0, c_max ≥ 0, d_max > 0, 0 < c_r ≤ 1              (normal laws, docs/model.md §3)
+/// μ_d ≥ 0, 0 ≤ v₀ ≤ v₁                                  (friction, docs/model.md §3)
+/// μ > 0, L > 0, R > 0, c > 0, 0 < ε_cap < 1             (film, docs/model.md §4)
 /// ```
-/// Every value must also be finite. Ranges follow from the laws of MODEL.md §3–§4: outside
+/// A scene's film may have μ = 0, a zero film (docs/model.md §4); the law itself asks for μ > 0.
+/// Every value must also be finite. Ranges follow from the laws of docs/model.md §3–§4: outside
 /// them a force is infinite, NaN or unphysical (negative damping, c_r = 0 in Flores' 1/c_r).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{law}: {parameter} = {value} is outside its valid range {range}")]
@@ -60,7 +61,7 @@ pub fn step_damping(delta: f64, d_max: f64, c_max: f64) -> f64 {
     c_max * s * s * (3.0 - 2.0 * s)
 }
 
-/// Hertz stiffness of a pin in a hole from the materials (MODEL.md §3).
+/// Hertz stiffness of a pin in a hole from the materials (docs/model.md §3).
 ///
 /// ```text
 /// K = 4 / (3(σ_B + σ_J)) · sqrt(R_B R_J / (R_B − R_J)),  σ_k = (1 − ν_k²)/E_k
@@ -281,7 +282,7 @@ impl FrictionLaw {
     }
 }
 
-/// Which hydrodynamic film model (MODEL.md §4).
+/// Which hydrodynamic film model (docs/model.md §4).
 ///
 /// ```text
 /// long_gumbel             infinitely long bearing, Gümbel (half-Sommerfeld), as printed
@@ -290,7 +291,7 @@ impl FrictionLaw {
 /// short_ocvirk            short (Ocvirk) bearing, Gümbel conditions
 /// short_ocvirk_mirrored   the same mirroring applied to short_ocvirk
 /// ```
-/// Formulas on [`Film`]; Peng et al. 2025 §2.3 (long Gümbel, with R³ for R²), MODEL.md §4.
+/// Formulas on [`Film`]; Peng et al. 2025 §2.3 (long Gümbel, with R³ for R²), docs/model.md §4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FilmModel {
@@ -322,7 +323,7 @@ pub enum FilmModel {
 /// ```
 /// f_J = F_r n + F_t t on the journal, −f_J on the bearing. Long bearing with Gümbel
 /// conditions: Peng et al. 2025 §2.3 (printed with R² for R³); full Sommerfeld and short
-/// (Ocvirk) bearing: MODEL.md §4, checked there against a numerical Reynolds solution and
+/// (Ocvirk) bearing: docs/model.md §4, checked there against a numerical Reynolds solution and
 /// MBDyn's bearing models.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Film {

@@ -1,12 +1,12 @@
 //! # lash-model
 //!
-//! Planar multibody scenes with dry and lubricated revolute clearance joints (MODEL.md), turned
-//! into an index-1 ODE `y' = f(t, y)` with y = (q, q̇) for the integrators of `lash-solver`.
+//! Planar multibody scenes with dry and lubricated revolute clearance joints (docs/model.md),
+//! turned into an index-1 ODE `y' = f(t, y)` with y = (q, q̇) for the integrators of `lash-solver`.
 //!
 //! ```text
 //! Scene (JSON, validated) → Mechanism::from_scene (prescribed bodies, constraints, assembly,
 //!   the equations checked once at the initial state)
-//!   → impl OdeSystem (rhs: KKT of MODEL.md §1; events δ, ε − ε_cap; FD Jacobian)
+//!   → impl OdeSystem (rhs: KKT of docs/model.md §1; events δ, ε − ε_cap; FD Jacobian)
 //!   → Mechanism::outputs / power / point_kinematics / ideal_slider_crank
 //! ```
 //! - [`scene`]: the JSON format and its validation ([`Scene`], [`SceneError`]).

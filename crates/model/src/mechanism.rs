@@ -1,4 +1,4 @@
-//! The mechanism: a validated scene turned into the index-1 ODE of MODEL.md §1.
+//! The mechanism: a validated scene turned into the index-1 ODE of docs/model.md §1.
 //!
 //! ```text
 //! y = (q, q̇),  q = (x_i, y_i, φ_i) of every integrated body (scene order)
@@ -14,10 +14,10 @@
 //! A body whose motion is prescribed (a rotational driver plus a revolute joint to the ground
 //! or to another prescribed body: the press's crank) is not integrated; its pose, velocity and
 //! acceleration are closed-form functions of t, and the joints to it are rheonomic constraints
-//! on the other body. The clearance joints add forces to g (MODEL.md §2–§4); absent features
+//! on the other body. The clearance joints add forces to g (docs/model.md §2–§4); absent features
 //! (gravity, friction, film) run no code.
 //!
-//! Sources: MODEL.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
+//! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
 //! Baumgarte 1972), Peng et al. 2025 §3.
 
 use std::cell::{Cell, RefCell};
@@ -226,7 +226,7 @@ pub(crate) struct Scratch {
 /// [`Mechanism::outputs`].
 ///
 /// ```text
-/// y' = f(t, y),  y = (q, q̇)  (MODEL.md §1);  events δ_k(q) and ε_k − ε_cap (MODEL.md §7)
+/// y' = f(t, y),  y = (q, q̇)  (docs/model.md §1);  events δ_k(q) and ε_k − ε_cap (§7)
 /// ```
 #[derive(Debug)]
 pub struct Mechanism {
@@ -654,7 +654,7 @@ impl Mechanism {
         }
     }
 
-    /// Applied forces: gravity and the clearance joints (MODEL.md §3–§4).
+    /// Applied forces: gravity and the clearance joints (docs/model.md §3–§4).
     pub(crate) fn applied_forces(&self, sc: &mut Scratch, full: bool) {
         sc.g.iter_mut().for_each(|v| *v = 0.0);
         if full {
@@ -711,7 +711,7 @@ impl Mechanism {
         }
     }
 
-    /// The force laws of clearance joint k at the clearance state `st` (MODEL.md §3–§4):
+    /// The force laws of clearance joint k at the clearance state `st` (docs/model.md §3–§4):
     /// normal force, friction, elastic part (δ > 0 only) and film forces (when lubricated).
     #[inline]
     pub(crate) fn clearance_forces(&self, k: usize, st: ClearanceState) -> ClrEval {

@@ -1,5 +1,5 @@
-//! Outputs by name: body points, the press quantities of INTERFACES.md, clearance-joint forces,
-//! constraint violation, driver torques and the energy terms.
+//! Outputs by name: body points, the press quantities of docs/outputs.md ("Scene roles"),
+//! clearance-joint forces, constraint violation, driver torques and the energy terms.
 //!
 //! ```text
 //! driver torque τ_d = −λ_d                                  (driver on an integrated body)
@@ -11,12 +11,12 @@
 //! D_film = −(F_r δ̇ + F_t t·ė)
 //! d/dt (T + V) = P_driver − D_contact − D_friction − D_film  (+ work of the Baumgarte terms)
 //! ```
-//! Source: MODEL.md §1–§5, INTERFACES.md (summary.json `energy`, trajectory.csv).
+//! Source: docs/model.md §1–§5, docs/outputs.md ("`energy`", "`trajectory.csv`").
 
 use crate::mechanism::{cross, perp, rot, Clr, End, Mechanism, Scratch};
 use crate::scene::{JointSpec, Scene, SceneError};
 
-/// The parts that the press metrics need, resolved to indices (INTERFACES.md, "Scene roles").
+/// The parts that the press metrics need, resolved to indices (docs/outputs.md, "Scene roles").
 ///
 /// ```text
 /// slider → body index,  crank_driver → joint index,  clearance_joint → joint index and its
@@ -83,7 +83,7 @@ pub struct PointKinematics {
     pub acc: [f64; 2],
 }
 
-/// One clearance joint at one instant (MODEL.md §2–§4).
+/// One clearance joint at one instant (docs/model.md §2–§4).
 ///
 /// ```text
 /// e/c, ε = |e|/c, δ = |e| − c, F_N, F_T (contact), film (F_r, F_t) and |film|
@@ -205,7 +205,7 @@ pub struct PowerTerms {
     pub film: f64,
 }
 
-/// The ideal slider-crank of MODEL.md §5, with r, l, ω and the crank angle derived from the
+/// The ideal slider-crank of docs/model.md §5, with r, l, ω and the crank angle derived from the
 /// scene's geometry.
 ///
 /// ```text
@@ -513,7 +513,7 @@ impl Mechanism {
         })
     }
 
-    /// The closed-form ideal slider-crank of MODEL.md §5, when the roles are declared and the
+    /// The closed-form ideal slider-crank of docs/model.md §5, when the roles are declared and the
     /// geometry is an in-line slider-crank: the crank (driven body) pinned to the ground at O,
     /// a rod pinned to the crank and joined (revolute or clearance joint) to the slider, and
     /// the slider on a translational joint whose line passes through O, on the +x branch.

@@ -9,7 +9,7 @@
 //!        | driver {body, theta0, omega | rpm}                     θ(t) = θ₀ + ω t
 //!        | clearance {bearing, journal, normal, friction, film, initial_eccentricity}
 //! ```
-//! Source: MODEL.md §1–§6 (after Peng et al. 2025, Lubricants 13(3) 124).
+//! Source: docs/model.md §1–§6 (after Peng et al. 2025, Lubricants 13(3) 124).
 //!
 //! Errors name the JSON path (`joints[3].bearing.radius`) and the reason; see [`SceneError`].
 
@@ -115,7 +115,7 @@ fn invalid(path: impl Into<String>, reason: impl Into<String>) -> SceneError {
 // Types
 // ---------------------------------------------------------------------------------------------
 
-/// A planar mechanism scene (MODEL.md §1–§6).
+/// A planar mechanism scene (docs/model.md §1–§6).
 ///
 /// ```text
 /// bodies, joints, gravity g (m/s²), Baumgarte α, β (1/s), time span [t_start, t_end]
@@ -151,7 +151,7 @@ pub struct Scene {
     /// Simulated crank revolutions (> 0; needs `roles.crank_driver` with ω ≠ 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub revolutions: Option<f64>,
-    /// Named parts the press metrics need (INTERFACES.md). Default none.
+    /// Named parts the press metrics need (docs/outputs.md, "Scene roles"). Default none.
     #[serde(default, deserialize_with = "object")]
     pub roles: RoleNames,
 }
@@ -309,7 +309,7 @@ pub struct ClearanceEnd {
     pub radius: f64,
 }
 
-/// Revolute clearance joint (MODEL.md §2–§4): no constraint, a force pair.
+/// Revolute clearance joint (docs/model.md §2–§4): no constraint, a force pair.
 ///
 /// ```text
 /// e = r_J^P − r_B^P,  c = R_B − R_J,  δ = |e| − c
@@ -343,7 +343,7 @@ pub struct ClearanceSpec {
     pub initial_eccentricity: [f64; 2],
 }
 
-/// Elastic properties of one contacting body (for the Hertz stiffness of MODEL.md §3).
+/// Elastic properties of one contacting body (for the Hertz stiffness of docs/model.md §3).
 ///
 /// ```text
 /// σ = (1 − ν²)/E
@@ -477,7 +477,7 @@ pub enum FrictionSpec {
     Coulomb(CoulombSpec),
 }
 
-/// Hydrodynamic film of a lubricated clearance joint (MODEL.md §4).
+/// Hydrodynamic film of a lubricated clearance joint (docs/model.md §4).
 ///
 /// ```text
 /// F_r, F_t = film model(ε_eff = min(ε, ε_cap), ε̇, Ω);  R = R_J, c = R_B − R_J
@@ -504,7 +504,7 @@ fn default_eps_cap() -> f64 {
     0.99
 }
 
-/// Baumgarte stabilisation parameters (MODEL.md §1).
+/// Baumgarte stabilisation parameters (docs/model.md §1).
 ///
 /// ```text
 /// Φ_q q̈ = γ − 2α Φ̇ − β² Φ
@@ -533,7 +533,7 @@ impl Default for Baumgarte {
     }
 }
 
-/// Names of the parts the press metrics need (INTERFACES.md, "Scene roles").
+/// Names of the parts the press metrics need (docs/outputs.md, "Scene roles").
 ///
 /// ```text
 /// slider: BODY,  crank_driver: driver JOINT,  clearance_joint: clearance JOINT
@@ -558,7 +558,7 @@ pub struct RoleNames {
 /// revolute       Φ = r_a^P − r_b^P                      (2 equations)
 /// translational  Φ = (n·(r^P − o), φ − φ₀)              (2 equations)
 /// driver         Φ = φ − θ₀ − ω t                       (1 equation)
-/// clearance      no equation: the force pair of MODEL.md §2–§4
+/// clearance      no equation: the force pair of docs/model.md §2–§4
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]

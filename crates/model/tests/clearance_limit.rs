@@ -1,4 +1,4 @@
-//! Clearance → 0 with stiff contact converges to the ideal mechanism (MODEL.md §5): a dry
+//! Clearance → 0 with stiff contact converges to the ideal mechanism (docs/model.md §5): a dry
 //! press with c = 1e-7 m and K = 1e14 N/m^1.5 keeps the slider within 1e-6 m of the closed
 //! form over the second revolution.
 mod common;

@@ -1,4 +1,4 @@
-//! Clearance-joint kinematics (MODEL.md §2, §4) against finite differences along prescribed
+//! Clearance-joint kinematics (docs/model.md §2, §4) against finite differences along prescribed
 //! motions and against motions with known rates.
 
 use lash_model::geometry::{ClearanceInput, ClearanceState};
@@ -253,8 +253,8 @@ fn circular_whirl_has_gamma_dot_equal_to_whirl_speed() {
     }
 }
 
-/// MODEL.md §2 guard: |e| < 1e-12·c uses n = (1, 0) and γ̇ = 0 (so Ω = φ̇_J + φ̇_B), whatever ė;
-/// everything stays finite. Just above the threshold the true direction is used.
+/// docs/model.md §2 guard: |e| < 1e-12·c uses n = (1, 0) and γ̇ = 0 (so Ω = φ̇_J + φ̇_B), whatever
+/// ė; everything stays finite. Just above the threshold the true direction is used.
 #[test]
 fn centred_journal_guard() {
     let ed = [1e-3, 2e-3];

@@ -1,4 +1,4 @@
-//! The ideal press (no clearance) against the closed form of MODEL.md §5, and the consistency
+//! The ideal press (no clearance) against the closed form of docs/model.md §5, and the consistency
 //! of the outputs (slider acceleration = right-hand side; driver torque = power balance).
 mod common;
 use common::*;
@@ -80,7 +80,7 @@ fn assembly_reaches_the_exact_initial_state() {
 
 #[test]
 fn slider_acceleration_at_dead_centres_from_exact_states() {
-    // MODEL.md §5: ẍ(θ=0) = −rω²(1 + r/l), ẍ(θ=π) = rω²(1 − r/l); printed values at θ = 0.
+    // docs/model.md §5: ẍ(θ=0) = −rω²(1 + r/l), ẍ(θ=π) = rω²(1 − r/l); printed values at θ = 0.
     let printed = [
         (120.0, -2.47022),
         (150.0, -3.85972),
@@ -94,7 +94,7 @@ fn slider_acceleration_at_dead_centres_from_exact_states() {
         let api = R * w * w * (1.0 - R / L);
         assert!(
             (a0 - a0_printed).abs() < 5e-6,
-            "closed form {a0} vs MODEL.md {a0_printed}"
+            "closed form {a0} vs docs/model.md §5 {a0_printed}"
         );
         let o0 = m.outputs(0.0, &exact_state(0.0, w));
         let t_pi = std::f64::consts::PI / w;

@@ -1,6 +1,6 @@
 //! The Jacobian ∂f/∂y that implicit methods use (central finite differences of the KKT
 //! solution) against analytic derivatives of the contact, friction and film laws
-//! (MODEL.md §3–§4) on a free journal in a ground bearing, where q̈ = force / mass.
+//! (docs/model.md §3–§4) on a free journal in a ground bearing, where q̈ = force / mass.
 use faer::Mat;
 use lash_model::{Mechanism, Scene};
 use lash_solver::OdeSystem;

@@ -1,5 +1,6 @@
-//! Force laws of the clearance joint (MODEL.md §3–§4) against the test vectors and anchors of
-//! MODEL.md, hand computations, and closed forms of 1-DOF impacts integrated with RK4.
+//! Force laws of the clearance joint (docs/model.md §3–§4) against the test vectors (§4) and
+//! anchors (§3.4) of docs/model.md, hand computations, and closed forms of 1-DOF impacts
+//! integrated with RK4.
 
 use std::cell::Cell;
 
@@ -11,10 +12,10 @@ use lash_solver::{
 };
 
 // ---------------------------------------------------------------------------------------------
-// Film laws: MODEL.md §4 test vectors
+// Film laws: docs/model.md §4 test vectors
 // ---------------------------------------------------------------------------------------------
 
-/// The film of the MODEL.md §4 test vectors: μ = 0.4 Pa·s, L = 0.04 m, R = 0.0095 m,
+/// The film of the docs/model.md §4 test vectors: μ = 0.4 Pa·s, L = 0.04 m, R = 0.0095 m,
 /// c = 0.0005 m (ε_cap at its default 0.99; every row has ε < 0.99).
 fn film(model: FilmModel) -> Film {
     Film {
@@ -27,7 +28,7 @@ fn film(model: FilmModel) -> Film {
     }
 }
 
-/// The table of MODEL.md §4: (ε, ε̇, Ω) and the expected (F_r, F_t) of long Gümbel, long full
+/// The table of docs/model.md §4: (ε, ε̇, Ω) and the expected (F_r, F_t) of long Gümbel, long full
 /// Sommerfeld and short Gümbel, in N, exactly as printed.
 type Input = (f64, f64, f64);
 type Forces = (f64, f64);
@@ -75,7 +76,8 @@ const TABLE: [Row; 5] = [
     ),
 ];
 
-/// MODEL.md's tolerance for the test vectors: 1e-9 relative, 1e-12 absolute for zero entries.
+/// The tolerance of docs/model.md §4 for the test vectors: 1e-9 relative, 1e-12 absolute for
+/// zero entries.
 /// The table prints 10 significant digits, so its own rounding (≤ 5e-10 relative) fits.
 fn assert_vector(what: &str, got: f64, want: f64) {
     if want == 0.0 {
@@ -120,7 +122,7 @@ fn short_ocvirk_matches_model_md_table_every_row() {
 
 /// Mirrored long Gümbel: F_r(ε, ε̇, |Ω|), sign(Ω)·F_t(ε, ε̇, |Ω|).
 /// - rows 1–4 have Ω ≥ 0, so the mirrored law equals the printed one: the table's values;
-/// - row 5 (Ω = −40): MODEL.md §4 gives F_r = −50.52682947, F_t = −34.83975427;
+/// - row 5 (Ω = −40): docs/model.md §4 gives F_r = −50.52682947, F_t = −34.83975427;
 /// - rows 1 and 4 with Ω negated: by the definition, (F_r, −F_t) of the table's own row.
 #[test]
 fn long_gumbel_mirrored_follows_its_definition() {
@@ -138,7 +140,7 @@ fn long_gumbel_mirrored_follows_its_definition() {
 /// - rows 1–4 (Ω ≥ 0): the table's short Gümbel values; rows 1 and 4 with Ω negated:
 ///   (F_r, −F_t) of the table's own row;
 /// - row 5 (Ω = −40) needs F(0.9, 2, +40), which the table does not contain: −1381.945844 and
-///   −429.1232717 N are the short-bearing formula of MODEL.md §4 evaluated independently of
+///   −429.1232717 N are the short-bearing formula of docs/model.md §4 evaluated independently of
 ///   this crate (double precision, outside Rust), then F_t negated.
 #[test]
 fn short_ocvirk_mirrored_follows_its_definition() {
@@ -187,7 +189,7 @@ const ALL_FILMS: [FilmModel; 5] = [
     FilmModel::ShortOcvirkMirrored,
 ];
 
-/// MODEL.md §4: the film is evaluated at ε_eff = min(ε, ε_cap); for ε ≥ ε_cap (1 included) the
+/// docs/model.md §4: the film is evaluated at ε_eff = min(ε, ε_cap); for ε ≥ ε_cap (1 included) the
 /// force is exactly the finite value at ε_cap, and (1 − ε²)^(−k) is never evaluated at ε ≥ 1.
 #[test]
 fn eps_cap_rule_gives_the_value_at_the_cap() {
@@ -308,7 +310,7 @@ fn film_validation_rejects_bad_parameters() {
 // Normal laws: STEP anchors, continuity, hand values
 // ---------------------------------------------------------------------------------------------
 
-/// MODEL.md §3 anchors: c_max = 1e5, d_max = 1e-5.
+/// docs/model.md §3 anchors: c_max = 1e5, d_max = 1e-5.
 #[test]
 fn step_damping_matches_model_md_anchors() {
     let anchors = [
@@ -337,7 +339,7 @@ fn step_damping_matches_model_md_anchors() {
 }
 
 fn paper_impact() -> NormalLaw {
-    // MODEL.md §6: K = 2.34e10, c_max = 100 N·s/m, d_max = 1e-5 m.
+    // docs/model.md §6: K = 2.34e10, c_max = 100 N·s/m, d_max = 1e-5 m.
     NormalLaw::Impact {
         k: 2.34e10,
         c_max: 100.0,
@@ -363,7 +365,7 @@ fn impact_force_by_hand() {
     assert_eq!(law.force(-1e-6, 5.0, 0.0), 0.0);
 }
 
-/// MODEL.md §3: F_N is continuous at δ = 0 because C(0) = 0: with C ≤ 3 c_max (δ/d_max)²,
+/// docs/model.md §3: F_N is continuous at δ = 0 because C(0) = 0: with C ≤ 3 c_max (δ/d_max)²,
 /// |F_N| ≤ K δ^{3/2} + 3 c_max (δ/d_max)² |δ̇| → 0. A constant damping c_max would leave a
 /// jump of c_max·δ̇ = 100 N here.
 #[test]
@@ -704,15 +706,15 @@ fn hertz_time_constant_is_the_energy_integral() {
     assert!((2.0 * quad - 2.9432).abs() < 1e-4);
 }
 
-/// MODEL.md §3: m = 1 kg, K = 1e10 N/m^1.5, approach 1 m/s lasts 3.2178e-4 s with maximum
-/// penetration 1.0934e-4 m (each to 1e-3 relative). Closed form of an undamped Hertz impact
+/// docs/model.md §3 (3.4): m = 1 kg, K = 1e10 N/m^1.5, approach 1 m/s lasts 3.2178e-4 s with
+/// maximum penetration 1.0934e-4 m (each to 1e-3 relative). Closed form of an undamped Hertz impact
 /// (energy: ½ m v² = (2/5) K δ_max^{5/2}):
 ///   δ_max = (5 m v² / (4K))^{2/5} = 1.0933621e-4 m,
 ///   T = 2 ∫₀^{δ_max} dδ / δ̇ = 2 (δ_max/v) ∫₀¹ dx / sqrt(1 − x^{5/2}) = 2.9432752 δ_max / v
 ///     = 3.2180655e-4 s.
-/// MODEL.md's 3.2178e-4 agrees with the closed form to 8e-5. RK4 with h = 1e-7 s (3200 steps in
-/// contact, ω h ≈ 1e-3) reproduces the closed form to ~1e-11 (measured T = 3.2180654598e-4 s,
-/// δ_max = 1.0933620739e-4 m); 1e-8 is asserted.
+/// The figure 3.2178e-4 of docs/model.md §3 agrees with the closed form to 8e-5. RK4 with
+/// h = 1e-7 s (3200 steps in contact, ω h ≈ 1e-3) reproduces the closed form to ~1e-11
+/// (measured T = 3.2180654598e-4 s, δ_max = 1.0933620739e-4 m); 1e-8 is asserted.
 #[test]
 fn elastic_hertz_impact_matches_model_md_and_closed_form() {
     let (m, k, v) = (1.0, 1e10, 1.0);
@@ -725,7 +727,7 @@ fn elastic_hertz_impact_matches_model_md_and_closed_form() {
     let duration = r.t_off - r.t_on;
     assert!((r.t_on - 1e-6).abs() < 1e-15, "onset at {}", r.t_on);
     let rel = |a: f64, b: f64| ((a - b) / b).abs();
-    // MODEL.md anchors, 1e-3 relative.
+    // The anchors of docs/model.md §3 (3.4), 1e-3 relative.
     assert!(rel(duration, 3.2178e-4) < 1e-3, "duration {duration:e}");
     assert!(
         rel(r.delta_max, 1.0934e-4) < 1e-3,

@@ -1,5 +1,5 @@
 //! Every scene of cases/press/ loads, matches its generator, declares its roles, and runs to
-//! its end time with RK4 at a stable step, keeping ‖Φ‖ below 1e-8 (MODEL.md §5–§6).
+//! its end time with RK4 at a stable step, keeping ‖Φ‖ below 1e-8 (docs/model.md §5–§6).
 //!
 //! Steps (largest tried that is stable *and* keeps ‖Φ‖ < 1e-8; `rk4_scan` example):
 //! ideal 1e-3 s; dry 2e-4 s (dry runs stay bounded up to 1e-3–2e-3 s but ‖Φ‖ reaches 1e-7);
@@ -25,7 +25,7 @@ fn run_case(stem: &str) -> RunStats {
     let t_end = m.t_end();
     let period = 2.0 * std::f64::consts::PI / m.crank_speed().unwrap();
     // Whole run on a coarse grid for ‖Φ‖, last revolution on the 2001-point grid of
-    // INTERFACES.md.
+    // docs/outputs.md ("`metrics`").
     let mut times: Vec<f64> = (0..400).map(|i| t_end * i as f64 / 400.0).collect();
     let last: Vec<f64> = (0..=2000)
         .map(|i| t_end - period + period * i as f64 / 2000.0)
@@ -135,7 +135,7 @@ fn ideal_and_dry_cases_run_to_the_end_with_rk4() {
             assert!(s.rms_dev_ideal < 1e-8, "{stem}: {}", s.rms_dev_ideal);
         }
         if stem == "dry_150rpm_c0.1" {
-            // MODEL.md §9: the soft contact penetrates deeper than the clearance (|e|/c > 2)
+            // docs/model.md §9: the soft contact penetrates deeper than the clearance (|e|/c > 2)
             // and the contact force exceeds 30 kN.
             assert!(
                 s.eps_max > 2.0 && s.f_n_max > 3e4,
@@ -154,7 +154,7 @@ fn lubricated_c01_cases_run_to_the_end_with_rk4() {
         // The film carries the load: no contact at 0.1 mm.
         assert!(s.eps_max < 1.0);
         if rpm == 150 {
-            // MODEL.md §9: within about 1e-3 m/s² RMS of the ideal mechanism.
+            // docs/model.md §9: within about 1e-3 m/s² RMS of the ideal mechanism.
             assert!(s.rms_dev_ideal < 1.5e-3, "{}", s.rms_dev_ideal);
         }
     }
@@ -166,7 +166,8 @@ fn lubricated_c05_case_runs_to_the_end_with_rk4() {
     assert!(s.eps_max > 1.0, "at 0.5 mm the journal reaches the bearing");
 }
 
-/// About 10 s in release: RK4 needs 2e-7 s and 5e-7 s steps for these two cases.
+/// Slow (BENCHMARKS.md, "Test-suite run times"): RK4 needs 2e-7 s and 5e-7 s steps for these
+/// two cases.
 #[test]
 fn lubricated_c02_c03_cases_run_to_the_end_with_rk4() {
     run_case("lubricated_150rpm_c0.2");

@@ -1,5 +1,4 @@
-//! Every integration method runs the press cases of cases/press/ to their end time (the
-//! integrators issue: "the press cases run with every method").
+//! Every integration method runs the press cases of cases/press/ to their end time.
 //!
 //! The default run covers one case of each kind (ideal, dry, lubricated at 150 rpm, 0.1 mm)
 //! with all nine methods; `all_press_cases_with_every_method` (ignored by default, minutes)

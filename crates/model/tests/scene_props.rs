@@ -1,5 +1,5 @@
-//! Property tests of the scene parser and of random valid mechanisms (issue "Stability at the
-//! extremes": faults and bad input).
+//! Property tests of the scene parser and of random valid mechanisms (faults and bad input;
+//! docs/scene-format.md, "Errors").
 //!
 //! 1. Arbitrary input (bytes, UTF-8 text, JSON values, scene-shaped JSON with random pieces)
 //!    never panics in [`Scene::from_json_str`], [`Mechanism::from_scene`], the first
@@ -14,11 +14,11 @@
 //!    only, and keep the constraint violation ‖Φ‖ below [`PHI_BOUND`].
 //! 5. Regressions: the inputs these properties found, as they are answered now.
 //!
-//! Case counts are explicit and the seed is fixed, so the default run (about 7 s in release on
-//! two cores) is the same on every machine: 400 byte strings, 600 texts, 600 JSON values, 3000
-//! scene-shaped documents, 100 files, 10 000 mutations, every number of 42 scenes × 3
-//! non-finite values, 150 mechanisms. `PROPTEST_CASES=n` and `PROPTEST_RNG_SEED=s` explore
-//! further, and the `#[ignore]`d `*_long` tests run 20× the cases (1–2 minutes each):
+//! Case counts are explicit and the seed is fixed, so the default run is the same on every machine
+//! (its time: BENCHMARKS.md, "Test-suite run times"): 400 byte strings, 600 texts, 600 JSON values,
+//! 3000 scene-shaped documents, 100 files, 10 000 mutations, every number of 42 scenes × 3
+//! non-finite values, 150 mechanisms. `PROPTEST_CASES=n` and `PROPTEST_RNG_SEED=s` explore further,
+//! and the `#[ignore]`d `*_long` tests run 20× the cases:
 //! `cargo test --release -p lash-model --test scene_props -- --ignored`.
 //! A cargo-fuzz target for the parser is in `crates/model/fuzz/` (README there).
 
@@ -727,7 +727,7 @@ fn scene_shaped_json_never_panics_and_errors_name_a_location() {
 }
 
 #[test]
-#[ignore = "20x the default case count (1–2 minutes)"]
+#[ignore = "20x the default case count (slow)"]
 fn scene_shaped_json_long() {
     scene_shaped(60_000);
 }
@@ -1409,7 +1409,7 @@ fn mutated_valid_scenes_fail_where_they_were_mutated() {
 }
 
 #[test]
-#[ignore = "20x the default case count (1–2 minutes)"]
+#[ignore = "20x the default case count (slow)"]
 fn mutated_valid_scenes_long() {
     mutations(200_000);
 }
@@ -2033,7 +2033,7 @@ fn random_valid_mechanisms_keep_the_constraints() {
 }
 
 #[test]
-#[ignore = "20x the default case count (1–2 minutes)"]
+#[ignore = "20x the default case count (slow)"]
 fn random_valid_mechanisms_long() {
     random_mechanisms(3000);
 }

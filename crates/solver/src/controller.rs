@@ -23,7 +23,8 @@
 
 use crate::error::SolveError;
 
-/// The controller presets. Names are the contract of INTERFACES.md.
+/// The controller presets. Names are the contract of docs/outputs.md ("Method and controller
+/// names").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ControllerKind {

@@ -8,8 +8,9 @@
 //! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense, nalgebra LU)
 //! ```
 //!
-//! Backend: diffsol 0.18 with its nalgebra matrices and LU (faster than faer for the small
-//! systems of this project). The system reaches diffsol as a custom `OdeEquations` type whose
+//! Backend: diffsol 0.18 with its nalgebra matrices and LU (chosen for the small dense systems
+//! of this project, where faer's dispatch and workspace handling dominate: BENCHMARKS.md, "What
+//! the profile showed"). The system reaches diffsol as a custom `OdeEquations` type whose
 //! right-hand side operator supplies
 //! - the Jacobian-vector product `J v` (diffsol's required interface): the system's dense
 //!   Jacobian times v when it has one, a forward difference of f along v otherwise;

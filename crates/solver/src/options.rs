@@ -4,7 +4,7 @@
 use crate::controller::{ControllerKind, StepLimits};
 use crate::error::SolveError;
 
-/// Integration method. Names are the contract of INTERFACES.md.
+/// Integration method. Names are the contract of docs/outputs.md ("Method and controller names").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {

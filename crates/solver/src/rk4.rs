@@ -32,9 +32,9 @@
 //! rounding level (‖k2 − k1‖² ≤ (64 ε)² · 2 (‖k1‖² + ‖k2‖²)) are not judged.
 //! ```
 //! Consecutive, because across a kink of f (contact onset, the end of the damping ramp) the
-//! difference quotient is not an eigenvalue and spikes for one or two steps. Measured on the
-//! press (150 rpm, c = 0.1 mm): dry, h = 1e-4 … 2.5e-3 s, at most 4 flagged steps in a row;
-//! lubricated, h = 2e-6 s never flagged (h ρ ≤ 2.04), h = 3e-6 … 1e-5 s runs of 208–633.
+//! difference quotient is not an eigenvalue and spikes for one or two steps. On the press the
+//! kinks flag a few steps in a row and a real instability hundreds (BENCHMARKS.md, "RK4 beyond
+//! its stability limit").
 
 use crate::error::SolveError;
 use crate::options::{Method, SolverOptions};

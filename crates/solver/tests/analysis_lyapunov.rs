@@ -185,8 +185,7 @@ impl OdeSystem for Lorenz {
 /// 0.904 with dopri54, 0.905 with rk4, largest deviation 0.014): the finite-time exponent
 /// fluctuates along a chaotic orbit, and any rounding difference picks another orbit. ±0.05 is
 /// seven standard deviations, and still far from the other exponents (0 and −14.57). Two
-/// methods: adaptive dopri54 (rtol 1e-10) and fixed-step rk4 (h = 0.005). About 0.2 s in
-/// release.
+/// methods: adaptive dopri54 (rtol 1e-10) and fixed-step rk4 (h = 0.005).
 #[test]
 fn lorenz_exponent_matches_sprott() {
     for solver in [

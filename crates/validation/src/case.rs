@@ -10,7 +10,7 @@
 //!                         its file in cases/press/; scene_sha256 = null)
 //! ```
 //!
-//! Source: INTERFACES.md (`summary.json` fields `case`, `scene_sha256`). Loading checks that
+//! Source: docs/outputs.md (`summary.json` fields `case`, `scene_sha256`). Loading checks that
 //! the file exists and is well-formed JSON; the model crate validates the scene itself.
 
 use std::path::{Path, PathBuf};
@@ -32,7 +32,7 @@ pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 /// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME) | Catalogue(NAME)
 /// ```
 ///
-/// Source: INTERFACES.md (`case`, `scene_sha256`).
+/// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum CaseSource {
     /// A scene file.
@@ -59,7 +59,7 @@ pub enum CaseSource {
 /// name = file stem | "testset:" NAME;   sha256 = sha256(file bytes) | none
 /// ```
 ///
-/// Source: INTERFACES.md (`case`, `scene_sha256`).
+/// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Case {
     /// The name recorded in summary.json (`case`).

@@ -20,8 +20,8 @@
 //! comparison, a derived RK4 step, each finished work–precision run) and the progress of a
 //! sweep. Errors are typed ([`Error`]); those about options name them by the engine's names.
 //!
-//! Source: the issue "The lash command" (the commands); the issue "One engine, one step
-//! driver" (one engine behind every front end).
+//! Source: docs/outputs.md ("Files each command writes"); ARCHITECTURE.md ("Invariants": one
+//! engine behind every front end, knowing no command line).
 
 use std::path::{Path, PathBuf};
 
@@ -57,7 +57,7 @@ pub fn default_run(
 /// case [solver choice] [t_end] [out]
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash run`).
+/// Source: docs/outputs.md ("`lash run CASE`").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunOptions {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -99,7 +99,7 @@ pub fn run(o: &RunOptions) -> Result<Written<RunResult>, Error> {
 /// paper = the paper's speeds (120–200 rpm) and clearances (0.1–0.5 mm), dry and lubricated
 /// ```
 ///
-/// Source: MODEL.md §6.
+/// Source: docs/model.md §6.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StudyOptions {
     /// Output directory; None = `out/study/paper`.
@@ -154,7 +154,7 @@ fn rk4_steps(
 /// case [tolerances] [steps] [t_end] [out]
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash compare`).
+/// Source: docs/outputs.md ("`lash compare CASE`").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CompareOptions {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -217,7 +217,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
 /// case [methods] [tolerances] [steps] [controllers] [t_end] [out]   (None = the default)
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash work-precision`).
+/// Source: docs/outputs.md ("`lash work-precision CASE`").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct WorkPrecisionOptions {
     /// The case: a scene file (JSON) or `testset:NAME`.
@@ -362,7 +362,7 @@ pub fn work_precision(
 /// case [solver choice] [samples] [t_end] [measure] [out]
 /// ```
 ///
-/// Source: the issue "Stiffness diagnostics".
+/// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Debug, Clone, PartialEq)]
 pub struct StiffnessOptions {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
@@ -427,7 +427,7 @@ pub fn stiffness(o: &StiffnessOptions) -> Result<Written<StiffnessResult>, Error
 /// case [revolutions] [perturbation] [renorm_per_rev] [solver choice] [out]
 /// ```
 ///
-/// Source: the issue "Chaos diagnostics".
+/// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PoincareOptions {
     /// The case: a scene file (JSON) with a crank driver and a clearance joint role.
@@ -478,7 +478,7 @@ pub fn poincare(o: &PoincareOptions) -> Result<Written<PoincareResult>, Error> {
 /// [quick] [jobs] [max_steps] [max_wall_time] [out]
 /// ```
 ///
-/// Source: the issue "Extremes"; module `extremes`.
+/// Source: docs/outputs.md ("`lash extremes`"); module `extremes`.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ExtremesOptions {
     /// The quick subset (3 scenes × every method × 3 tolerances).
@@ -531,7 +531,7 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
 /// SWEEP.json [jobs] [shard] [out]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SweepRunOptions {
     /// The sweep file (JSON): a base case and lists of parameter values.
@@ -668,7 +668,7 @@ pub fn point_values(mut summary: serde_json::Value) -> PointResult {
 /// DIR... [out]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MergeOptions {
     /// Sweep output directories (or point directories) to join; at least one.

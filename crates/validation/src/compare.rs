@@ -2,9 +2,8 @@
 //! the error norms, and `lash compare`.
 //!
 //! ```text
-//! error window   dry clearance joint (chaotic, MODEL.md §9): the first half revolution
-//!                  [t0, t0 + T/2]   (two correct runs still agree there: 1e-15 m of initial
-//!                  difference grows to ~1e-5 m/s² within one revolution, 4e-2 by the second)
+//! error window   dry clearance joint (chaotic, docs/model.md §9): the first half revolution
+//!                  [t0, t0 + T/2]   (two correct runs still agree there; docs/model.md §9)
 //!                otherwise: the metrics window (the last revolution)
 //!                sampled on 2001 equally spaced times, both ends
 //! reference      a scene with an oil film (stiff): bdf at rtol 1e-12, checked by esdirk34 at
@@ -21,8 +20,8 @@
 //!                test problems: reference_error (largest relative error over components)
 //! ```
 //!
-//! Source: MODEL.md §9; INTERFACES.md (`reference_error`); the issue "The lash command"
-//! (`lash compare`: every method against a converged reference, say how it was obtained).
+//! Source: docs/model.md §9; docs/outputs.md (`summary.json`: `reference_error`; "`lash compare
+//! CASE`": every method against a converged reference, saying how it was obtained).
 
 use std::path::{Path, PathBuf};
 
@@ -53,7 +52,7 @@ pub const STABLE_PHI_MAX: f64 = 1e-8;
 /// [start, end] sampled at 2001 equally spaced times;  label says which rule chose it
 /// ```
 ///
-/// Source: MODEL.md §9.
+/// Source: docs/model.md §9.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorWindow {
     /// Start, s.
@@ -339,7 +338,7 @@ impl Reference {
 /// (method, controller, rtol | step) → error norms, headline error, cost, events
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash compare`).
+/// Source: docs/outputs.md ("`lash compare CASE`").
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Compared {
     /// Method.
@@ -523,7 +522,7 @@ pub fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
 /// { case, reference: how, window, t_end, runs: [Compared] }
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("`lash compare CASE`": compare.json).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Comparison {
     /// Case name.

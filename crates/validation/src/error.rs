@@ -11,7 +11,7 @@
 //! own way (the `lash` command as `--rtol`, `--t-end`; a Python binding as `rtol`, `t_end`).
 //! [`Display`](std::fmt::Display) spells them as the engine names them.
 //!
-//! Source: the exit-code contract of INTERFACES.md ("Exit codes of `lash`"): the kinds are its
+//! Source: the exit-code contract of docs/outputs.md ("Exit codes of `lash`"): the kinds are its
 //! classes (exit codes 2, 3 and 1).
 
 use std::fmt;
@@ -30,7 +30,7 @@ use lash_solver::SolveError;
 /// field); a solver failure also carries its time and state ([`SolveError::time`],
 /// [`SolveError::state`]).
 ///
-/// Source: INTERFACES.md ("Exit codes of `lash`").
+/// Source: docs/outputs.md ("Exit codes of `lash`").
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A request that does not fit: a wrong combination, an out-of-range number, an unknown
@@ -65,10 +65,10 @@ pub enum Error {
 /// The class of an [`Error`]: whose fault it is.
 ///
 /// ```text
-/// BadInput → exit code 2,  Solver → 3,  Bug → 1   (INTERFACES.md)
+/// BadInput → exit code 2,  Solver → 3,  Bug → 1   (docs/outputs.md, "Exit codes of `lash`")
 /// ```
 ///
-/// Source: INTERFACES.md ("Exit codes of `lash`").
+/// Source: docs/outputs.md ("Exit codes of `lash`").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ErrorKind {
     /// The request or an input file is wrong (usage, an option, a case, a file).
@@ -129,7 +129,7 @@ pub enum Piece {
 ///   engine: "rk4 left out (give steps to include it)"
 /// ```
 ///
-/// Source: the issue "One engine, one step driver" (the engine names no command-line flag).
+/// Source: ARCHITECTURE.md ("Invariants": the engine names no command-line flag).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Message {
     /// The pieces, in order.
@@ -194,7 +194,7 @@ impl From<String> for Message {
 ///   engine: "rtol is only for adaptive methods, and rk4 is fixed-step"
 /// ```
 ///
-/// Source: the issue "One engine, one step driver" (engine errors name no command-line flag).
+/// Source: ARCHITECTURE.md ("Invariants": engine errors name no command-line flag).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct OptionError {
     /// The option at fault, by its engine name.

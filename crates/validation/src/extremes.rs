@@ -13,17 +13,14 @@
 //! reference   per scene: methods A and B at the first rtol of a ladder at which both succeed
 //!               dry:        rodas5p, dop853 at 1e-13, 1e-12, 1e-11, 1e-10
 //!               lubricated: bdf, esdirk34 at 1e-12, 1e-11, 1e-10 (compare.rs's pair; below
-//!                           1e-12 the film scenes lose accuracy: at 1e-13 bdf, esdirk34 and
-//!                           rodas5p differ by up to 2e-6 on lubricated_viscosity_10, where
-//!                           at 1e-12 bdf and esdirk34 agree to 2e-9)
+//!                           1e-12 the film scenes lose accuracy: BENCHMARKS.md, "Extremes")
 //!             converged: E_ref = max( e(B; A), e(A at 10·rtol; A) ), the disagreement of two
 //!             methods and of two tolerances, is the floor of what can be verified (the
 //!             second term matters where the start at the film's singular point e = 0 makes
-//!             the trajectory depend on how the first steps resolve it: on
-//!             lubricated_viscosity_10 bdf and esdirk34 agree to 2e-9 at 1e-12, while every
-//!             method at 1e-10 lands 1.8e-7 away)
+//!             the trajectory depend on how the first steps resolve it, as on
+//!             lubricated_viscosity_10: BENCHMARKS.md, "Extremes")
 //! window      the error window of compare.rs: dry scenes the first half revolution (chaotic,
-//!             MODEL.md §9), lubricated the last revolution, a run shorter than that whole;
+//!             docs/model.md §9), lubricated the last revolution, a run shorter than that whole;
 //!             2001 equally spaced times
 //! error       e(run; ref) = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v )
 //!             x, v slider position and velocity; s_x = r (crank radius: the amplitude of
@@ -52,10 +49,10 @@
 //! (p = 2) 2/3, esdirk34 (p = 3) 3/4, bdf (orders 1–5) 5/6 at its highest order. C, C_rk4 and F are measured, not
 //! assumed: [`PROMISE_C_DRY`] documents the measurement.
 //!
-//! "1e-6 to 1 mm" reads either as 1e-6 m … 1e-3 m or as 1e-6 mm … 1 mm (1e-9 m … 1e-3 m):
-//! the scenes cover both, with clearances of 1e-9, 1e-6 and 1e-3 m.
+//! The clearances 1e-9, 1e-6 and 1e-3 m span both 1e-6 m … 1e-3 m and 1e-6 mm … 1 mm.
 //!
-//! Source: the issue "Extremes"; MODEL.md §6, §9; INTERFACES.md (exit codes).
+//! Source: docs/outputs.md ("`lash extremes`", "Exit codes of `lash`"); docs/model.md §6, §9;
+//! BENCHMARKS.md ("Extremes").
 
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -78,7 +75,7 @@ use crate::workprecision::fmt_num;
 pub const TOLERANCES: [f64; 6] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
 /// Relative tolerances of the quick subset.
 pub const QUICK_TOLERANCES: [f64; 3] = [1e-3, 1e-6, 1e-9];
-/// Scenes of the quick subset: cheap corners (references under 0.5 s) that still stress each
+/// Scenes of the quick subset: cheap corners (quick references) that still stress each
 /// family: hard contact, a film near ε = 1, a clearance 100 times smaller than the
 /// penetration.
 pub const QUICK_SCENES: [&str; 3] = [
@@ -87,12 +84,13 @@ pub const QUICK_SCENES: [&str; 3] = [
     "dry_clearance_1um",
 ];
 /// Budget of every run of the quick subset: the explicit methods on the film near ε = 1 are
-/// stability-bound (~1e6 steps a revolution) and stop at the step budget.
+/// stability-bound and stop at the step budget.
 pub const QUICK_BUDGET: Budget = Budget {
     max_steps: 100_000,
     max_wall_time: 10.0,
 };
-/// The adaptive methods of the matrix, in the order of INTERFACES.md.
+/// The adaptive methods of the matrix, in the order of docs/outputs.md ("Method and controller
+/// names").
 pub const ADAPTIVE: [Method; 8] = [
     Method::Bs32,
     Method::Dopri54,
@@ -122,21 +120,20 @@ pub const REFERENCE_MAX_WALL_TIME: f64 = 60.0;
 /// C_dry = 2e5
 /// ```
 /// Rule for every constant of the promise: the smallest 1–2–5 value at least twice the
-/// largest value measured over the full matrix (BENCHMARKS.md "Extremes"), the measured value
-/// of a run being (e − F·E_ref)/rtol^α ([`Cell::measured_c`]), the [`KNOWN_FINDINGS`] left
-/// out. Dry scenes: 5.5e4 (dry_clearance_1mm, dop853 at 1e-10; then dry_speed_1rpm 4.7e4). An impact turns a small
-/// error in the journal's position into an error in the slider's velocity, and the dry press
-/// is chaotic (MODEL.md §9), so its global error is 1e3–5e4 × rtol where the lubricated scenes
-/// stay within 2e2 × rtol. With this C the promise can fail for rtol ≤ 1e-7; at looser
-/// tolerances C·rtol exceeds any deviation the slider can have, and the check there is that
-/// the result is finite.
+/// largest value measured over the full matrix (BENCHMARKS.md, "Extremes", lists them), the
+/// measured value of a run being (e − F·E_ref)/rtol^α ([`Cell::measured_c`]), the
+/// [`KNOWN_FINDINGS`] left out. An impact turns a small error in the journal's position into an
+/// error in the slider's velocity, and the dry press is chaotic (docs/model.md §9), so the
+/// global error of a dry scene lies decades further above rtol than that of a lubricated one.
+/// With this C the promise can fail for rtol ≤ 1e-7; at looser tolerances C·rtol exceeds any
+/// deviation the slider can have, and the check there is that the result is finite.
 pub const PROMISE_C_DRY: f64 = 2e5;
 /// The constant C of the promise on a scene whose clearance joints all have a film.
 ///
 /// ```text
 /// C_lub = 5e2
 /// ```
-/// Measured (rule of [`PROMISE_C_DRY`]): 157 (lubricated_speed_2000rpm, bs32 at 1e-8).
+/// Set by the rule of [`PROMISE_C_DRY`] (the largest measured value: BENCHMARKS.md, "Extremes").
 pub const PROMISE_C_LUBRICATED: f64 = 5e2;
 /// The constant C_rk4 of RK4's promise e(h) ≤ C_rk4 · e(h; h/2) + F · E_ref.
 ///
@@ -145,8 +142,8 @@ pub const PROMISE_C_LUBRICATED: f64 = 5e2;
 /// ```
 /// For a method of order p ≥ 1, e(h) ≈ e(h; h/2) / (1 − 2^{−p}) ≤ 2 e(h; h/2); RK4 without
 /// event location on the non-smooth contact force does not converge at a clean order
-/// (BENCHMARKS.md (c)). Measured (rule of [`PROMISE_C_DRY`]): 1.32
-/// (lubricated_clearance_1mm at h = 5e-6 s).
+/// (BENCHMARKS.md (c)). Set by the rule of [`PROMISE_C_DRY`] (the largest measured value:
+/// BENCHMARKS.md, "Extremes").
 pub const PROMISE_C_RK4: f64 = 5.0;
 /// The factor F on the reference's error estimate E_ref in the promise: below E_ref an error
 /// cannot be told from the reference's own, so F = 1 is not fitted but the definition of the
@@ -155,8 +152,8 @@ pub const PROMISE_C_RK4: f64 = 5.0;
 /// ```text
 /// F = 1
 /// ```
-/// Measured: the runs whose error exceeds C·rtol^α (all at rtol 1e-12) exceed it by at most
-/// 0.05 E_ref.
+/// The runs whose error exceeds C·rtol^α exceed it by a small fraction of E_ref
+/// (BENCHMARKS.md, "Extremes").
 pub const PROMISE_F: f64 = 1.0;
 
 /// The exponent α of a method's tolerance proportionality (module doc).
@@ -408,9 +405,8 @@ pub fn catalogue() -> Vec<ExtremeScene> {
         &[
             "K = 1e14 N/m^1.5, 4300 times stiffer than the paper's: 4 impacts in 0.02 s.",
             "t_end = 0.02 s (1/20 revolution): with this hard contact the press is chaotic \
-             (MODEL.md §9) on a short time scale: two converged runs at rtol 1e-12 differ by \
-             1e-1 in slider velocity (units of its maximum) after half a revolution, by 2e-7 \
-             after 0.05 s, and dopri54 at rtol 1e-10 is 4e5 x rtol off after 0.03 s.",
+             (docs/model.md §9) on a short time scale, and converged runs agree closely enough \
+             to check the methods only over a short run (BENCHMARKS.md, Extremes).",
         ],
         2e-5,
         2e-4,
@@ -543,7 +539,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
 /// max_wall_time seconds of integration
 /// ```
 ///
-/// Source: the issue "Extremes" (no hang).
+/// Source: docs/outputs.md ("`lash extremes`": every run has a step and a wall-clock budget).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Budget {
     /// Most step attempts of one run.
@@ -723,15 +719,14 @@ pub struct KnownFinding {
 /// ```text
 /// lubricated_viscosity_10: rodas5p and dop853 at rtol ≤ 1e-10
 /// ```
-/// At t = 0.223 s the journal of lubricated_viscosity_10 passes within ε = 4e-4 of the bearing
-/// centre, where the film force turns with e/|e| and a perturbation of e is amplified by
-/// ~1/ε: errors of ~1e-9 before the passage leave it as ~2e-7 in slider velocity (units of its
-/// maximum). bdf at 1e-11 and 1e-12 and esdirk34 at 1e-12 agree to 2e-9 through it; every
-/// method at 1e-10 lands 1.7e-7 … 2.0e-7 away. bdf, trbdf2 and esdirk34 stay within their
-/// promise there (their α < 1 allows it), rodas5p and dop853 (α = 1) do not: rodas5p at 1e-10
-/// and 1e-12 (1.8e-7, 4.6e-8; Rodas5P's order reduction on this stiff driven problem,
-/// BENCHMARKS.md (d), keeps it from converging at its nominal rate), dop853 at 1e-10 and 1e-12
-/// (2.0e-7, 5.2e-7: stability-bound, 7e5 steps whose round-off the passage amplifies).
+/// The journal of lubricated_viscosity_10 passes close to the bearing centre, where the film
+/// force turns with e/|e| and a perturbation of e is amplified by ~1/ε: the errors of every run
+/// before the passage leave it orders of magnitude larger. bdf, trbdf2 and esdirk34 stay within
+/// their promise there (their α < 1 allows it), rodas5p and dop853 (α = 1) do not: rodas5p
+/// because its order reduction on this stiff driven problem (BENCHMARKS.md (d)) keeps it from
+/// converging at its nominal rate, dop853 because it is stability-bound and the passage
+/// amplifies the round-off of its many steps. The numbers: BENCHMARKS.md, "Extremes" → "What
+/// the matrix found".
 pub const KNOWN_FINDINGS: [KnownFinding; 2] = [
     KnownFinding {
         scene: "lubricated_viscosity_10",

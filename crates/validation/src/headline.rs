@@ -13,7 +13,7 @@
 //!                lubricated bdf) at the loosest rtol in 1e-3, 1e-4, …, 1e-11 whose error is
 //!                at most RK4's: the same accuracy, so the costs compare directly
 //!   error      compare::ErrorNorms::headline: relative RMS error of the slider acceleration
-//!                over the first half revolution (dry: chaotic, MODEL.md §9) or the last
+//!                over the first half revolution (dry: chaotic, docs/model.md §9) or the last
 //!                revolution (ideal, lubricated)
 //! returns the table (`lash` prints it); writes validation/reports/default/ (git-ignored):
 //! README.md (the tables), default.json, slider_acceleration.{svg,png} (last revolution, the
@@ -21,7 +21,8 @@
 //! per case the reference run's summary.json, trajectory.csv and figures
 //! ```
 //!
-//! Source: the issue "The lash command" (the default run); MODEL.md §5–§9.
+//! Source: docs/outputs.md ("`lash` (no command): the default run"); README.md ("What the
+//! default run shows"); docs/model.md §5–§9.
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -255,7 +256,7 @@ impl Headline {
         s.push_str(
             "\nerror: relative RMS error of the slider acceleration against the reference on \
              2001 points of the error window (the dry case is chaotic, so it is measured over \
-             the first half revolution; MODEL.md §9). RK4 runs at the largest stable step \
+             the first half revolution; docs/model.md §9). RK4 runs at the largest stable step \
              (ideal 1e-3 s, dry 2e-4 s, lubricated 2e-6 s) without event location, its contact \
              onsets counted at the step ends; the adaptive method runs at the loosest rtol \
              (decades from 1e-3) that matches RK4's error, with event location. Wall times are \
@@ -320,7 +321,7 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
         .collect();
     if let Some((x, y)) = &ideal {
         series.push(Series {
-            name: "closed form (MODEL.md §5)",
+            name: "closed form (docs/model.md §5)",
             x,
             y,
             style: SeriesStyle::Dashed,

@@ -18,7 +18,7 @@
 //! ```
 //!
 //! A metric whose role (slider, crank driver, clearance joint) the scene does not declare is
-//! `None` (null). Source: INTERFACES.md (`summary.json`, `metrics`).
+//! `None` (null). Source: docs/outputs.md (`summary.json`, `metrics`).
 
 use crate::error::Error;
 
@@ -53,7 +53,7 @@ pub fn grid(t_end: f64, period: f64) -> Vec<f64> {
 /// ε = |e|/c,  δ = |e| − c,  F_N ≥ 0 normal contact force,  F_T friction,  |F_film| film force
 /// ```
 ///
-/// Source: INTERFACES.md (`trajectory.csv` columns and `metrics`); MODEL.md §2–§4.
+/// Source: docs/outputs.md (`trajectory.csv` columns and `metrics`); docs/model.md §2–§4.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Sample {
     /// Time, s.
@@ -105,7 +105,7 @@ impl Sample {
 /// c = R_B − R_J;  lubricated ⇒ film_thickness_min = c (1 − min(ε_max, 1))
 /// ```
 ///
-/// Source: MODEL.md §2, INTERFACES.md (`metrics`).
+/// Source: docs/model.md §2, docs/outputs.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointInfo {
     /// Radial clearance c, m.
@@ -120,7 +120,7 @@ pub struct JointInfo {
 /// Penetration: g = δ = |e| − c;  FilmCap: g = ε − ε_cap
 /// ```
 ///
-/// Source: MODEL.md §7.
+/// Source: docs/model.md §7.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EventQuantity {
     /// The penetration δ of the clearance joint (rising = contact onset).
@@ -137,7 +137,7 @@ pub enum EventQuantity {
 /// contact onset ⇔ quantity = Penetration ∧ rising
 /// ```
 ///
-/// Source: INTERFACES.md (`contact_onsets`).
+/// Source: docs/outputs.md (`contact_onsets`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EventRecord {
     /// Event time, s.
@@ -155,7 +155,7 @@ pub struct EventRecord {
 /// D_* = ∫ (dissipated power) dt ≥ 0
 /// ```
 ///
-/// Source: INTERFACES.md (`energy`).
+/// Source: docs/outputs.md (`energy`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnergyTotals {
     /// Work done by the crank driver, J.
@@ -184,7 +184,7 @@ pub struct EnergyTotals {
 ///                 + dissipated_damping + dissipated_friction + dissipated_film)
 /// ```
 ///
-/// Source: INTERFACES.md (`energy`).
+/// Source: docs/outputs.md (`energy`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Energy {
     /// Work done by the crank driver, J.
@@ -233,7 +233,7 @@ impl Energy {
 /// see the module doc: maxima, minima and RMS over the 2001-point grid of the last revolution
 /// ```
 ///
-/// Source: INTERFACES.md (`metrics`).
+/// Source: docs/outputs.md (`metrics`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Metrics {
     /// Max slider x acceleration on the grid, m/s².
@@ -268,7 +268,7 @@ pub struct Metrics {
 /// [t_end − T, t_end],  T = 60 / rpm
 /// ```
 ///
-/// Source: INTERFACES.md (`metrics`).
+/// Source: docs/outputs.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
     /// End time, s.

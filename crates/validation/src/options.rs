@@ -9,7 +9,7 @@
 //! Errors name the options by their engine names ([`OptionError`]): `rtol`, `atol`, `step`,
 //! `controller`, `method`, `max_steps`, `max_wall_time`.
 //!
-//! Source: INTERFACES.md (method and controller names); the issue "The lash command".
+//! Source: docs/outputs.md ("Method and controller names", "Defaults of a run").
 
 use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
 
@@ -27,7 +27,7 @@ pub const RTOL_MIN: f64 = 1e-14;
 ///                                       ("too many steps", "budget exhausted")
 /// ```
 ///
-/// Source: INTERFACES.md (method and controller names).
+/// Source: docs/outputs.md ("Method and controller names").
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SolverChoice {
     /// Integration method.

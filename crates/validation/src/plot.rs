@@ -13,8 +13,8 @@
 //!
 //! Text is drawn with DejaVu Sans, shipped in `assets/` (Bitstream Vera licence, see
 //! `assets/DejaVuSans-LICENSE.txt`) and registered with plotters' `ab_glyph` renderer, so no
-//! system font library is needed. Both files are written atomically. Source: the issue
-//! "The lash command" (figures of `lash run` and `lash work-precision`).
+//! system font library is needed. Both files are written atomically. Source:
+//! docs/outputs.md ("`lash run CASE`", "`lash work-precision CASE`").
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -21,9 +21,9 @@
 //!               lyapunov.{svg,png} (running estimate), poincare.md, poincare.json (last)
 //! ```
 //!
-//! The renormalisation interval T/10 keeps the separation small: at the dry press's exponent
-//! (≈ 9 1/s at 150 rpm, ≈ 20 1/s over the first revolutions) it grows by e^{λT/10} ≤ 2.2
-//! between renormalisations. Both trajectories
+//! The renormalisation interval T/10 keeps the separation small: at the exponents measured on
+//! the dry press (BENCHMARKS.md, "Chaos diagnostics") it grows by e^{λT/10}, a factor of order
+//! 2, between renormalisations. Both trajectories
 //! use the case's solver options; the integration error must stay well below d0 (the default
 //! atol is rtol·c, so rtol 1e-8 against d0 = 1e-4 clearances). Sources: G. Benettin,
 //! L. Galgani, A. Giorgilli, J.-M. Strelcyn, Meccanica 15 (1980) 9–20; J. C. Sprott, *Chaos
@@ -60,10 +60,9 @@ pub const DEFAULT_RENORM_PER_REV: usize = 10;
 ///
 /// Benettin's method needs the integration error of each trajectory far below d0 (the two
 /// trajectories take different steps and locate their own events, so their errors do not
-/// cancel). At the case default rtol 1e-8 (atol 1e-8 c) the dry press at 150 rpm gives
-/// λ ≈ 15 1/s with d0 = 1e-4 and 49 1/s with d0 = 1e-5, while from rtol 1e-10 down the
-/// estimate no longer depends on d0 (6–10 1/s over 50 revolutions); 1e-11 costs about 2× the
-/// time of 1e-8.
+/// cancel). On the dry press at 150 rpm the estimate at the case default rtol 1e-8 depends on
+/// d0, and from rtol 1e-10 down it does not; 1e-11 adds a margin at a moderate cost
+/// (measurements: BENCHMARKS.md, "Chaos diagnostics").
 pub const DEFAULT_RTOL: f64 = 1e-11;
 /// Standard errors by which the estimate must clear zero for a verdict.
 pub const SIGMAS: f64 = 3.0;
@@ -74,7 +73,7 @@ pub const SIGMAS: f64 = 3.0;
 /// N revolutions ≥ 1, d0 ∈ (0, 1) clearances, R ≥ 1 renormalisations per revolution
 /// ```
 ///
-/// Source: the issue "Chaos diagnostics".
+/// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoincareSettings {
     /// Revolutions N (section points j = 0..N; Lyapunov averaging over N T).

@@ -12,7 +12,8 @@
 //! of it) implements what it needs. The `lash` command draws a progress bar on a terminal and
 //! prints the notes on standard error; a library caller may log them or ignore them.
 //!
-//! Source: the issue "One engine, one step driver" (progress through a hook).
+//! Source: ARCHITECTURE.md ("Invariants": the engine prints nothing; progress goes through a
+//! hook).
 
 use crate::error::Message;
 

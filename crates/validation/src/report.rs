@@ -11,8 +11,8 @@
 //!   joint_forces                   contact force F_N and film force |F_film|   [clearance joint]
 //! ```
 //!
-//! Source: the issue "The lash command" (`lash run` writes DIR/summary.json,
-//! DIR/trajectory.csv and figures).
+//! Source: docs/outputs.md ("`lash run CASE`": DIR/summary.json, DIR/trajectory.csv and
+//! figures).
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -35,7 +35,7 @@ pub const FIGURES: [&str; 5] = ["slider_x", "slider_v", "slider_a", "orbit", "jo
 /// trajectory: rows at the output times;  window: rows on metrics::grid(t_end, T)
 /// ```
 ///
-/// Source: INTERFACES.md (`summary.json`, `trajectory.csv`).
+/// Source: docs/outputs.md (`summary.json`, `trajectory.csv`).
 #[derive(Clone, Copy, Debug)]
 pub struct RunOutput<'a> {
     /// The summary (metrics filled in for mechanism cases).
@@ -206,7 +206,7 @@ mod tests {
         )
     }
 
-    /// The paper's press at 150 rpm (MODEL.md §5): r = 15 mm, l = 350 mm, θ = φ_crank.
+    /// The paper's press at 150 rpm (docs/model.md §5): r = 15 mm, l = 350 mm, θ = φ_crank.
     fn press_ideal() -> IdealSliderCrank {
         IdealSliderCrank {
             r: 0.015,

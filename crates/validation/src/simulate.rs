@@ -29,9 +29,9 @@
 //!
 //! ```text
 //! method         bdf: the one method that is never far from the cheapest in `lash
-//!                work-precision` on the paper's press (the lubricated case, where the film
-//!                makes the explicit pairs stability-bound, 100–200× more RHS evaluations;
-//!                the dry and ideal cases, within 1.5–3× of the best explicit pair)
+//!                work-precision` on the paper's press: on the lubricated case the film makes
+//!                the explicit pairs stability-bound, and on the dry and ideal cases bdf stays
+//!                close to the best explicit pair (BENCHMARKS.md, "Defaults of a run")
 //! rtol           1e-8
 //! atol_i         rtol · s_i, per state component y = (q, q̇), q = (x, y, φ) per integrated body:
 //!                  x, y      s = L                  (m)
@@ -43,18 +43,19 @@
 //!                the floor that applies where y_i passes near 0 (rod angle, velocities at
 //!                reversal, a journal at the centre). Body positions of the press are
 //!                |y_i| ≈ 0.4 m, so there the relative term dominates and positions are
-//!                controlled to about rtol·0.4 m, not rtol·c: the measured error of the
-//!                extremes matrix is 1e3–5e4·rtol on the dry scenes for that reason
-//!                (BENCHMARKS.md, Extremes). atol scales with rtol, so tolerance
+//!                controlled to about rtol·0.4 m, not rtol·c: for that reason the errors of
+//!                the dry scenes of the extremes matrix lie decades above rtol (BENCHMARKS.md,
+//!                "Extremes"). atol scales with rtol, so tolerance
 //!                proportionality holds down to rtol = 1e-13.
 //!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
 //! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
 //!                joint, where nothing can be stepped over): with 4 samples an
 //!                interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot hide
-//!                inside a step. On dry_150rpm_c0.1 the shortest contact lasts 3.5 ms and the
-//!                shortest flight 1 ms; a step over a whole contact would miss both its onset
-//!                and its loss (tests/simulate.rs checks the onset count against a reference).
+//!                inside a step, and the contacts and flights of the dry press are longer
+//!                than that (BENCHMARKS.md, "Defaults of a run"); a step over a whole contact
+//!                would miss both its onset and its loss (tests/simulate.rs checks the onset
+//!                count against a reference).
 //! max_steps      50 000 000
 //! divergence     1e6: a state component (m, rad, m/s, rad/s) beyond 1e6 in magnitude is
 //!  bound         divergence (NonFiniteState), not motion of a mechanism: 1000 km, 1000 km/s,
@@ -64,22 +65,21 @@
 //!  check         outside its stability region (h·ρ > 2.785, lash_solver::rk4). Past the
 //!                limit the oil film of a lubricated joint does not blow up: the numerical
 //!                journal drifts to a lower eccentricity where the step is stable, finite
-//!                and wrong (lubricated_150rpm_c0.1 at h = 5e-6 and 1e-5 s: ε_max 0.28 and
-//!                0.16 instead of 0.34, slider acceleration up to 1.6e4 m/s² instead of 3.9),
-//!                which no bound on the state catches.
+//!                and wrong (BENCHMARKS.md, "Extremes" → "What the matrix found"), which no
+//!                bound on the state catches.
 //! events         located for adaptive methods; off for fixed-step methods (the paper's RK4
-//!                runs without event location, MODEL.md §7), whose crossings are counted at
+//!                runs without event location, docs/model.md §7), whose crossings are counted at
 //!                the step ends
 //! ```
 //!
 //! A built-in test problem runs rodas5p at rtol 1e-6 with the problem's own atol (its
 //! reference_error threshold) and records every accepted step as its trajectory.
 //!
-//! Metrics window: the last crank revolution [t_end − T, t_end] (INTERFACES.md); when the run
-//! is shorter than T (a `--t-end` override) or has no crank driver, the whole run.
+//! Metrics window: the last crank revolution [t_end − T, t_end] (docs/outputs.md, "`metrics`");
+//! when the run is shorter than T (a `--t-end` override) or has no crank driver, the whole run.
 //!
-//! Source: INTERFACES.md (summary.json, trajectory.csv, the metrics window, the energy
-//! balance), MODEL.md §5–§7, §9.
+//! Source: docs/outputs.md (summary.json, trajectory.csv, the metrics window, the energy
+//! balance), docs/model.md §5–§7, §9.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -131,7 +131,7 @@ pub const TESTSET_RTOL: f64 = 1e-6;
 /// Mechanism(scene) → Mechanism::from_scene per run (fresh event state) | TestSet(name)
 /// ```
 ///
-/// Source: INTERFACES.md (`case`).
+/// Source: docs/outputs.md (`case`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Model {
     /// A checked scene; each run builds its own `Mechanism` from it.
@@ -146,7 +146,7 @@ pub enum Model {
 /// T = 2π/|ω_crank|,  L = min_k c_k,  dim = 2·3·(integrated bodies)
 /// ```
 ///
-/// Source: MODEL.md §1, §5.
+/// Source: docs/model.md §1, §5.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MechanismInfo {
     /// Crank period T, s (crank driver role with ω ≠ 0).
@@ -161,7 +161,7 @@ pub struct MechanismInfo {
     pub clearance_min: Option<f64>,
     /// The clearance-joint role: its clearance and whether it is lubricated.
     pub joint: Option<JointInfo>,
-    /// Whether some clearance joint has no oil film (dry contact: chaotic, MODEL.md §9).
+    /// Whether some clearance joint has no oil film (dry contact: chaotic, docs/model.md §9).
     pub has_dry_joint: bool,
     /// State dimension.
     pub dim: usize,
@@ -175,7 +175,7 @@ pub struct MechanismInfo {
 /// (case: name and hash, model: scene | test problem, info: what the scene offers)
 /// ```
 ///
-/// Source: INTERFACES.md (`case`, `scene_sha256`).
+/// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prepared {
     /// The case reference (name and sha256 recorded in summary.json).
@@ -444,7 +444,7 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
 /// t_end override, trajectory grid size, extra output times, energy on/off
 /// ```
 ///
-/// Source: INTERFACES.md (`trajectory.csv`, `metrics`, `energy`).
+/// Source: docs/outputs.md (`trajectory.csv`, `metrics`, `energy`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunRequest {
     /// Solver options (from [`Prepared::options`]).
@@ -482,7 +482,7 @@ impl RunRequest {
 /// and at the extra times, with the raw states; events; energy totals; the ideal mechanism
 /// ```
 ///
-/// Source: INTERFACES.md.
+/// Source: docs/outputs.md ("`summary.json`", "`trajectory.csv`").
 #[derive(Clone, Debug)]
 pub struct RunResult {
     /// summary.json content (metrics for mechanisms; final_state and reference_error for test

@@ -53,8 +53,9 @@ use crate::summary::RunHeader;
 use crate::trajectory::fmt_num;
 
 /// Default number of sample points along the run (both ends included): every 0.72° of crank
-/// angle over the paper's two revolutions; one analytic Jacobian and the eigenvalues of a
-/// 12 × 12 matrix cost microseconds each.
+/// angle over the paper's two revolutions; the analysis of a sample (one analytic Jacobian, the
+/// eigenvalues of a 12 × 12 matrix) is cheap next to the measurement of the RK4 limit
+/// (BENCHMARKS.md, "Diagnostics").
 pub const DEFAULT_SAMPLES: usize = 1000;
 /// Fewest sample points.
 pub const MIN_SAMPLES: usize = 2;
@@ -69,10 +70,10 @@ pub const MAX_BRACKET_ATTEMPTS: usize = 8;
 /// Why: beyond its RK4 limit the clearance joint's fast mode (the oil film's squeeze damping,
 /// the contact stiffness) does not always blow the state up. The nonlinear film and contact
 /// forces keep the journal within about a clearance, so max ‖y‖∞ (0.4 m of slider travel) never
-/// grows tenfold while the run is garbage: on the lubricated press at 150 rpm RK4 at 6 µs and
-/// 8 µs ends finite with ‖Φ‖ ≈ 1e-4 m and an energy balance off by kJ, while 5 µs diverges (the
-/// bare criterion is not even monotonic in h). Stable runs keep ‖Φ‖ at the Baumgarte and
-/// truncation level: ≤ 1e-12 m lubricated at 2–4 µs, ≤ 6e-8 m dry up to 1 ms (growing as h⁴).
+/// grows tenfold while the run is garbage, and whether a run diverges is not even monotonic in
+/// h. ‖Φ‖ tells them apart: past the limit it grows by orders of magnitude, while stable runs
+/// keep it at the Baumgarte and truncation level, far below L/100 (measurements on the press:
+/// BENCHMARKS.md, "RK4 beyond its stability limit").
 /// The check sees the accepted states only: an RK4 stage state y_n + (h/2)k moves pinned points
 /// along tangents and violates Φ by about |a| h²/8 (1e-8 m at 0.15 ms on the press) without any
 /// instability.
@@ -92,7 +93,7 @@ pub const FILES: [&str; 4] = [
 /// probe: growth_bound 10, rel_tol 1e-4 (Rk4ProbeOptions)
 /// ```
 ///
-/// Source: the issue "Stiffness diagnostics".
+/// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Clone, Debug, PartialEq)]
 pub struct StiffnessSettings {
     /// Sample points along the run, both ends included (≥ 2).

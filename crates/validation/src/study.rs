@@ -11,21 +11,21 @@
 //!              the run's metrics window and, as extra output times, the revolution before)
 //! reference    every realisation again at rtol 1e-12, atol 1e-14 (convergence check), and
 //! loose        at rtol 1e-8, atol 1e-10 (to show what a looser tolerance changes)
-//! statistics   INTERFACES.md metrics of the last revolution + [`Deviations`]
+//! statistics   metrics of the last revolution (docs/outputs.md, "`metrics`") + [`Deviations`]
 //! claims       claims::evaluate on the ensemble means (and per realisation)
 //! files        DIR/figures/figNN[a-d].{svg,png} → DIR/report.md → DIR/study.json (last)
 //! ```
 //!
-//! The dry cases are chaotic (MODEL.md §9), which is why each case is an ensemble and the
+//! The dry cases are chaotic (docs/model.md §9), which is why each case is an ensemble and the
 //! claims compare statistics, never pointwise values. The realisations differ by a crank phase
 //! of micro-radians: physically nothing (r·Δθ = 15 nm per step), but more than the integration
 //! error at either setting (rtol·|q| ≈ 4e-11 m at rtol 1e-10), so that they are different
 //! trajectories rather than copies of one numerical trajectory, and a smooth change of every
 //! case alike (the journal's initial eccentricity is not perturbed: e = 0 is where the film's
-//! attitude angle is undefined, MODEL.md §2, and nanometre offsets there change the
+//! attitude angle is undefined, docs/model.md §2, and nanometre offsets there change the
 //! lubricated start discontinuously). Nothing is written if any run fails.
 //!
-//! Source: the paper's §4 and Figures 5–16; MODEL.md §5, §6, §9; INTERFACES.md (`metrics`).
+//! Source: the paper's §4 and Figures 5–16; docs/model.md §5, §6, §9; docs/outputs.md (`metrics`).
 
 pub mod claims;
 mod figures;
@@ -120,7 +120,7 @@ impl Settings {
 /// every case × realisations k = 0..N−1 (crank θ₀ = k·Δθ) × {settings, reference, loose}
 /// ```
 ///
-/// Source: this module (MODEL.md §9 for why an ensemble).
+/// Source: this module (docs/model.md §9 for why an ensemble).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Plan {
     /// Settings of the reported runs.
@@ -215,7 +215,7 @@ impl CaseResult {
 /// ```
 ///
 /// Source: this study's reading of the paper's §4 (the claims module says which claim uses
-/// which); MODEL.md §5 for the ideal mechanism.
+/// which); docs/model.md §5 for the ideal mechanism.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Deviations {
     /// max x_ideal − min x_ideal, m.
@@ -249,13 +249,14 @@ pub struct Deviations {
 /// The statistics of one realisation of one case.
 ///
 /// ```text
-/// metrics (INTERFACES.md, last revolution) + deviations from the ideal mechanism
+/// metrics (docs/outputs.md, "`metrics`": last revolution) + deviations from the ideal mechanism
 /// ```
 ///
-/// Source: INTERFACES.md (`metrics`); [`Deviations`].
+/// Source: docs/outputs.md (`metrics`); [`Deviations`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CaseStats {
-    /// The INTERFACES.md metrics (energy null: the study does not account energy).
+    /// The metrics of docs/outputs.md ("`metrics`"; energy null: the study does not account
+    /// energy).
     pub metrics: Metrics,
     /// Deviations from the ideal mechanism.
     pub dev: Deviations,
@@ -268,7 +269,7 @@ pub struct CaseStats {
 /// acc_spread = max_i ( max_k ẍ_k(t_i) − min_k ẍ_k(t_i) )  over the last revolution's grid
 /// ```
 ///
-/// Source: this module (MODEL.md §9: chaotic cases are compared through statistics).
+/// Source: this module (docs/model.md §9: chaotic cases are compared through statistics).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ensemble {
     /// One entry per realisation (k = 0 is the paper's case).
@@ -284,7 +285,7 @@ pub struct Ensemble {
 /// stats, events of realisation 0;  wall_time_s of realisation 0;  total_wall_time_s = Σ runs
 /// ```
 ///
-/// Source: `lash_solver::Stats`; INTERFACES.md (`wall_time_s`, `events`).
+/// Source: `lash_solver::Stats`; docs/outputs.md (`wall_time_s`, `events`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SolverRecord {
     /// The solver's counters.
@@ -303,7 +304,7 @@ pub struct SolverRecord {
 /// Dry (IMPACT + Coulomb) | Lubricated (long Gümbel film + contact) | Ideal (pin)
 /// ```
 ///
-/// Source: MODEL.md §3–§5.
+/// Source: docs/model.md §3–§5.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Kind {
@@ -994,7 +995,7 @@ mod tests {
         );
         // Stroke 2r: θ = 0 and π are grid points (i = 0, 1000, 2000).
         assert!((d.stroke - 0.03).abs() < 1e-15, "{}", d.stroke);
-        // Ideal peak |ẍ| at θ = 0: r ω² (1 + r/l) (MODEL.md §5: 3.85972 m/s² at 150 rpm).
+        // Ideal peak |ẍ| at θ = 0: r ω² (1 + r/l) (docs/model.md §5: 3.85972 m/s² at 150 rpm).
         assert!(
             (d.a_ideal_peak - 3.85972).abs() < 5e-6,
             "{}",
@@ -1130,7 +1131,7 @@ mod tests {
 
     #[test]
     fn ideal_run_reproduces_the_closed_form() {
-        // MODEL.md §5: ẍ(θ = 0) = −r ω² (1 + r/l) = −3.85972 m/s² at 150 rpm; the last grid
+        // docs/model.md §5: ẍ(θ = 0) = −r ω² (1 + r/l) = −3.85972 m/s² at 150 rpm; the last grid
         // point is θ = 4π. The run's RMS deviation from the closed form is the integration
         // error, far below the 1e-6 relative that M1 asks for.
         let cat: BTreeMap<String, Scene> =

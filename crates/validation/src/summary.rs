@@ -11,7 +11,7 @@
 //! final_state, reference_error   built-in test problems, else null
 //! ```
 //!
-//! Every key is always present (null when it does not apply). Source: INTERFACES.md
+//! Every key is always present (null when it does not apply). Source: docs/outputs.md
 //! (`summary.json`).
 
 use std::path::{Path, PathBuf};
@@ -49,7 +49,7 @@ pub fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
 /// fixed-step: controller = rtol = null, step = h;  adaptive: step = null
 /// ```
 ///
-/// Source: INTERFACES.md (`summary.json`, the same keys and meanings).
+/// Source: docs/outputs.md (`summary.json`, the same keys and meanings).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RunHeader {
     /// lash version.
@@ -100,7 +100,7 @@ impl RunHeader {
 ///   wall_time_s, events, metrics, final_state, reference_error }
 /// ```
 ///
-/// Source: INTERFACES.md (`summary.json`).
+/// Source: docs/outputs.md (`summary.json`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Summary {
     /// lash version string.

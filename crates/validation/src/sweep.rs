@@ -18,7 +18,7 @@
 //! merge(DIR...) = the result.json files found → one table (CSV + markdown)
 //! ```
 //!
-//! Source: INTERFACES.md ("Sweeps") and the issue "The lash command".
+//! Source: docs/outputs.md ("Sweeps").
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -48,7 +48,7 @@ pub const RESULT_FILE: &str = "result.json";
 /// shard I/N selects the points with index mod N = I,  0 ≤ I < N
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
     /// I, counting from 0.
@@ -93,7 +93,7 @@ impl fmt::Display for Shard {
 /// grid = speed_rpm × clearance × viscosity × stiffness × (method-dependent solver choices)
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash sweep`).
+/// Source: docs/outputs.md ("Sweeps": the sweep file).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
@@ -111,7 +111,7 @@ pub struct SweepFile {
     /// Contact stiffnesses K, N/m^1.5; each > 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<Vec<f64>>,
-    /// Methods (INTERFACES.md names).
+    /// Methods (names of docs/outputs.md, "Method and controller names").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub method: Option<Vec<Method>>,
     /// Relative tolerances of adaptive methods; each in [1e-14, 1).
@@ -120,7 +120,8 @@ pub struct SweepFile {
     /// Fixed steps of fixed-step methods, s; each > 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub step: Option<Vec<f64>>,
-    /// Controllers of our adaptive methods (INTERFACES.md names).
+    /// Controllers of our adaptive methods (names of docs/outputs.md, "Method and controller
+    /// names").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub controller: Option<Vec<ControllerKind>>,
 }
@@ -131,7 +132,7 @@ pub struct SweepFile {
 /// id = hex(sha256(canonical_json(self)))[..16]
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps": a directory named by a stable hash of its parameters).
+/// Source: docs/outputs.md ("Sweeps": a directory named by a stable hash of its parameters).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointParams {
     /// The base case's name (file stem or `testset:NAME`).
@@ -219,7 +220,7 @@ fn canonical(v: &Value) -> String {
 /// (index, id = PointParams::id(), params);  shard I/N runs it iff index mod N = I
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepPoint {
     /// Position in the grid (0-based), the index sharding uses.
@@ -236,7 +237,7 @@ pub struct SweepPoint {
 /// SWEEP.json + base case → points() = the grid of the module doc
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug)]
 pub struct SweepSpec {
     /// The parsed file.
@@ -465,7 +466,7 @@ fn check_file(f: &SweepFile) -> Result<(), Error> {
 ///
 /// A parameter the scene cannot take (no crank driver, no clearance joint, no film) is an
 /// input error; the scene is validated again when the point's mechanism is built.
-/// Source: INTERFACES.md ("Scene roles"), docs/scene-format.md.
+/// Source: docs/outputs.md ("Scene roles"), docs/scene-format.md.
 pub fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
     let bad = |m: &str| Err(Error::Input(format!("sweep: {m}")));
     if let Some(rpm) = p.speed_rpm {
@@ -539,7 +540,7 @@ pub fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
 /// values = flatten(object): {"a": {"b": 1}} → {"a.b": 1}; arrays kept as JSON text
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash merge` joins one table).
+/// Source: docs/outputs.md ("Sweeps": point files, merge).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PointResult {
     /// Column name → value (number, string, bool or null).
@@ -598,7 +599,7 @@ pub enum PointStatus {
 /// OUT/id/result.json = { id, index, params, status, error, values }
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps").
+/// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointRecord {
     /// The point's id (its directory name).
@@ -621,7 +622,7 @@ pub struct PointRecord {
 /// jobs threads (None = cores), shard I/N
 /// ```
 ///
-/// Source: the issue "The lash command".
+/// Source: docs/outputs.md ("Sweeps": `--jobs`, `--shard`).
 #[derive(Clone, Debug)]
 pub struct SweepOptions {
     /// Worker threads; None = one per core.
@@ -791,7 +792,7 @@ where
 /// rows    = one per distinct point id, sorted by (index, id)
 /// ```
 ///
-/// Source: INTERFACES.md ("Sweeps": `lash merge DIR...`).
+/// Source: docs/outputs.md ("Sweeps": `lash merge DIR...`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MergedTable {
     /// Column names.

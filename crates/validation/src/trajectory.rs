@@ -6,7 +6,7 @@
 //! ```
 //!
 //! A column whose role the scene does not declare is left empty. Numbers are written in the
-//! shortest form that reads back to the same f64. Source: INTERFACES.md (`trajectory.csv`).
+//! shortest form that reads back to the same f64. Source: docs/outputs.md (`trajectory.csv`).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -18,7 +18,7 @@ use crate::metrics::Sample;
 /// File name of the trajectory in an output directory.
 pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 
-/// The fixed columns, in order (INTERFACES.md).
+/// The fixed columns, in order (docs/outputs.md, "`trajectory.csv`").
 pub const COLUMNS: [&str; 13] = [
     "t",
     "crank_angle",
@@ -41,7 +41,7 @@ pub const COLUMNS: [&str; 13] = [
 /// header = COLUMNS, extra names...;  row i = fixed values, extra values[i]...
 /// ```
 ///
-/// Source: INTERFACES.md (`trajectory.csv`: extra columns after).
+/// Source: docs/outputs.md (`trajectory.csv`: extra columns after).
 #[derive(Clone, Copy, Debug)]
 pub struct Extra<'a> {
     /// Column name (no comma, quote or newline; not a fixed column's name).

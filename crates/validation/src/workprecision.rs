@@ -9,7 +9,7 @@
 //!        wp_rhs.{svg,png} (error vs RHS evaluations), wp_time.{svg,png} (error vs wall time)
 //! ```
 //!
-//! Source: the issue "The lash command" (`lash work-precision`); work–precision diagrams as in
+//! Source: docs/outputs.md ("`lash work-precision CASE`"); work–precision diagrams as in
 //! Hairer & Wanner, Solving ODEs II, §IV.10, and DiffEqDevTools' WorkPrecisionSet.
 
 use std::path::{Path, PathBuf};
@@ -56,7 +56,7 @@ pub const CONTROLLER_METHOD: Method = Method::Dop853;
 ///        (the controllers on one adaptive method of ours)
 /// ```
 ///
-/// Source: the issue "The lash command" (`lash work-precision`).
+/// Source: docs/outputs.md ("`lash work-precision CASE`").
 #[derive(Debug, Clone, PartialEq)]
 pub struct WorkPrecisionPlan {
     /// Methods, in the order given, no duplicates.

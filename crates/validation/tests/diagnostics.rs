@@ -85,7 +85,7 @@ fn linear_system_through_the_command_functions() {
 }
 
 /// The ideal press has no degree of freedom: every perturbation is a constraint violation,
-/// which obeys Φ̈ = −2α Φ̇ − β² Φ exactly (MODEL.md §1), with roots −α ± √(α² − β²). With
+/// which obeys Φ̈ = −2α Φ̇ − β² Φ exactly (docs/model.md §1), with roots −α ± √(α² − β²). With
 /// α = 5, β = 4 they are −2 and −8, so the largest Lyapunov exponent is −2. The estimate over
 /// the late half (revolutions 4–8 at 150 rpm, t ∈ [1.6, 3.2] s) is the slope of
 /// ln‖δy(t)‖ = −2t + ln‖M(t) v‖ + O(e^{−6t}); the first term is exact and the second is

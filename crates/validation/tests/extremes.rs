@@ -37,8 +37,9 @@ fn case_files_are_the_catalogue() {
     }
 }
 
-/// The scenes reach the corners the issue names: clearance 1e-9 … 1e-3 m (both readings of
-/// "1e-6 to 1 mm"), K 1e6 … 1e14, 1 … 2000 rpm, viscosity 1e-4 … 10 Pa·s, friction 0 … 0.5.
+/// The scenes reach the corners of the extremes matrix (module `extremes`; docs/outputs.md,
+/// "`lash extremes`"): clearance 1e-9 … 1e-3 m, K 1e6 … 1e14, 1 … 2000 rpm, viscosity
+/// 1e-4 … 10 Pa·s, friction 0 … 0.5.
 #[test]
 fn scenes_cover_the_corners() {
     let (mut c, mut k, mut rpm, mut visc, mut mu) = (vec![], vec![], vec![], vec![], vec![]);

@@ -11,7 +11,7 @@ fn default_run_compares_rk4_with_the_best_adaptive_method() {
     for c in &h.cases {
         let rk4 = &c.rk4;
         assert_eq!(rk4.method, Method::Rk4);
-        // RK4 runs without event location (MODEL.md §7).
+        // RK4 runs without event location (docs/model.md §7).
         assert_eq!(rk4.events, 0);
         // The adaptive method reached RK4's accuracy.
         assert!(
@@ -34,7 +34,7 @@ fn default_run_compares_rk4_with_the_best_adaptive_method() {
     assert!(lub.rk4.rhs_evals > 100 * lub.adaptive.rhs_evals);
     let m = lub.metrics.as_ref().unwrap();
     assert!(m.eps_max.unwrap() < 1.0 && m.contact_onsets == Some(0));
-    // The dry case is measured over the first half revolution (chaotic, MODEL.md §9).
+    // The dry case is measured over the first half revolution (chaotic, docs/model.md §9).
     assert_eq!(by("dry").window.label, "first half revolution");
     assert_eq!(by("ideal").window.label, "last revolution");
     for f in [

@@ -1,5 +1,5 @@
 //! The core runner on the paper's press and a built-in test problem: closed forms, physical
-//! expectations of MODEL.md §5–§9, the energy balance, and contact onsets against a tight
+//! expectations of docs/model.md §5–§9, the energy balance, and contact onsets against a tight
 //! reference (skipped impacts).
 
 use std::path::PathBuf;
@@ -37,7 +37,7 @@ fn onsets(r: &RunResult, t0: f64, t1: f64) -> Vec<f64> {
         .collect()
 }
 
-/// MODEL.md §5: ẍ(θ=0) = −r ω² (1 + r/l) for r = 15 mm, l = 350 mm; the closed form derived
+/// docs/model.md §5: ẍ(θ=0) = −r ω² (1 + r/l) for r = 15 mm, l = 350 mm; the closed form derived
 /// from the press scenes (these checks moved here with the model's `IdealSliderCrank`).
 #[test]
 fn ideal_slider_crank_of_the_press_scenes_has_the_closed_form_values() {
@@ -76,7 +76,7 @@ fn ideal_press_follows_the_closed_form_and_conserves_energy() {
     let m = r.summary.metrics.as_ref().unwrap();
     // The ideal mechanism is the closed form: only the integration error remains.
     assert!(m.slider_acc_rms_dev_ideal.unwrap() < 1e-9, "{m:?}");
-    // Extremes at the dead centres (MODEL.md §5): θ = 0 → −3.85972, θ = π → rω²(1 − r/l).
+    // Extremes at the dead centres (docs/model.md §5): θ = 0 → −3.85972, θ = π → rω²(1 − r/l).
     assert!((m.slider_acc_min.unwrap() + 3.85972).abs() < 1e-5);
     let w2 = (5.0 * std::f64::consts::PI).powi(2);
     assert!((m.slider_acc_max.unwrap() - 0.015 * w2 * (1.0 - 0.015 / 0.35)).abs() < 1e-6);
@@ -114,7 +114,7 @@ fn lubricated_press_film_carries_the_load() {
     let p = case("lubricated_150rpm_c0.1");
     let r = run(&p, Method::Bdf, 1e-8, None);
     let m = r.summary.metrics.as_ref().unwrap();
-    // MODEL.md §9: the journal never touches the bearing; the slider stays within about
+    // docs/model.md §9: the journal never touches the bearing; the slider stays within about
     // 1e-3 m/s² RMS of the ideal mechanism.
     let eps = m.eps_max.unwrap();
     assert!(eps > 0.3 && eps < 1.0, "{eps}");
@@ -133,7 +133,7 @@ fn lubricated_press_film_carries_the_load() {
     assert!(e.quadrature_error < 1e-6 * e.dissipated_film, "{e:?}");
 }
 
-/// MODEL.md §7: missed events show up as skipped impacts. The dry press is chaotic (§9), so
+/// docs/model.md §7: missed events show up as skipped impacts. The dry press is chaotic (§9), so
 /// runs are compared where trajectories still agree: the first revolution for the default
 /// method at rtol 1e-10 (its other settings the defaults: event samples, h_max), the first
 /// half for every adaptive method at rtol 1e-6.
@@ -169,7 +169,7 @@ fn dry_press_energy_balance_and_rk4_crossings() {
     let p = case("dry_150rpm_c0.1");
     let r = run(&p, Method::Dop853, 1e-10, None);
     let m = r.summary.metrics.as_ref().unwrap();
-    // MODEL.md §9: deeper than the clearance, contact force above 30 kN.
+    // docs/model.md §9: deeper than the clearance, contact force above 30 kN.
     assert!(
         m.eps_max.unwrap() > 2.0 && m.contact_force_max.unwrap() > 3e4,
         "{m:?}"

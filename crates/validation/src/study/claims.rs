@@ -1,5 +1,5 @@
-//! The paper's qualitative claims of §4 (and MODEL.md's cross-checks), each turned into a
-//! criterion on the measured statistics and decided from them.
+//! The paper's qualitative claims of §4 (and the cross-checks of docs/model.md §5, §9), each turned
+//! into a criterion on the measured statistics and decided from them.
 //!
 //! ```text
 //! value(case, q)   = mean over the case's realisations of q          (the verdict)
@@ -8,7 +8,7 @@
 //! realisations     = #{k : criterion true on realisation k} of N
 //! ```
 //!
-//! The dry cases are chaotic (MODEL.md §9): one revolution's maximum, RMS or count depends on
+//! The dry cases are chaotic (docs/model.md §9): one revolution's maximum, RMS or count depends on
 //! the realisation, so every case runs as an ensemble of realisations that differ only by a
 //! micro-radian of initial crank phase, and the claims compare ensemble means. A case with one
 //! realisation (the ideal mechanism, deterministic) takes part in every one.
@@ -20,7 +20,7 @@
 //! chaotic" = the realisations' pointwise acceleration spread below 0.1 % of the ideal peak;
 //! "periodic" = the last revolution's orbit within 5 % of c of the previous one.
 //!
-//! Source: the paper's §4 (quoted per claim), MODEL.md §5 and §9.
+//! Source: the paper's §4 (quoted per claim), docs/model.md §5 and §9.
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -85,11 +85,11 @@ pub const PERIODIC: f64 = 0.05;
 /// A statistic of one realisation of one case that a claim reads.
 ///
 /// ```text
-/// INTERFACES.md metrics (slider_acc_rms_dev_ideal, eps_max, ...) and the study's deviations
+/// metrics of docs/outputs.md (slider_acc_rms_dev_ideal, eps_max, ...) and the study's deviations
 /// (x_dev_max = max |x − x_ideal|, ...); acc_spread = max_i (max_k ẍ_k,i − min_k ẍ_k,i)
 /// ```
 ///
-/// Source: INTERFACES.md (`metrics`); this module's [`super::Deviations`].
+/// Source: docs/outputs.md (`metrics`); this module's [`super::Deviations`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantity {
     /// `slider_acc_rms_dev_ideal`, m/s².
@@ -220,7 +220,7 @@ impl Verdict {
 /// Where a claim comes from.
 ///
 /// ```text
-/// Paper = a sentence of the paper's §4;  Model = a statement of MODEL.md (§5, §9)
+/// Paper = a sentence of the paper's §4;  Model = a statement of docs/model.md (§5, §9)
 /// ```
 ///
 /// Source: this module.
@@ -229,7 +229,7 @@ impl Verdict {
 pub enum Origin {
     /// The paper's §4.
     Paper,
-    /// MODEL.md.
+    /// A statement of docs/model.md (§5, §9).
     Model,
 }
 
@@ -258,12 +258,12 @@ pub struct Number {
 /// statement, quoted source, criterion → numbers → verdict; realisations_holding of realisations
 /// ```
 ///
-/// Source: the paper's §4 (quoted in `source`) or MODEL.md.
+/// Source: the paper's §4 (quoted in `source`) or docs/model.md §5, §9.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Claim {
-    /// Identifier (P1, P2, ... paper; M1, ... MODEL.md).
+    /// Identifier (P1, P2, ... paper; M1, ... docs/model.md §5, §9).
     pub id: String,
-    /// Paper or MODEL.md.
+    /// Paper or docs/model.md.
     pub origin: Origin,
     /// The figure(s) the claim is about.
     pub figure: String,
@@ -736,7 +736,7 @@ const DEFS: &[Def] = &[
         statement: "Lubricated, 150 rpm: the orbit is periodic at every clearance.",
         source: "Then, the regularity and periodicity of motion are presented.",
         criterion: "max |e(t) − e(t − T)| / c over the last revolution < 0.05 at every clearance (lubricated, 150 rpm).",
-        note: "The journal starts centred (MODEL.md §6) and sinks into the film over several revolutions, so a large gap after two revolutions can be a transient that has not settled rather than an aperiodic orbit.",
+        note: "The journal starts centred (docs/model.md §6) and sinks into the film over several revolutions, so a large gap after two revolutions can be a transient that has not settled rather than an aperiodic orbit.",
         eval: |v| {
             Ok(v
                 .all(&LUB_CLEARANCES, Quantity::OrbitClosure)?
@@ -749,7 +749,7 @@ const DEFS: &[Def] = &[
         origin: Origin::Model,
         figure: "—",
         statement: "The ideal mechanism's runs reproduce the closed-form slider acceleration.",
-        source: "Without clearance, the slider obeys the closed form (crank angle θ = ωt, S = sqrt(l² − r² sin²θ)) (MODEL.md §5)",
+        source: "Without clearance, the slider obeys the closed form (crank angle θ = ωt, S = sqrt(l² − r² sin²θ)) (docs/model.md §5)",
         criterion: "slider_acc_rms_dev_ideal < 1e-6 × the ideal peak for the four ideal runs.",
         note: "",
         eval: |v| {
@@ -765,7 +765,7 @@ const DEFS: &[Def] = &[
         origin: Origin::Model,
         figure: "Fig. 7(b)",
         statement: "Dry, 150 rpm, 0.1 mm: contact penetrates deeper than the clearance (|e|/c above 2, contact force above 30 kN).",
-        source: "With the paper's soft K = 2.34e10 N/m^1.5 and the heavy slider, dry contact penetrates deeper than the clearance itself at 150 rpm, 0.1 mm (|e|/c above 2, contact force above 30 kN) (MODEL.md §9)",
+        source: "With the paper's soft K = 2.34e10 N/m^1.5 and the heavy slider, dry contact penetrates deeper than the clearance itself at 150 rpm, 0.1 mm (|e|/c above 2, contact force above 30 kN) (docs/model.md §9)",
         criterion: "eps_max > 2 and contact_force_max > 3e4 N (dry_150rpm_c0.1).",
         note: "",
         eval: |v| {
@@ -778,7 +778,7 @@ const DEFS: &[Def] = &[
         origin: Origin::Model,
         figure: "Fig. 9(b), 10(b)",
         statement: "Lubricated, 150 rpm, 0.1 mm: the journal never touches the bearing and ẍ stays within about 1e-3 m/s² RMS of the ideal.",
-        source: "With the film of §6, the lubricated 150 rpm, 0.1 mm journal never touches the bearing; its slider acceleration stays within about 1e-3 m/s² RMS of the ideal mechanism (MODEL.md §9)",
+        source: "With the film of §6, the lubricated 150 rpm, 0.1 mm journal never touches the bearing; its slider acceleration stays within about 1e-3 m/s² RMS of the ideal mechanism (docs/model.md §9)",
         criterion: "eps_max < 1 and slider_acc_rms_dev_ideal < 2e-3 m/s² (lubricated_150rpm_c0.1).",
         note: "",
         eval: |v| {
@@ -791,7 +791,7 @@ const DEFS: &[Def] = &[
         origin: Origin::Model,
         figure: "Fig. 6(b)",
         statement: "Dry, 150 rpm, 0.1 mm is chaotic: micro-radian changes of the initial crank phase change the second revolution's acceleration visibly.",
-        source: "The dry cases are chaotic. At 150 rpm with 0.1 mm clearance, moving the slider's initial position by 1e-15 m changes the slider acceleration by about 1e-5 m/s² within the first revolution and by about 4e-2 m/s² by the end of the second. (MODEL.md §9)",
+        source: "The dry cases are chaotic. At 150 rpm with 0.1 mm clearance, moving the slider's initial position by 1e-15 m changes the slider acceleration by about 1e-5 m/s² within the first revolution and by about 4e-2 m/s² by the end of the second. (docs/model.md §9)",
         criterion: "The realisations' pointwise spread of ẍ over the last revolution exceeds 1e-2 m/s² (dry_150rpm_c0.1).",
         note: "",
         eval: |v| Ok(v.get(DRY_SPEEDS[1], Quantity::AccSpread)? > 1e-2),
