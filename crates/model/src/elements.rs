@@ -25,7 +25,7 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::laws::{FrictionLaw, NormalLaw};
-use crate::mechanism::{cross, dot, perp, rot};
+use crate::mechanism::{dot, perp, rot};
 use crate::scene::{
     invalid, object, tagged_object, variant, Attachment, Checker, FrictionSpec, JointSpec,
     NormalSpec, Scene, SceneError, GROUND, PATH_MARK,
