@@ -438,42 +438,56 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
     // Velocities: one mass-weighted projection (Φ̇ is affine in q̇), then verify.
     let mut all = rows.clone();
     all.extend(vrows.iter().map(|v| v.0.clone()));
-    let vfail = |mech: &Mechanism, phid: &[f64], jac: &Mat<f64>, it: usize| {
-        let (i, v) = worst(phid);
-        if i >= rows.len() {
-            let (_, path, what) = &vrows[i - rows.len()];
-            return Err(SceneError::Assembly {
-                path: path.clone(),
-                reason: format!(
-                    "velocities: {what} cannot be met together with the constraints and the \
-                     other initial velocities (residual {v:.3e})"
-                ),
-            });
-        }
-        fail(mech, phid, jac, "velocities", it)
-    };
-    let (_, phid, jac) = eval(mech, &all, t0, &y);
     // J M^{-1/2}: the projection of least kinetic energy (docs/model.md §1).
     let w: Vec<f64> = mech.minv.iter().map(|v| v.sqrt()).collect();
-    let mut jw = jac.clone();
-    for r in 0..jw.nrows() {
-        for c in 0..nq {
-            jw[(r, c)] *= w[c];
+    // The projected state and whether it meets the equations `eqs`.
+    let project = |eqs: &[Row], y: &[f64]| -> (Vec<f64>, bool) {
+        let mut y = y.to_vec();
+        let (_, phid, jac) = eval(mech, eqs, t0, &y);
+        let mut jw = jac.clone();
+        for r in 0..jw.nrows() {
+            for c in 0..nq {
+                jw[(r, c)] *= w[c];
+            }
         }
-    }
-    let Some(dv) = pinv_apply(&jw, &phid) else {
-        return vfail(mech, &phid, &jac, 0);
+        let Some(dv) = pinv_apply(&jw, &phid) else {
+            return (y, false);
+        };
+        for j in 0..nq {
+            y[nq + j] -= w[j] * dv[j];
+        }
+        let (_, phid, _) = eval(mech, eqs, t0, &y);
+        let (_, verr) = worst(&phid);
+        let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // A huge velocity guess (1e308) overflows in the projection: never a non-finite y0.
+        (y.clone(), vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax))
     };
-    for j in 0..nq {
-        y[nq + j] -= w[j] * dv[j];
+    let (yp, ok) = project(&all, &y);
+    if !ok {
+        // Blame the first exact initial velocity that the constraints (and the ones before it)
+        // cannot meet; else the constraints themselves.
+        for m in 1..=vrows.len() {
+            let mut eqs = rows.clone();
+            eqs.extend(vrows[..m].iter().map(|v| v.0.clone()));
+            let (ym, okm) = project(&eqs, &y);
+            if !okm {
+                let (_, path, what) = &vrows[m - 1];
+                let (_, phid, _) = eval(mech, &eqs, t0, &ym);
+                return Err(SceneError::Assembly {
+                    path: path.clone(),
+                    reason: format!(
+                        "velocities: {what} cannot be met together with the constraints and \
+                         the initial velocities before it (residual {:.3e})",
+                        worst(&phid).1
+                    ),
+                });
+            }
+        }
+        let (_, phid, jac) = eval(mech, &all, t0, &yp);
+        return fail(mech, &phid, &jac, "velocities", 1);
     }
-    let (_, phid, jac) = eval(mech, &all, t0, &y);
-    let (_, verr) = worst(&phid);
-    let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    // A huge velocity guess (1e308) overflows in the projection: never return a non-finite y0.
-    if !(vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax)) {
-        return vfail(mech, &phid, &jac, 1);
-    }
+    y = yp;
+    let (_, _, jac) = eval(mech, &all, t0, &y);
     // Rank of the ideal equations (the KKT system) at the assembled state.
     let m = mech.rows.len();
     let ideal = jac.subrows(0, m).to_owned();

@@ -145,8 +145,10 @@ pub struct TableSpec {
 ///
 /// ```text
 /// always    f(s) as given
-/// opposing  f(s) while the load opposes the motion (F·v < 0 for a force, τ φ̇ < 0 for a
-///           torque), 0 otherwise: a load that is only ever a resistance (a punch cutting)
+/// opposing  r(v) f(s) while the load opposes the motion (F·v < 0 for a force, τ φ̇ < 0 for a
+///           torque), 0 otherwise: a load that is only ever a resistance (a punch cutting);
+///           r(v) = min(|v| / v_ramp, 1) with v = d̂·ṙ^P (m/s) or φ̇ (rad/s), so that the
+///           load fades in from rest like the friction law's c_d (no sticking at v = 0)
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -265,6 +267,13 @@ pub struct ForceSpec {
     /// When it acts. Default `always`.
     #[serde(default)]
     pub acts: Acts,
+    /// v_ramp of an opposing load (m/s), ≥ 0. Default 1e-4.
+    #[serde(default = "default_ramp")]
+    pub ramp_speed: f64,
+}
+
+fn default_ramp() -> f64 {
+    1e-4
 }
 
 /// An applied torque on a body (docs/model.md §10.3).
@@ -288,6 +297,9 @@ pub struct TorqueSpec {
     /// When it acts. Default `always`.
     #[serde(default)]
     pub acts: Acts,
+    /// v_ramp of an opposing torque (rad/s), ≥ 0. Default 1e-4.
+    #[serde(default = "default_ramp")]
+    pub ramp_speed: f64,
 }
 
 /// A motor: a torque between a rotor and a stator from its torque–speed curve (docs/model.md
@@ -703,10 +715,12 @@ pub(crate) fn validate_forces(scene: &Scene) -> Result<(), SceneError> {
                     ));
                 }
                 check_value_or_table(scene, &p, s.value, &s.table)?;
+                C::non_negative(&format!("{p}.ramp_speed"), s.ramp_speed, "ramp speed")?;
             }
             ForceElementSpec::Torque(s) => {
                 check_moving(scene, &format!("{p}.body"), &s.body)?;
                 check_value_or_table(scene, &p, s.value, &s.table)?;
+                C::non_negative(&format!("{p}.ramp_speed"), s.ramp_speed, "ramp speed")?;
             }
             ForceElementSpec::Motor(s) => {
                 check_moving(scene, &format!("{p}.rotor"), &s.rotor)?;
@@ -1048,12 +1062,13 @@ pub(crate) enum Kind {
         dir: [f64; 2],
         body_frame: bool,
         law: Law,
-        opposing: bool,
+        /// v_ramp of an opposing load; None: always acts.
+        opposing: Option<f64>,
     },
     Torque {
         body: usize,
         law: Law,
-        opposing: bool,
+        opposing: Option<f64>,
     },
     Motor {
         rotor: usize,
@@ -1094,6 +1109,20 @@ impl Element {
             Kind::Torque { .. } => &["torque"],
             Kind::Motor { .. } => &["torque", "speed"],
         }
+    }
+}
+
+/// r(v) of an opposing load f at speed v along it: min(|v|/v_ramp, 1) when f v < 0, else 0.
+#[inline]
+fn opposing_factor(f: f64, v: f64, ramp: f64) -> f64 {
+    if f * v < 0.0 {
+        if v.abs() >= ramp {
+            1.0
+        } else {
+            v.abs() / ramp
+        }
+    } else {
+        0.0
     }
 }
 
@@ -1248,9 +1277,8 @@ impl Element {
                 let k = p.body.expect("forces act on bodies");
                 let d = if *body_frame { rot(cs[k], *dir) } else { *dir };
                 let mut f = law.value(t, pose, vel, cs);
-                let power = f * dot(d, v);
-                if *opposing && !(power < 0.0) {
-                    f = 0.0;
+                if let Some(ramp) = opposing {
+                    f *= opposing_factor(f, dot(d, v), *ramp);
                 }
                 apply((k, arm, [f * d[0], f * d[1]], 0.0));
                 out.load = f;
@@ -1263,8 +1291,8 @@ impl Element {
             } => {
                 let w = vel[*body][2];
                 let mut tau = law.value(t, pose, vel, cs);
-                if *opposing && !(tau * w < 0.0) {
-                    tau = 0.0;
+                if let Some(ramp) = opposing {
+                    tau *= opposing_factor(tau, w, *ramp);
                 }
                 apply((*body, [0.0; 2], [0.0; 2], tau));
                 out.load = tau;
@@ -1595,13 +1623,13 @@ pub(crate) fn compile(scene: &Scene, initial: &dyn Fn(&Input) -> f64) -> Vec<Ele
                         dir: [s.direction[0] / l, s.direction[1] / l],
                         body_frame: s.frame == Frame::Body,
                         law: law(s.value, &s.table),
-                        opposing: s.acts == Acts::Opposing,
+                        opposing: (s.acts == Acts::Opposing).then_some(s.ramp_speed),
                     }
                 }
                 ForceElementSpec::Torque(s) => Kind::Torque {
                     body: scene.body_index(&s.body).expect("validated"),
                     law: law(s.value, &s.table),
-                    opposing: s.acts == Acts::Opposing,
+                    opposing: (s.acts == Acts::Opposing).then_some(s.ramp_speed),
                 },
                 ForceElementSpec::Motor(s) => {
                     let curve = match &s.torque_speed {
