@@ -460,7 +460,10 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         let (_, verr) = worst(&phid);
         let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
         // A huge velocity guess (1e308) overflows in the projection: never a non-finite y0.
-        (y.clone(), vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax))
+        (
+            y.clone(),
+            vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax),
+        )
     };
     let (yp, ok) = project(&all, &y);
     if !ok {

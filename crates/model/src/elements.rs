@@ -12,8 +12,8 @@
 //!        a joint's relative coordinate | a spring's length
 //! ```
 //! The scene types (`*Spec`) are read and validated here (docs/scene-format.md, "Force
-//! elements" and "Prismatic clearance joint"); the compiled elements ([`Element`],
-//! [`Prismatic`]) are what the mechanism evaluates. A scene without them runs none of this code.
+//! elements" and "Prismatic clearance joint"); the compiled elements (`Element`,
+//! `Prismatic`) are what the mechanism evaluates. A scene without them runs none of this code.
 //!
 //! Sources: docs/model.md §10–§11; Flores, Leine and Glocker, Multibody Syst. Dyn. 23 (2010)
 //! 165–190 (the block-in-guide geometry); Nikravesh, Computer-Aided Analysis of Mechanical
@@ -689,7 +689,10 @@ pub(crate) fn validate_forces(scene: &Scene) -> Result<(), SceneError> {
                 if s.a == s.b {
                     return Err(invalid(
                         format!("{p}.b"),
-                        format!("a rotational spring needs two different bodies, both are '{}'", s.a),
+                        format!(
+                            "a rotational spring needs two different bodies, both are '{}'",
+                            s.a
+                        ),
                     ));
                 }
                 check_stiffness_or_curve(&p, s.stiffness, &s.curve, "torque–angle")?;
@@ -735,7 +738,9 @@ pub(crate) fn validate_forces(scene: &Scene) -> Result<(), SceneError> {
                     || s.no_load_speed.is_some()
                     || s.no_load_rpm.is_some();
                 match (&s.torque_speed, line) {
-                    (Some(c), false) => check_curve(&format!("{p}.torque_speed.points"), &c.points)?,
+                    (Some(c), false) => {
+                        check_curve(&format!("{p}.torque_speed.points"), &c.points)?
+                    }
                     (Some(_), true) => {
                         return Err(invalid(
                             format!("{p}.torque_speed"),
@@ -751,23 +756,20 @@ pub(crate) fn validate_forces(scene: &Scene) -> Result<(), SceneError> {
                             ));
                         };
                         C::finite(&format!("{p}.stall_torque"), ts)?;
-                        let (w0, wp) = match (s.no_load_speed, s.no_load_rpm) {
-                            (Some(w), None) => (w, "no_load_speed"),
-                            (None, Some(n)) => (n, "no_load_rpm"),
-                            (Some(_), Some(_)) => {
-                                return Err(invalid(
+                        let (w0, wp) =
+                            match (s.no_load_speed, s.no_load_rpm) {
+                                (Some(w), None) => (w, "no_load_speed"),
+                                (None, Some(n)) => (n, "no_load_rpm"),
+                                (Some(_), Some(_)) => return Err(invalid(
                                     format!("{p}.no_load_rpm"),
                                     "give either no_load_speed (rad/s) or no_load_rpm, not both",
-                                ))
-                            }
-                            (None, None) => {
-                                return Err(invalid(
+                                )),
+                                (None, None) => return Err(invalid(
                                     format!("{p}.no_load_speed"),
                                     "the motor line T_s (1 − ω/ω₀) needs no_load_speed (rad/s) \
                                      or no_load_rpm",
-                                ))
-                            }
-                        };
+                                )),
+                            };
                         C::finite(&format!("{p}.{wp}"), w0)?;
                         if w0 == 0.0 {
                             return Err(invalid(format!("{p}.{wp}"), "must not be 0"));
@@ -895,7 +897,9 @@ pub(crate) fn validate_prismatic(
     C::finite(&format!("{p}.initial_tilt"), s.initial_tilt)?;
     C::finite(&format!("{p}.initial_offset_rate"), s.initial_offset_rate)?;
     C::finite(&format!("{p}.initial_tilt_rate"), s.initial_tilt_rate)?;
-    let tilt_max = (s.guide.width / s.block.length.hypot(s.block.width)).min(1.0).asin();
+    let tilt_max = (s.guide.width / s.block.length.hypot(s.block.width))
+        .min(1.0)
+        .asin();
     if !(s.initial_tilt.abs() < std::f64::consts::FRAC_PI_4) {
         return Err(invalid(
             format!("{p}.initial_tilt"),
@@ -1026,7 +1030,11 @@ pub(crate) enum Input {
     /// φ_a − φ_b of a revolute joint (None: the ground).
     Relative(Option<usize>, Option<usize>),
     /// u·(r^P − o) along a line.
-    Along { p: Pt, o: [f64; 2], u: [f64; 2] },
+    Along {
+        p: Pt,
+        o: [f64; 2],
+        u: [f64; 2],
+    },
     /// |r_b − r_a| of two points.
     Length(Pt, Pt),
 }
@@ -1157,7 +1165,13 @@ fn omega_of(b: Option<usize>, vel: &[[f64; 3]]) -> f64 {
 
 impl Input {
     #[inline]
-    pub(crate) fn value(&self, t: f64, pose: &[[f64; 3]], vel: &[[f64; 3]], cs: &[[f64; 2]]) -> f64 {
+    pub(crate) fn value(
+        &self,
+        t: f64,
+        pose: &[[f64; 3]],
+        vel: &[[f64; 3]],
+        cs: &[[f64; 2]],
+    ) -> f64 {
         match *self {
             Input::Time => t,
             Input::X(p) => point_state(&p, pose, vel, cs).0[0],
@@ -1540,7 +1554,9 @@ pub(crate) fn compile(scene: &Scene, initial: &dyn Fn(&Input) -> f64) -> Vec<Ele
             InputSpec::Angle(b) => Input::Angle(scene.body_index(&b.body).expect("validated")),
             InputSpec::Joint(j) => {
                 match &scene.joints[scene.joint_index(&j.joint).expect("validated")] {
-                    JointSpec::Revolute(r) => Input::Relative(body_opt(&r.a.body), body_opt(&r.b.body)),
+                    JointSpec::Revolute(r) => {
+                        Input::Relative(body_opt(&r.a.body), body_opt(&r.b.body))
+                    }
                     JointSpec::Translational(tr) => {
                         let k = scene.body_index(&tr.body).expect("validated");
                         let l = tr.direction[0].hypot(tr.direction[1]);
@@ -1618,7 +1634,9 @@ pub(crate) fn compile(scene: &Scene, initial: &dyn Fn(&Input) -> f64) -> Vec<Ele
                     Kind::Force {
                         p: Pt {
                             body: Some(k),
-                            s: s.point.as_ref().map_or([0.0; 2], |p| scene.bodies[k].points[p]),
+                            s: s.point
+                                .as_ref()
+                                .map_or([0.0; 2], |p| scene.bodies[k].points[p]),
                         },
                         dir: [s.direction[0] / l, s.direction[1] / l],
                         body_frame: s.frame == Frame::Body,

@@ -67,8 +67,8 @@ pub mod mechanism;
 pub mod outputs;
 pub mod scene;
 
-pub use mechanism::Mechanism;
 pub use assembly::{CoordinateChange, ProjectionReport};
+pub use mechanism::Mechanism;
 pub use outputs::{
     BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,
     PowerTerms, PrismaticOutput, Roles,

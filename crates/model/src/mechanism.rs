@@ -532,7 +532,8 @@ impl Mechanism {
         for e in &mut self.elements {
             match &mut e.kind {
                 crate::elements::Kind::Spring { a, b, l0, .. } if l0.is_nan() => {
-                    *l0 = crate::elements::Input::Length(*a, *b).value(t0, &sc.pose, &sc.vel, &sc.cs);
+                    *l0 =
+                        crate::elements::Input::Length(*a, *b).value(t0, &sc.pose, &sc.vel, &sc.cs);
                 }
                 crate::elements::Kind::RotSpring { a, b, theta0, .. } if theta0.is_nan() => {
                     *theta0 = crate::elements::Input::Relative(Some(*a), *b)

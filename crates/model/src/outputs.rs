@@ -157,13 +157,8 @@ pub const CLEARANCE_COLUMNS: [&str; 6] = [
 /// Column suffix of a driver.
 pub const DRIVER_COLUMNS: [&str; 1] = ["torque"];
 /// Column suffixes of a prismatic clearance joint, in the order of [`Outputs::column_values`].
-pub const PRISMATIC_COLUMNS: [&str; 5] = [
-    "offset",
-    "tilt",
-    "delta",
-    "contact_force",
-    "friction_force",
-];
+pub const PRISMATIC_COLUMNS: [&str; 5] =
+    ["offset", "tilt", "delta", "contact_force", "friction_force"];
 
 /// One force element at one instant (docs/model.md §10).
 ///
@@ -179,7 +174,7 @@ pub struct ElementOutput {
     /// Element name.
     pub name: String,
     /// Column suffixes of the element (`force`, `length`; `torque`, `angle`; `force`;
-    /// `torque`; `torque`, `speed`), in the order of [`ElementOutput::values`].
+    /// `torque`; `torque`, `speed`): the first is `load`, the second `coordinate`.
     pub columns: &'static [&'static str],
     /// The element's force or torque.
     pub load: f64,
@@ -349,13 +344,7 @@ impl Outputs {
             }
         }
         for p in &self.prismatic {
-            out.extend_from_slice(&[
-                p.offset,
-                p.tilt,
-                p.delta,
-                p.contact_force,
-                p.friction_force,
-            ]);
+            out.extend_from_slice(&[p.offset, p.tilt, p.delta, p.contact_force, p.friction_force]);
         }
     }
 }

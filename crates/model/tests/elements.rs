@@ -25,7 +25,7 @@ fn build(v: &Value) -> Mechanism {
 fn error_of(v: &Value) -> SceneError {
     match Scene::from_json_str(&v.to_string()) {
         Err(e) => e,
-        Ok(s) => Mechanism::from_scene(&s).err().expect("the scene must be rejected"),
+        Ok(s) => Mechanism::from_scene(&s).expect_err("the scene must be rejected"),
     }
 }
 
@@ -78,7 +78,9 @@ fn a_mass_on_a_spring_damper_oscillates_and_decays_as_the_closed_form() {
     let wd = w * (1.0 - zeta * zeta).sqrt();
     let exact = |t: f64| {
         let a = x0 - l0;
-        l0 + a * (-zeta * w * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
+        l0 + a
+            * (-zeta * w * t).exp()
+            * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
     };
     let times: Vec<f64> = (1..=20).map(|i| i as f64 * 0.05).collect();
     // An explicit and an implicit method (the latter uses the Jacobian of the elements).
@@ -134,7 +136,10 @@ fn a_pendulum_on_a_torsion_spring_swings_at_its_closed_form_frequency() {
         let o = mech.outputs(t, sol.state(i));
         let th = o.bodies[0].theta;
         let exact = theta0 + amp * (w * t).cos();
-        assert!((th - exact).abs() < 1e-8, "t = {t}: θ = {th}, closed form {exact}");
+        assert!(
+            (th - exact).abs() < 1e-8,
+            "t = {t}: θ = {th}, closed form {exact}"
+        );
         // Its columns: τ = k (θ − θ₀), θ; energy ½ I_O θ̇² + ½ k (θ − θ₀)² constant.
         let e = &o.elements[0];
         assert!((e.load - k * (th - theta0)).abs() < 1e-12);
@@ -277,7 +282,11 @@ fn a_motor_reaches_its_no_load_speed_from_its_stall_torque() {
         for (i, &t) in sol.t.iter().enumerate() {
             let o = mech.outputs(t, sol.state(i));
             let w = o.bodies[0].omega;
-            assert!((w - exact(t)).abs() < 1e-7 * w0, "t = {t}: ω = {w}, closed form {}", exact(t));
+            assert!(
+                (w - exact(t)).abs() < 1e-7 * w0,
+                "t = {t}: ω = {w}, closed form {}",
+                exact(t)
+            );
             assert!((o.elements[0].coordinate - w).abs() < 1e-15);
             assert!((o.elements[0].load - ts * (1.0 - w / w0)).abs() < 1e-9 * ts);
         }
@@ -315,12 +324,18 @@ fn a_block_hitting_a_guide_face_is_the_one_dof_hertz_impact() {
     ));
     // The initial relative velocity is exactly what the scene asks (no silent projection).
     let y0 = mech.initial_state();
-    assert!(y0[3] == 0.0 && (y0[4] - v).abs() < 1e-15 && y0[5] == 0.0, "{y0:?}");
+    assert!(
+        y0[3] == 0.0 && (y0[4] - v).abs() < 1e-15 && y0[5] == 0.0,
+        "{y0:?}"
+    );
     // The report says what the projection did: the block's guess ẏ = 0 became the joint's rate.
     let rep = mech.projection_report();
     assert_eq!(rep.changes.len(), 1, "{rep}");
     let ch = &rep.changes[0];
-    assert_eq!((ch.body.as_str(), ch.coordinate, ch.given), ("block", "vy", 0.0));
+    assert_eq!(
+        (ch.body.as_str(), ch.coordinate, ch.given),
+        ("block", "vy", 0.0)
+    );
     assert!((ch.assembled - v).abs() < 1e-15);
     assert!((rep.kinetic_energy_assembled - 0.5 * 2.0 * v * v).abs() < 1e-12);
     // Both upper corners touch at once: m δ̈ = −2 K δ^{3/2} after the flight c / v.
@@ -342,7 +357,13 @@ fn a_block_hitting_a_guide_face_is_the_one_dof_hertz_impact() {
         let h = 1.0 / n as f64;
         (0..=n)
             .map(|i| {
-                let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
                 w * f(i as f64 * h)
             })
             .sum::<f64>()
@@ -384,7 +405,11 @@ fn a_block_hitting_a_guide_face_is_the_one_dof_hertz_impact() {
     let sol2 = solve(&mech, (0.0, t_end), &y0, &opts).unwrap();
     let o = mech.outputs(tm, sol2.state(0));
     let p = &o.prismatic[0];
-    assert!((p.delta - d_max).abs() < 1e-6 * d_max, "δ = {}, δ_max = {d_max}", p.delta);
+    assert!(
+        (p.delta - d_max).abs() < 1e-6 * d_max,
+        "δ = {}, δ_max = {d_max}",
+        p.delta
+    );
     let f_max = k2 * d_max.powf(1.5);
     assert!((p.contact_force - f_max).abs() < 1e-5 * f_max);
     assert!(p.tilt.abs() < 1e-12 && (p.offset - (c + d_max)).abs() < 1e-6 * d_max);
@@ -477,7 +502,8 @@ fn the_energy_balance_closes_with_every_new_element() {
     let n = mech.dim();
     let (ya, yb) = (&y0[..n], &sol.y_final[..n]);
     let (o0, o1) = (mech.outputs(0.0, ya), mech.outputs(0.4, yb));
-    let change = (o1.kinetic_energy + o1.potential_energy) - (o0.kinetic_energy + o0.potential_energy);
+    let change =
+        (o1.kinetic_energy + o1.potential_energy) - (o0.kinetic_energy + o0.potential_energy);
     let net_work = sol.y_final[n];
     // The scale: the energy that flowed (every power term's absolute integral, by the
     // trapezoidal rule on the steps).
@@ -485,7 +511,15 @@ fn the_energy_balance_closes_with_every_new_element() {
     let mut contact = false;
     for k in 1..sol.len() {
         let p = mech.power(sol.t[k], &sol.state(k)[..n]);
-        let terms = [p.driver, p.load, p.motor, p.contact_damping, p.friction, p.film, p.damper];
+        let terms = [
+            p.driver,
+            p.load,
+            p.motor,
+            p.contact_damping,
+            p.friction,
+            p.film,
+            p.damper,
+        ];
         flow += terms.iter().map(|v| v.abs()).sum::<f64>() * (sol.t[k] - sol.t[k - 1]);
         contact |= mech.outputs(sol.t[k], &sol.state(k)[..n]).prismatic[0].contact_force > 0.0;
     }
@@ -533,7 +567,11 @@ fn the_jacobian_of_the_elements_matches_differences_of_the_right_hand_side() {
         for i in 0..n {
             let d = (fp[i] - fm[i]) / (2.0 * h);
             let scale = d.abs().max(1.0) * 1e-4;
-            assert!((jac[(i, j)] - d).abs() <= scale, "∂f{i}/∂y{j}: {} vs {d}", jac[(i, j)]);
+            assert!(
+                (jac[(i, j)] - d).abs() <= scale,
+                "∂f{i}/∂y{j}: {} vs {d}",
+                jac[(i, j)]
+            );
         }
     }
 }
@@ -550,50 +588,208 @@ fn every_new_error_names_its_path() {
         slider(1.0, 0.5, json!([s]), 1.0)
     };
     let cases: Vec<(Value, &str, &str)> = vec![
-        (spring(json!({"stiffness": -1.0})), "forces[0].stiffness", "stiffness must be >= 0"),
-        (spring(json!({"damping": -1.0})), "forces[0].damping", "damping must be >= 0"),
-        (spring(json!({"free_length": -1.0})), "forces[0].free_length", "free length must be >= 0"),
-        (spring(json!({"b": {"body": "ground", "at": [1.0, 0.0]}})), "forces[0].b.body", "two different bodies"),
-        (spring(json!({"curve": {"points": [[0.0, 1.0], [1.0, 2.0]]}})), "forces[0].curve", "not both"),
-        (spring(json!({"stiffness": null, "curve": {"points": [[0.0, 1.0]]}})), "forces[0].curve.points", "at least 2 points"),
-        (spring(json!({"stiffness": null, "curve": {"points": [[0.0, 1.0], [0.0, 2.0]]}})), "forces[0].curve.points[1][0]", "increase strictly"),
-        (spring(json!({"b": {"body": "m", "point": "Q"}})), "forces[0].b.point", "no point named 'Q'"),
-        (slider(1.0, 0.0, json!([{"type": "spring", "name": "x"}]), 1.0), "forces[0].type", "unknown force element type `spring`"),
-        (slider(1.0, 0.0, json!([{"type": "torque", "name": "t", "body": "m"}]), 1.0), "forces[0]", "value (a constant) or table"),
-        (slider(1.0, 0.0, json!([{"type": "torque", "name": "t", "body": "m", "value": 1.0,
-                                  "table": {"input": {"of": "time"}, "points": [[0, 0], [1, 1]]}}]), 1.0),
-         "forces[0].table", "not both"),
-        (slider(1.0, 0.0, json!([{"type": "torque", "name": "t", "body": "ground", "value": 1.0}]), 1.0), "forces[0].body", "not the ground"),
-        (slider(1.0, 0.0, json!([{"type": "force", "name": "f", "body": "m", "direction": [0.0, 0.0], "value": 1.0}]), 1.0), "forces[0].direction", "zero vector"),
-        (slider(1.0, 0.0, json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
-                                  "table": {"input": {"of": "speed"}, "points": [[0, 0], [1, 1]]}}]), 1.0),
-         "forces[0].table.input.of", "unknown table input `speed`"),
-        (slider(1.0, 0.0, json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
-                                  "table": {"input": {"of": "joint", "joint": "nope"}, "points": [[0, 0], [1, 1]]}}]), 1.0),
-         "forces[0].table.input.joint", "no joint named 'nope'"),
-        (slider(1.0, 0.0, json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
-                                  "table": {"input": {"of": "length", "element": "f"}, "points": [[0, 0], [1, 1]]}}]), 1.0),
-         "forces[0].table.input.element", "not a spring_damper"),
-        (slider(1.0, 0.0, json!([{"type": "torque", "name": "t", "body": "m", "value": 1.0},
-                                 {"type": "torque", "name": "t", "body": "m", "value": 2.0}]), 1.0),
-         "forces[1].name", "duplicate force element name 't'"),
-        (slider(1.0, 0.0, json!([{"type": "motor", "name": "mot", "rotor": "m"}]), 1.0), "forces[0]", "a motor needs"),
-        (slider(1.0, 0.0, json!([{"type": "motor", "name": "mot", "rotor": "m", "stall_torque": 1.0}]), 1.0), "forces[0].no_load_speed", "needs no_load_speed"),
-        (slider(1.0, 0.0, json!([{"type": "motor", "name": "mot", "rotor": "m", "stall_torque": 1.0, "no_load_speed": 0.0}]), 1.0), "forces[0].no_load_speed", "must not be 0"),
-        (slider(1.0, 0.0, json!([{"type": "motor", "name": "mot", "rotor": "m", "stator": "m", "stall_torque": 1.0, "no_load_rpm": 10.0}]), 1.0), "forces[0].stator", "must differ"),
-        (slider(1.0, 0.0, json!([{"type": "rotational_spring_damper", "name": "r", "a": "m", "b": "x"}]), 1.0), "forces[0].b", "no body named 'x'"),
+        (
+            spring(json!({"stiffness": -1.0})),
+            "forces[0].stiffness",
+            "stiffness must be >= 0",
+        ),
+        (
+            spring(json!({"damping": -1.0})),
+            "forces[0].damping",
+            "damping must be >= 0",
+        ),
+        (
+            spring(json!({"free_length": -1.0})),
+            "forces[0].free_length",
+            "free length must be >= 0",
+        ),
+        (
+            spring(json!({"b": {"body": "ground", "at": [1.0, 0.0]}})),
+            "forces[0].b.body",
+            "two different bodies",
+        ),
+        (
+            spring(json!({"curve": {"points": [[0.0, 1.0], [1.0, 2.0]]}})),
+            "forces[0].curve",
+            "not both",
+        ),
+        (
+            spring(json!({"stiffness": null, "curve": {"points": [[0.0, 1.0]]}})),
+            "forces[0].curve.points",
+            "at least 2 points",
+        ),
+        (
+            spring(json!({"stiffness": null, "curve": {"points": [[0.0, 1.0], [0.0, 2.0]]}})),
+            "forces[0].curve.points[1][0]",
+            "increase strictly",
+        ),
+        (
+            spring(json!({"b": {"body": "m", "point": "Q"}})),
+            "forces[0].b.point",
+            "no point named 'Q'",
+        ),
+        (
+            slider(1.0, 0.0, json!([{"type": "spring", "name": "x"}]), 1.0),
+            "forces[0].type",
+            "unknown force element type `spring`",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "torque", "name": "t", "body": "m"}]),
+                1.0,
+            ),
+            "forces[0]",
+            "value (a constant) or table",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "torque", "name": "t", "body": "m", "value": 1.0,
+                                  "table": {"input": {"of": "time"}, "points": [[0, 0], [1, 1]]}}]),
+                1.0,
+            ),
+            "forces[0].table",
+            "not both",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "torque", "name": "t", "body": "ground", "value": 1.0}]),
+                1.0,
+            ),
+            "forces[0].body",
+            "not the ground",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "force", "name": "f", "body": "m", "direction": [0.0, 0.0], "value": 1.0}]),
+                1.0,
+            ),
+            "forces[0].direction",
+            "zero vector",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
+                                  "table": {"input": {"of": "speed"}, "points": [[0, 0], [1, 1]]}}]),
+                1.0,
+            ),
+            "forces[0].table.input.of",
+            "unknown table input `speed`",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
+                                  "table": {"input": {"of": "joint", "joint": "nope"}, "points": [[0, 0], [1, 1]]}}]),
+                1.0,
+            ),
+            "forces[0].table.input.joint",
+            "no joint named 'nope'",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "force", "name": "f", "body": "m", "direction": [1.0, 0.0],
+                                  "table": {"input": {"of": "length", "element": "f"}, "points": [[0, 0], [1, 1]]}}]),
+                1.0,
+            ),
+            "forces[0].table.input.element",
+            "not a spring_damper",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "torque", "name": "t", "body": "m", "value": 1.0},
+                                 {"type": "torque", "name": "t", "body": "m", "value": 2.0}]),
+                1.0,
+            ),
+            "forces[1].name",
+            "duplicate force element name 't'",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "motor", "name": "mot", "rotor": "m"}]),
+                1.0,
+            ),
+            "forces[0]",
+            "a motor needs",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "motor", "name": "mot", "rotor": "m", "stall_torque": 1.0}]),
+                1.0,
+            ),
+            "forces[0].no_load_speed",
+            "needs no_load_speed",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "motor", "name": "mot", "rotor": "m", "stall_torque": 1.0, "no_load_speed": 0.0}]),
+                1.0,
+            ),
+            "forces[0].no_load_speed",
+            "must not be 0",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "motor", "name": "mot", "rotor": "m", "stator": "m", "stall_torque": 1.0, "no_load_rpm": 10.0}]),
+                1.0,
+            ),
+            "forces[0].stator",
+            "must differ",
+        ),
+        (
+            slider(
+                1.0,
+                0.0,
+                json!([{"type": "rotational_spring_damper", "name": "r", "a": "m", "b": "x"}]),
+                1.0,
+            ),
+            "forces[0].b",
+            "no body named 'x'",
+        ),
     ];
     for (scene, path, words) in cases {
         let e = error_of(&scene);
         let msg = e.to_string();
-        assert!(msg.starts_with(&format!("{path}: ")), "expected {path}: … {words}, got {msg}");
+        assert!(
+            msg.starts_with(&format!("{path}: ")),
+            "expected {path}: … {words}, got {msg}"
+        );
         assert!(msg.contains(words), "expected {path}: … {words}, got {msg}");
     }
     // The prismatic clearance joint.
     let block = |patch: Value| {
-        let mut s = block_in_guide(0.0, json!({"law": "impact", "k": 1e9, "c_max": 0.0, "d_max": 1e-5}), json!({"law": "none"}), 0.0);
+        let mut s = block_in_guide(
+            0.0,
+            json!({"law": "impact", "k": 1e9, "c_max": 0.0, "d_max": 1e-5}),
+            json!({"law": "none"}),
+            0.0,
+        );
         for (k, v) in patch.as_object().unwrap() {
-            let (outer, inner) = k.split_once('.').map_or((k.as_str(), None), |(a, b)| (a, Some(b)));
+            let (outer, inner) = k
+                .split_once('.')
+                .map_or((k.as_str(), None), |(a, b)| (a, Some(b)));
             match inner {
                 Some(i) => s["joints"][0][outer][i] = v.clone(),
                 None => s["joints"][0][outer] = v.clone(),
@@ -602,27 +798,65 @@ fn every_new_error_names_its_path() {
         s
     };
     let cases: Vec<(Value, &str, &str)> = vec![
-        (block(json!({"block.width": 0.03})), "joints[0].block.width", "must be smaller than the guide width"),
-        (block(json!({"guide.body": "block"})), "joints[0].guide.body", "must be the ground"),
-        (block(json!({"initial_offset": 0.001})), "joints[0].initial_offset", "allow_initial_penetration"),
-        (block(json!({"initial_tilt": 0.01})), "joints[0].initial_tilt", "allow_initial_penetration"),
-        (block(json!({"normal": {"law": "impact", "materials": {"bearing": {"youngs_modulus": 2e11, "poisson_ratio": 0.3}, "journal": {"youngs_modulus": 2e11, "poisson_ratio": 0.3}}, "c_max": 0.0, "d_max": 1e-5}})),
-         "joints[0].normal.materials", "no radii"),
-        (block(json!({"block.point": "Z"})), "joints[0].block.point", "no point named 'Z'"),
-        (block(json!({"initial_offset": 0.02, "allow_initial_penetration": true})), "joints[0].initial_offset", "more than half its width"),
+        (
+            block(json!({"block.width": 0.03})),
+            "joints[0].block.width",
+            "must be smaller than the guide width",
+        ),
+        (
+            block(json!({"guide.body": "block"})),
+            "joints[0].guide.body",
+            "must be the ground",
+        ),
+        (
+            block(json!({"initial_offset": 0.001})),
+            "joints[0].initial_offset",
+            "allow_initial_penetration",
+        ),
+        (
+            block(json!({"initial_tilt": 0.01})),
+            "joints[0].initial_tilt",
+            "allow_initial_penetration",
+        ),
+        (
+            block(
+                json!({"normal": {"law": "impact", "materials": {"bearing": {"youngs_modulus": 2e11, "poisson_ratio": 0.3}, "journal": {"youngs_modulus": 2e11, "poisson_ratio": 0.3}}, "c_max": 0.0, "d_max": 1e-5}}),
+            ),
+            "joints[0].normal.materials",
+            "no radii",
+        ),
+        (
+            block(json!({"block.point": "Z"})),
+            "joints[0].block.point",
+            "no point named 'Z'",
+        ),
+        (
+            block(json!({"initial_offset": 0.02, "allow_initial_penetration": true})),
+            "joints[0].initial_offset",
+            "more than half its width",
+        ),
     ];
     for (scene, path, words) in cases {
         let msg = error_of(&scene).to_string();
-        assert!(msg.starts_with(&format!("{path}: ")) && msg.contains(words), "expected {path}: … {words}, got {msg}");
+        assert!(
+            msg.starts_with(&format!("{path}: ")) && msg.contains(words),
+            "expected {path}: … {words}, got {msg}"
+        );
     }
     // Initial rates that contradict the constraints, or each other.
     let mut s = flywheel(1.0, json!([]), 1.0);
     s["bodies"][0]["initial_velocity"] = json!({"vx": 1.0});
     let msg = error_of(&s).to_string();
-    assert!(msg.starts_with("bodies[0].initial_velocity.vx: initial assembly did not converge"), "{msg}");
+    assert!(
+        msg.starts_with("bodies[0].initial_velocity.vx: initial assembly did not converge"),
+        "{msg}"
+    );
     let mut s = flywheel(1.0, json!([]), 1.0);
     s["bodies"][0]["initial_velocity"] = json!({"omega": 1.0});
     s["joints"][0]["initial_rate"] = json!(2.0);
     let msg = error_of(&s).to_string();
-    assert!(msg.contains("initial_rate") || msg.contains("initial_velocity.omega"), "{msg}");
+    assert!(
+        msg.contains("initial_rate") || msg.contains("initial_velocity.omega"),
+        "{msg}"
+    );
 }

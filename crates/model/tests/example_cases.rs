@@ -58,7 +58,15 @@ fn run_with_energy(m: &Mechanism, opts: &SolverOptions) -> (Solution, f64) {
     let mut flow = 0.0;
     for k in 1..sol.len() {
         let p = m.power(sol.t[k], &sol.state(k)[..n]);
-        let terms = [p.driver, p.load, p.motor, p.contact_damping, p.friction, p.film, p.damper];
+        let terms = [
+            p.driver,
+            p.load,
+            p.motor,
+            p.contact_damping,
+            p.friction,
+            p.film,
+            p.damper,
+        ];
         flow += terms.iter().map(|v| v.abs()).sum::<f64>() * (sol.t[k] - sol.t[k - 1]);
     }
     let err = (sol.y_final[n] - change).abs() / flow;
@@ -67,9 +75,11 @@ fn run_with_energy(m: &Mechanism, opts: &SolverOptions) -> (Solution, f64) {
 
 #[test]
 fn the_readme_scene_is_the_pendulum_example_and_loses_energy_only_to_contact() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let start = readme
+        .find("A two-link pendulum whose elbow has a dry clearance")
         .unwrap();
-    let start = readme.find("A two-link pendulum whose elbow has a dry clearance").unwrap();
     let block = &readme[start..];
     let a = block.find("```json").unwrap() + "```json".len();
     let b = a + block[a..].find("```").unwrap();
@@ -77,7 +87,10 @@ fn the_readme_scene_is_the_pendulum_example_and_loses_energy_only_to_contact() {
     let mut file = case("examples/pendulum.json");
     assert!(!file.description.is_empty());
     file.description.clear();
-    assert_eq!(file, from_readme, "cases/examples/pendulum.json is the README's scene");
+    assert_eq!(
+        file, from_readme,
+        "cases/examples/pendulum.json is the README's scene"
+    );
 
     let m = Mechanism::from_scene(&case("examples/pendulum.json")).unwrap();
     let opts = SolverOptions {
@@ -86,10 +99,16 @@ fn the_readme_scene_is_the_pendulum_example_and_loses_energy_only_to_contact() {
         ..SolverOptions::with_method(Method::Dop853)
     };
     let (sol, err) = run_with_energy(&m, &opts);
-    assert!(err < 1e-6, "energy balance error {err:.2e} of the energy that flowed");
+    assert!(
+        err < 1e-6,
+        "energy balance error {err:.2e} of the energy that flowed"
+    );
     let n = m.dim();
     let dissipated = -sol.y_final[n];
-    assert!(dissipated > 0.0, "the elbow's damping and friction dissipate");
+    assert!(
+        dissipated > 0.0,
+        "the elbow's damping and friction dissipate"
+    );
     assert!(sol
         .events
         .iter()
@@ -106,11 +125,17 @@ fn the_four_bar_with_a_clearance_joint_balances_driver_work_and_dissipation() {
         ..SolverOptions::with_method(Method::Dop853)
     };
     let (sol, err) = run_with_energy(&m, &opts);
-    assert!(err < 1e-6, "energy balance error {err:.2e} of the energy that flowed");
+    assert!(
+        err < 1e-6,
+        "energy balance error {err:.2e} of the energy that flowed"
+    );
     let n = m.dim();
     let o = m.outputs(sol.t_final, &sol.y_final[..n]);
     assert!(o.constraint_violation < 1e-8, "{}", o.constraint_violation);
-    assert!(sol.events.iter().any(|h| h.rising), "the joint must make contact");
+    assert!(
+        sol.events.iter().any(|h| h.rising),
+        "the joint must make contact"
+    );
 }
 
 #[test]
@@ -122,14 +147,20 @@ fn the_press_with_a_punch_and_a_motor_slows_under_the_load() {
     let y0 = m.initial_state();
     let o0 = m.outputs(0.0, &y0);
     let w150 = 150.0 * std::f64::consts::PI / 30.0;
-    assert!((o0.bodies[0].omega - w150).abs() < 1e-12, "the crank starts at 150 rpm");
+    assert!(
+        (o0.bodies[0].omega - w150).abs() < 1e-12,
+        "the crank starts at 150 rpm"
+    );
     let opts = SolverOptions {
         rtol: 1e-7,
         atol: Atol::Scalar(1e-10),
         ..SolverOptions::with_method(Method::Dop853)
     };
     let (sol, err) = run_with_energy(&m, &opts);
-    assert!(err < 1e-4, "energy balance error {err:.2e} of the energy that flowed");
+    assert!(
+        err < 1e-4,
+        "energy balance error {err:.2e} of the energy that flowed"
+    );
     let n = m.dim();
     let names = m.element_names();
     let (motor, punch) = (
@@ -146,28 +177,38 @@ fn the_press_with_a_punch_and_a_motor_slows_under_the_load() {
         let o = m.outputs(sol.t[k], &sol.state(k)[..n]);
         let (mo, pu) = (&o.elements[motor], &o.elements[punch]);
         assert!((mo.load - ts * (1.0 - mo.coordinate / w0)).abs() < 1e-9 * ts);
-        assert!(pu.load == 0.0 || o.bodies[2].vx > 0.0, "the punch resists the forward stroke");
+        assert!(
+            pu.load == 0.0 || o.bodies[2].vx > 0.0,
+            "the punch resists the forward stroke"
+        );
         let p = pu.power;
         if let Some((t0, p0)) = prev {
             work -= 0.5 * (p + p0) * (sol.t[k] - t0);
         }
         prev = Some((sol.t[k], p));
     }
-    assert!((work - 720.0).abs() < 0.01 * 720.0, "work of the punch {work} J, table area 720 J");
+    assert!(
+        (work - 720.0).abs() < 0.01 * 720.0,
+        "work of the punch {work} J, table area 720 J"
+    );
     // The same press without the punch turns further in the same time.
     let mut free = scene.clone();
     free.forces.retain(|f| f.name() != "punch");
     let mf = Mechanism::from_scene(&free).unwrap();
     let (solf, errf) = run_with_energy(&mf, &opts);
     assert!(errf < 1e-4);
-    let turned = |m: &Mechanism, s: &Solution| m.outputs(s.t_final, &s.y_final[..n]).bodies[0].theta;
+    let turned =
+        |m: &Mechanism, s: &Solution| m.outputs(s.t_final, &s.y_final[..n]).bodies[0].theta;
     let (a, af) = (turned(&m, &sol), turned(&mf, &solf));
     let range = |m: &Mechanism, s: &Solution| {
-        (0..s.len()).fold((f64::INFINITY, f64::NEG_INFINITY, 0.0f64), |(lo, hi, f), k| {
-            let o = m.outputs(s.t[k], &s.state(k)[..n]);
-            let w = o.bodies[0].omega * 30.0 / std::f64::consts::PI;
-            (lo.min(w), hi.max(w), f.max(o.clearance[0].contact_force))
-        })
+        (0..s.len()).fold(
+            (f64::INFINITY, f64::NEG_INFINITY, 0.0f64),
+            |(lo, hi, f), k| {
+                let o = m.outputs(s.t[k], &s.state(k)[..n]);
+                let w = o.bodies[0].omega * 30.0 / std::f64::consts::PI;
+                (lo.min(w), hi.max(w), f.max(o.clearance[0].contact_force))
+            },
+        )
     };
     eprintln!(
         "crank after 0.8 s: {a:.4} rad with the punch (rpm, rpm, N: {:?}), {af:.4} rad without \
