@@ -860,3 +860,131 @@ fn every_new_error_names_its_path() {
         "{msg}"
     );
 }
+
+/// A uniform rod (m = 1.2 kg, l = 0.5 m) pinned at one end to the ground, no gravity.
+fn pinned_rod(extra_body: Value, extra_pin: Value) -> Value {
+    let mut s = json!({
+        "bodies": [{"name": "rod", "mass": 1.2, "inertia": 1.2 * 0.25 / 12.0,
+                    "position": [0.25, 0.0], "points": {"O": [-0.25, 0.0]}}],
+        "joints": [{"type": "revolute", "name": "pin", "a": {"body": "rod", "point": "O"},
+                    "b": {"body": "ground", "at": [0.0, 0.0]}}],
+        "t_end": 1.0
+    });
+    for (k, v) in extra_body.as_object().unwrap() {
+        s["bodies"][0][k] = v.clone();
+    }
+    for (k, v) in extra_pin.as_object().unwrap() {
+        s["joints"][0][k] = v.clone();
+    }
+    s
+}
+
+#[test]
+fn initial_velocities_are_projected_by_least_kinetic_energy_and_reported() {
+    // Guessed ω = 2 rad/s with the centre of mass at rest: the projection of least kinetic
+    // energy of the change, min m|v|² + I (ω − 2)² with v = ω l/2, gives ω = 2 I/(I + m l²/4).
+    let (m, l): (f64, f64) = (1.2, 0.5);
+    let i = m * l * l / 12.0;
+    let mech = build(&pinned_rod(json!({"angular_velocity": 2.0}), json!({})));
+    let y0 = mech.initial_state();
+    let omega = 2.0 * i / (i + m * l * l / 4.0);
+    assert!((omega - 0.5).abs() < 1e-15);
+    assert!((y0[5] - omega).abs() < 1e-12, "ω = {}", y0[5]);
+    assert!((y0[4] - omega * l / 2.0).abs() < 1e-12, "ẏ = {}", y0[4]);
+    let rep = mech.projection_report();
+    let changed: Vec<(&str, f64, f64)> = rep
+        .changes
+        .iter()
+        .map(|c| (c.coordinate, c.given, c.assembled))
+        .collect();
+    assert_eq!(changed.len(), 2, "{rep}");
+    assert_eq!((changed[0].0, changed[0].1), ("vy", 0.0));
+    assert_eq!((changed[1].0, changed[1].1), ("omega", 2.0));
+    assert!((rep.kinetic_energy_given - 0.5 * i * 4.0).abs() < 1e-15);
+    assert!(rep.max_velocity_change > 1.4 && rep.max_position_change == 0.0);
+    let text = rep.to_string();
+    assert!(
+        text.contains("rod.omega: 2.000000000e0 → 5.000000000e-1"),
+        "{text}"
+    );
+    // Stated exactly, by the body or by the pin, it is kept.
+    for mech in [
+        build(&pinned_rod(
+            json!({"initial_velocity": {"omega": 2.0}}),
+            json!({}),
+        )),
+        build(&pinned_rod(json!({}), json!({"initial_rate": 2.0}))),
+    ] {
+        let y0 = mech.initial_state();
+        assert!(
+            (y0[5] - 2.0).abs() < 1e-12 && (y0[4] - 0.5).abs() < 1e-12,
+            "{y0:?}"
+        );
+    }
+    // A slider's initial_rate along its line.
+    let s = slider(2.0, 0.1, json!([]), 1.0);
+    let mut s2 = s.clone();
+    s2["joints"][0]["initial_rate"] = json!(-0.75);
+    let y0 = build(&s2).initial_state();
+    assert_eq!(&y0[3..6], &[-0.75, 0.0, 0.0]);
+    // A clearance joint's relative velocity: a journal leaving its bearing's centre at 1 m/s.
+    let mut v = build_value_clearance();
+    v["joints"][0]["initial_eccentricity_rate"] = json!([0.0, -1.0]);
+    let mech = build(&v);
+    let o = mech.outputs(0.0, &mech.initial_state());
+    assert!((o.bodies[0].vy + 1.0).abs() < 1e-12, "{:?}", o.bodies[0]);
+}
+
+/// A disk in a ground bearing (revolute clearance joint), no gravity.
+fn build_value_clearance() -> Value {
+    json!({
+        "bodies": [{"name": "disk", "mass": 3.0, "inertia": 0.02, "points": {"c": [0.0, 0.0]}}],
+        "joints": [{"type": "clearance", "name": "j",
+                    "bearing": {"body": "ground", "at": [0.0, 0.0], "radius": 0.010},
+                    "journal": {"body": "disk", "point": "c", "radius": 0.009},
+                    "normal": {"law": "impact", "k": 1e9, "c_max": 100.0, "d_max": 1e-5}}],
+        "t_end": 1.0
+    })
+}
+
+#[test]
+fn scenes_with_repeated_keys_or_a_journal_outside_its_clearance_are_rejected() {
+    // A repeated key, nested: its path.
+    let text = r#"{"bodies": [{"name": "a", "mass": 1, "inertia": 1, "points": {"P": [0, 0], "P": [1, 0]}}], "t_end": 1}"#;
+    let e = Scene::from_json_str(text).unwrap_err().to_string();
+    assert!(
+        e.starts_with("bodies[0].points.P: duplicate key `P`"),
+        "{e}"
+    );
+    let text = r#"{"bodies": [{"name": "a", "mass": 1, "inertia": 1}], "t_end": 1, "t_end": 2}"#;
+    let e = Scene::from_json_str(text).unwrap_err().to_string();
+    assert!(e.starts_with("t_end: duplicate key `t_end`"), "{e}");
+    // An eccentricity beyond the clearance: an error at the field, unless stated; and never
+    // beyond the journal radius (5 m in a 1 mm clearance used to hang the integrator).
+    for (e0, allow, ok) in [
+        (0.0011, false, false),
+        (0.0011, true, true),
+        (0.001, false, true),
+        (5.0, false, false),
+        (5.0, true, false),
+    ] {
+        let mut v = build_value_clearance();
+        v["joints"][0]["initial_eccentricity"] = json!([e0, 0.0]);
+        v["joints"][0]["allow_initial_penetration"] = json!(allow);
+        let r = Scene::from_json_str(&v.to_string());
+        assert_eq!(r.is_ok(), ok, "e0 = {e0}, allow = {allow}: {r:?}");
+        if let Err(e) = r {
+            let msg = e.to_string();
+            assert!(
+                msg.starts_with("joints[0].initial_eccentricity: |e| = "),
+                "{msg}"
+            );
+            let why = if allow {
+                "beyond the journal radius"
+            } else {
+                "allow_initial_penetration"
+            };
+            assert!(msg.contains(why), "{msg}");
+        }
+    }
+}
