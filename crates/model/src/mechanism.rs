@@ -14,8 +14,9 @@
 //! A body whose motion is prescribed (a rotational driver plus a revolute joint to the ground
 //! or to another prescribed body: the press's crank) is not integrated; its pose, velocity and
 //! acceleration are closed-form functions of t, and the joints to it are rheonomic constraints
-//! on the other body. The clearance joints add forces to g (docs/model.md §2–§4); absent features
-//! (gravity, friction, film) run no code.
+//! on the other body. The clearance joints add forces to g (docs/model.md §2–§4), and so do the
+//! force elements and prismatic clearance joints (§10–§11); absent features (gravity, friction,
+//! film, force elements) run no code.
 //!
 //! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
 //! Baumgarte 1972), Peng et al. 2025 §3.
@@ -235,7 +236,8 @@ pub(crate) struct Scratch {
 /// [`Mechanism::outputs`].
 ///
 /// ```text
-/// y' = f(t, y),  y = (q, q̇)  (docs/model.md §1);  events δ_k(q) and ε_k − ε_cap (§7)
+/// y' = f(t, y),  y = (q, q̇)  (docs/model.md §1);  events δ_k(q), ε_k − ε_cap and the
+/// corner gaps δ_i of the prismatic clearance joints (§7, §11)
 /// ```
 #[derive(Debug)]
 pub struct Mechanism {
