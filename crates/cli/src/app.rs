@@ -4,7 +4,8 @@
 //! main_with(args) = 0 on success; on failure print report() to stderr and return
 //!                   exit_code()  (2 usage/input, 3 solver, 1 bug)
 //! stdout: the command's result (tables, descriptions, "wrote N files to DIR")
-//! stderr: the engine's notes and a sweep's progress bar (StderrProgress), errors
+//! stderr: the engine's notes and the progress of long commands (StderrProgress: a bar on a
+//!         terminal, else a line per finished item), errors
 //! ```
 //!
 //! Source: docs/outputs.md ("Exit codes of `lash`"). Commands whose engine (the model, the
@@ -31,7 +32,7 @@ use crate::args::{
     self, Command, CompareArgs, ExtremesArgs, Parsed, PoincareArgs, RunArgs, StiffnessArgs,
     SweepArgs, WorkPrecisionArgs,
 };
-use crate::exit::{ExitStatus, EXIT_BUG, EXIT_OK};
+use crate::exit::{flagged, ExitStatus, EXIT_BUG, EXIT_OK};
 use crate::progress::StderrProgress;
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
@@ -74,7 +75,10 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
     match command {
         Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) => {
-            let w = commands::study_paper(&a.options())?;
+            let progress = StderrProgress::new();
+            let w = commands::study_paper(&a.options(), &progress);
+            progress.clear();
+            let w = w?;
             println!("{}", study::describe_paper(&w.result, &w.dir));
             Ok(())
         }
@@ -91,13 +95,20 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Poincare(a) => poincare_command(&a).map(|_| ()),
         Command::Extremes(a) => extremes_command(&a).map(|_| ()),
         Command::Merge(a) => {
-            let m = commands::merge(&a.options())?;
+            let m = commands::merge(&a.options()).map_err(flagged)?;
+            let missing = m.table.unfinished.len() + m.table.corrupt.len();
             println!(
                 "merged {} points into {} and {}",
-                m.table.rows.len(),
+                m.table.rows.len() - missing,
                 m.csv.display(),
                 m.md.display()
             );
+            if missing > 0 {
+                eprintln!(
+                    "merge: {} (rows with status unfinished / corrupt)",
+                    m.table.missing_summary(20)
+                );
+            }
             Ok(())
         }
     }
@@ -125,7 +136,10 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
 /// tolerance, against the case's reference; notes the reference on standard error, writes
 /// compare.md and compare.json and prints the table.
 pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
-    let w = commands::compare(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::compare(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     print!("{}", w.result.to_markdown());
     println!("wrote {} files to {}", w.files.len(), w.dir.display());
     Ok(w.result)
@@ -135,7 +149,10 @@ pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
 /// compared on one method of ours, against the case's reference; notes each run on standard
 /// error, writes the markdown and JSON tables and the log–log figures, prints the table.
 pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
-    let w = commands::work_precision(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::work_precision(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     let WorkPrecisionResult { table, reference } = w.result;
     print!("{}", table.to_markdown());
     println!(
@@ -149,7 +166,10 @@ pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
 
 /// `lash stiffness`: the engine's analysis, then the two limits and the verdict.
 pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf), Error> {
-    let w = commands::stiffness(&a.options())?;
+    let progress = StderrProgress::new();
+    let w = commands::stiffness(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     print!("{}", w.result.report.describe());
     println!("wrote {} files to {}", w.files.len(), w.dir.display());
     Ok((w.result, w.dir))
@@ -157,7 +177,10 @@ pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf)
 
 /// `lash poincare`: the engine's section and Lyapunov exponent, then the estimate.
 pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), Error> {
-    let w = commands::poincare(&a.options())?;
+    let progress = StderrProgress::new();
+    let w = commands::poincare(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     print!("{}", w.result.describe());
     println!("wrote {} files to {}", w.files.len(), w.dir.display());
     Ok((w.result, w.dir))
@@ -168,7 +191,10 @@ pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), E
 /// exit code 1 (a bug) when some run ended in an outcome that is not allowed (the report is
 /// written first, to show which).
 pub fn extremes_command(a: &ExtremesArgs) -> Result<Matrix, Error> {
-    let w = commands::extremes(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::extremes(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     print!(
         "{}",
         extremes::describe(&w.result, &w.files[0], &w.files[1])
@@ -193,8 +219,13 @@ where
 
 /// Prints the closing line of a sweep on standard error.
 fn print_sweep(o: &SweepOutcome) {
+    let busy = if o.report.busy.is_empty() {
+        String::new()
+    } else {
+        format!(", {} claimed by other processes", o.report.busy.len())
+    };
     eprintln!(
-        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
+        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done{busy}; results in {}",
         o.shard,
         o.points,
         o.report.ok,
@@ -239,6 +270,7 @@ mod tests {
         execute(Some(Command::Merge(MergeArgs {
             dirs: vec![out.clone()],
             out: None,
+            allow_partial: false,
         })))
         .unwrap();
         let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();

@@ -7,12 +7,14 @@
 //! ```text
 //! argv ──args::parse──▶ Command ──args: .options()──▶ lash_validation::commands::*
 //!      ──Written<result> | Error──▶ app: print (stdout), exit: report (stderr) + exit code
-//! engine notes, sweep progress ──Progress──▶ progress::StderrProgress (bar on a terminal)
+//! engine notes, progress ──Progress──▶ progress::StderrProgress (bar on a terminal, else lines)
+//! SIGINT, SIGTERM ──signals──▶ lash_solver::interrupt::request_stop() → exit code 130
 //! ```
 //!
 //! Modules: [`args`] (clap derive types and value parsers), [`app`] (dispatch and printing),
 //! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`progress`]
-//! (notes and the progress bar on standard error).
+//! (notes, the progress bar or per-item log lines on standard error), [`signals`] (SIGINT and
+//! SIGTERM stop the work cleanly).
 
 #![warn(missing_docs)]
 
@@ -20,3 +22,4 @@ pub mod app;
 pub mod args;
 pub mod exit;
 pub mod progress;
+pub mod signals;

@@ -135,7 +135,7 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
                 style: SeriesStyle::Dashed,
             });
         }
-        let t = format!("{title}, {case}");
+        let t = format!("{title}, {}", plot::plain(case));
         push(plot::line_plot(
             &dir.join(stem),
             &Axes {
@@ -147,12 +147,12 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
         )?);
     }
     if let (Some(ex), Some(ey)) = (col(w, |s| s.ex_over_c), col(w, |s| s.ey_over_c)) {
-        let t = format!("Journal centre orbit, {case}");
+        let t = format!("Journal centre orbit, {}", plot::plain(case));
         push(plot::orbit_plot(&dir.join("orbit"), &t, &ex, &ey)?);
     }
     if let Some(fn_) = col(w, |s| s.contact_force) {
         let mut series = vec![Series {
-            name: "contact force F_N",
+            name: "normal contact force",
             x: &x,
             y: &fn_,
             style: SeriesStyle::Line,
@@ -160,13 +160,13 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
         let film = col(w, |s| s.film_force.map(f64::abs));
         if let Some(f) = &film {
             series.push(Series {
-                name: "film force |F_film|",
+                name: "film force, magnitude",
                 x: &x,
                 y: f,
                 style: SeriesStyle::Line,
             });
         }
-        let t = format!("Clearance joint forces, {case}");
+        let t = format!("Clearance joint forces, {}", plot::plain(case));
         push(plot::line_plot(
             &dir.join("joint_forces"),
             &Axes {
