@@ -13,7 +13,7 @@
 //! schedulers send before they kill a job): it runs on its own thread, so printing and
 //! exiting there is safe.
 //!
-//! Source: docs/outputs.md ("Exit codes of `lash`", "Interrupting a command").
+//! Source: docs/outputs.md ("Exit codes of `lash`", "Progress and interrupting a command").
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 

@@ -16,7 +16,7 @@
 //! writes the same numbers as an uninterrupted one; only wall times differ (a reused run
 //! keeps the wall time it was measured with). Deleting DIR makes everything run again.
 //!
-//! Source: docs/outputs.md ("Interrupting a command", `cache/`).
+//! Source: docs/outputs.md ("Progress and interrupting a command", `cache/`).
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -433,7 +433,7 @@ impl WpTable {
                 })
                 .collect();
             let title = format!(
-                "Work–precision, {}: error against {what} (one point per tolerance or step)",
+                "Work–precision, {}: error against {what}",
                 plot::plain(&self.case)
             );
             let w = plot::loglog_plot(
