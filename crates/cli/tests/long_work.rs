@@ -113,7 +113,15 @@ fn two_processes_on_one_sweep_compute_each_point_once() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(0), "{err}");
         for l in err.lines().filter(|l| l.contains("): ok (")) {
-            ran.push(l.split(" point ").nth(1).unwrap().split(':').next().unwrap().to_string());
+            ran.push(
+                l.split(" point ")
+                    .nth(1)
+                    .unwrap()
+                    .split(':')
+                    .next()
+                    .unwrap()
+                    .to_string(),
+            );
         }
     }
     ran.sort();
@@ -172,7 +180,11 @@ fn sigint_abandons_the_point_in_flight_and_a_rerun_resumes() {
         .filter(|p| p.join("result.json").is_file())
         .collect();
     assert!(!finished.is_empty() && finished.len() < 12, "{seen}");
-    assert_eq!(point_dirs(&s).len(), finished.len(), "a partial point directory stayed");
+    assert_eq!(
+        point_dirs(&s).len(),
+        finished.len(),
+        "a partial point directory stayed"
+    );
     assert!(leftovers(&s).is_empty(), "{:?}", leftovers(&s));
     // merge names the unfinished points and refuses, unless --allow-partial.
     let o = lash(&["merge", "s"], d.path());
@@ -191,7 +203,11 @@ fn sigint_abandons_the_point_in_flight_and_a_rerun_resumes() {
     assert_eq!(o.status.code(), Some(0));
     let csv = std::fs::read_to_string(s.join("merged.csv")).unwrap();
     assert_eq!(csv.lines().count(), 13);
-    assert_eq!(csv.matches(",unfinished,unfinished,").count(), missing, "{csv}");
+    assert_eq!(
+        csv.matches(",unfinished,unfinished,").count(),
+        missing,
+        "{csv}"
+    );
     // The rerun does the rest only.
     let o = lash(&["sweep", "grid.json", "--out", "s"], d.path());
     let e = String::from_utf8_lossy(&o.stderr);
@@ -226,6 +242,9 @@ fn merge_names_a_corrupt_point() {
     let o = lash(&["sweep", "grid.json", "--out", "s"], d.path());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains(&format!("({id}) runs again: ")), "{e}");
-    assert!(e.contains("1 ran, 0 solver failures, 1 already done"), "{e}");
+    assert!(
+        e.contains("1 ran, 0 solver failures, 1 already done"),
+        "{e}"
+    );
     ok(&["merge", "s"], d.path());
 }

@@ -130,7 +130,7 @@ mod tests {
             k,
             c.key(
                 "test",
-                &serde_json::json!({"case": "a", "rtol": 1.0000000000000001e-10 + 1e-25})
+                &serde_json::json!({"case": "a", "rtol": 1e-10 * (1.0 + f64::EPSILON)})
             )
             .unwrap()
         );

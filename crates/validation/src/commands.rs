@@ -575,6 +575,7 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
             "extremes"
         })
     });
+    crate::claim::remove_dead_temporaries(&out);
     let cache = RunCache::new(&out.join(CACHE_DIR));
     let m = extremes::run_cached(&plan, Some(&cache), progress)?;
     let files = m.write(&out)?;

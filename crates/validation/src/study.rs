@@ -984,6 +984,9 @@ pub fn run_and_write_with(
     progress: &dyn Progress,
 ) -> Result<StudyResult, Error> {
     let clock = Instant::now();
+    // Temporary files of a study killed while writing (a second signal, SIGKILL).
+    crate::claim::remove_dead_temporaries(out);
+    crate::claim::remove_dead_temporaries(&out.join(FIGURES_DIR));
     let cache = RunCache::new(&out.join(CACHE_DIR));
     let (mut result, curves) = run_plan(plan, &cache, progress)?;
     result.timing.runs_s = clock.elapsed().as_secs_f64();

@@ -879,6 +879,8 @@ where
     let held = &held_set;
     let (stop_beat, beat) = std::sync::mpsc::channel::<()>();
     std::thread::scope(|s| {
+        // Dropped on every way out of this closure (a panic too), which ends the heartbeat.
+        let stop_beat = stop_beat;
         // The heartbeat: refreshes the claims this process holds (claim::HEARTBEAT).
         s.spawn(move || {
             while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =

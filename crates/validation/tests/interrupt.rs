@@ -112,7 +112,11 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
     assert!(e.is_interrupted(), "{e}");
     let kept = first.finished().len();
     assert!(kept >= 10, "{kept}");
-    assert!(e.to_string().contains(&format!("{kept} of {all} runs finished and kept")), "{e}");
+    assert!(
+        e.to_string()
+            .contains(&format!("{kept} of {all} runs finished and kept")),
+        "{e}"
+    );
     // Nothing but the cache is written; it holds exactly the finished runs.
     assert!(!out.join(study::JSON_FILE).exists() && !out.join(study::FIGURES_DIR).exists());
     assert_eq!(std::fs::read_dir(out.join("cache")).unwrap().count(), kept);
@@ -122,14 +126,20 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
     assert_eq!(second.total("runs"), Some(all - kept));
     let redone: BTreeSet<String> = second.finished().into_iter().collect();
     assert_eq!(redone.len(), all - kept);
-    assert!(first.finished().iter().all(|w| !redone.contains(w)), "a finished run ran again");
+    assert!(
+        first.finished().iter().all(|w| !redone.contains(w)),
+        "a finished run ran again"
+    );
     assert!(second.notes.lock().unwrap()[0].starts_with(&format!(
         "study: {kept} of {all} runs finished before, reused from"
     )));
     // The numbers are those of an uninterrupted study (wall times aside).
     let fresh = study::run_and_write(&plan, &dir.join("fresh")).unwrap();
     for (a, b) in resumed.cases.iter().zip(&fresh.cases) {
-        assert_eq!((&a.study, &a.reference, &a.loose), (&b.study, &b.reference, &b.loose));
+        assert_eq!(
+            (&a.study, &a.reference, &a.loose),
+            (&b.study, &b.reference, &b.loose)
+        );
         assert_eq!(a.solver.stats, b.solver.stats);
     }
     assert_eq!(resumed.claims, fresh.claims);
@@ -152,7 +162,10 @@ fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
     clear_stop();
     assert!(e.is_interrupted(), "{e}");
     let done = first.finished();
-    assert!(done[0].starts_with("dry_stiffness_1e14: reference"), "{done:?}");
+    assert!(
+        done[0].starts_with("dry_stiffness_1e14: reference"),
+        "{done:?}"
+    );
     let runs_kept = done.len() - 1;
     assert!(runs_kept >= 4);
     let second = Recorder::default();
@@ -163,7 +176,10 @@ fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
     let name = |w: &String| w.split(": ").next().unwrap_or_default().to_string();
     let redone: BTreeSet<String> = second.finished().iter().map(name).collect();
     assert_eq!(redone.len(), all - runs_kept);
-    assert!(done[1..].iter().all(|w| !redone.contains(&name(w))), "a finished run ran again");
+    assert!(
+        done[1..].iter().all(|w| !redone.contains(&name(w))),
+        "a finished run ran again"
+    );
     assert_eq!(m.cells.len(), all);
     assert_eq!(m.failures, 0, "{:?}", m.failure_lines());
 }
@@ -171,7 +187,11 @@ fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
 fn sweep_abandons_the_point_in_flight(dir: &Path) {
     std::fs::write(dir.join("base.json"), b"{}").unwrap();
     let file = dir.join("grid.json");
-    std::fs::write(&file, br#"{"case": "base.json", "speed_rpm": [1, 2, 3, 4, 5, 6]}"#).unwrap();
+    std::fs::write(
+        &file,
+        br#"{"case": "base.json", "speed_rpm": [1, 2, 3, 4, 5, 6]}"#,
+    )
+    .unwrap();
     let points = SweepSpec::load(&file).unwrap().points().unwrap();
     let root = dir.join("sweep");
     let opts = SweepOptions {
@@ -200,7 +220,10 @@ fn sweep_abandons_the_point_in_flight(dir: &Path) {
         assert!(!root.join(&p.id).join("claim.json").exists());
     }
     let e = r.into_result().unwrap_err();
-    assert!(e.is_interrupted() && e.to_string().contains("2 of 6 in all are kept; 4 left"), "{e}");
+    assert!(
+        e.is_interrupted() && e.to_string().contains("2 of 6 in all are kept; 4 left"),
+        "{e}"
+    );
     // The rerun runs the four others only.
     let again = AtomicUsize::new(0);
     let r = sweep::run_sweep(&points, &root, &opts, |p, _| {
