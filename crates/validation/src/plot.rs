@@ -475,10 +475,8 @@ fn draw_entry<DB: DrawingBackend>(
         draw_marker(area, (x + LEGEND_SAMPLE / 2, y), k, e.color)?;
     }
     if e.dots {
-        for k in 0..3 {
-            area.draw(&Circle::new((x + 8 + 12 * k, y), 3, e.color.filled()))
-                .map_err(|e| e.to_string())?;
-        }
+        area.draw(&Circle::new((x + LEGEND_SAMPLE / 2, y), 3, e.color.filled()))
+            .map_err(|e| e.to_string())?;
     }
     area.draw(&Text::new(
         e.name.clone(),
@@ -1143,7 +1141,8 @@ mod tests {
         )
         .unwrap();
         let svg = std::fs::read_to_string(&w.svg).unwrap();
-        assert_eq!(svg.matches("<circle").count(), 3, "one marker per point");
+        // One marker per point, and one in the legend.
+        assert_eq!(svg.matches("<circle").count(), 4, "one marker per point");
     }
 
     #[test]
