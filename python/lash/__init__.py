@@ -1,0 +1,39 @@
+"""lash: ODE integrators for stiff contact problems, from Python.
+
+lash is a Rust research solver for planar mechanisms with clearance joints. This package
+gives its integrators to your own ODE with scipy's interface:
+
+- :func:`solve_ivp` — scipy's ``solve_ivp`` with lash's methods (Rodas5P, BDF, TR-BDF2,
+  ESDIRK3(4), the embedded pairs BS3(2), DP5(4), Tsit5(4), DOP853, fixed-step RK4), its
+  Söderlind step-size controllers, and events with direction, terminal counts and hooks.
+- :class:`OdeResult`, :class:`OdeSolution` — its result and continuous solution.
+- :data:`METHODS`, :data:`CONTROLLERS` — the names lash accepts.
+- Exceptions: :class:`UsageError` (bad arguments), :class:`SolveError` (the integration
+  failed, with time and state), :class:`SceneError` (a scene that cannot be used, with its
+  JSON path), all derived from :class:`LashError`. An exception raised inside your own
+  callback propagates as itself.
+
+Example
+-------
+>>> import lash
+>>> sol = lash.solve_ivp(lambda t, y: [-y[0]], (0, 1), [1.0], rtol=1e-10)
+>>> abs(float(sol.y[0, -1]) - 0.36787944117144233) < 1e-9
+True
+"""
+
+from ._errors import LashError, SceneError, SolveError, UsageError
+from ._ivp import CONTROLLERS, METHODS, OdeResult, OdeSolution, solve_ivp
+from ._lash import __version__
+
+__all__ = [
+    "solve_ivp",
+    "OdeResult",
+    "OdeSolution",
+    "METHODS",
+    "CONTROLLERS",
+    "LashError",
+    "UsageError",
+    "SolveError",
+    "SceneError",
+    "__version__",
+]
