@@ -73,7 +73,8 @@ class SolveError(LashError, RuntimeError):
         The last good state, shape (n,).
     kind : str
         ``"step_size_too_small"``, ``"too_many_steps"``, ``"non_finite_state"``,
-        ``"newton_failure"`` or ``"budget_exhausted"``.
+        ``"rk4_unstable"`` (fixed-step RK4 beyond its stability limit, only where a scene
+        asks for the check), ``"newton_failure"`` or ``"budget_exhausted"``.
     result : OdeResult or None
         What :func:`lash.solve_ivp` had computed up to the failure, with ``status = -1``,
         ``success = False`` and ``message`` (scipy's failed result).

@@ -654,6 +654,12 @@ fn failure_message(e: &SolveError, t: f64) -> String {
             "non-finite or diverging state at t = {t:e} (fun returned NaN or inf, or the \
              solution grew past 1e100)"
         ),
+        SolveError::Rk4Unstable {
+            h, h_limit, steps, ..
+        } => format!(
+            "RK4 beyond its stability limit at t = {t:e}: step {h:e}, estimated limit \
+             {h_limit:.3e} (h·ρ > 2.785 on {steps} steps in a row)"
+        ),
         SolveError::NewtonFailure { reason, .. } => {
             format!("Newton iteration failed at t = {t:e}: {reason}")
         }
