@@ -370,12 +370,12 @@ def solve_ivp(
     Notes
     -----
     The callbacks are Python functions called from Rust with the GIL held, one call per
-    evaluation. Each call of ``fun`` costs, besides the time of ``fun`` itself, the
-    creation of the array ``y`` and the reading of the result: about 1 µs on a 2-core
-    x86-64 machine with CPython 3.11 (BENCHMARKS.md, "Python callbacks"), against a few
-    tens of µs of Python overhead per step in scipy's solvers. For an RHS written in Python
-    the run time is mostly the time of ``fun`` times ``nfev``: choose the method that needs
-    the fewest evaluations (``stats`` has the counts).
+    evaluation. Each call of ``fun`` costs, besides the time of ``fun`` itself, the creation
+    of the array ``y`` and the reading of the result: a few microseconds, a list or tuple
+    result being the cheapest, an order of magnitude less than scipy's own step loop per
+    call (measured in BENCHMARKS.md, "Python", with python/bench/callbacks.py). For an RHS
+    written in Python the run time is about ``nfev`` times (the time of ``fun`` plus that
+    cost): choose the method that needs the fewest evaluations (``stats`` has the counts).
 
     With events, each occurrence cuts the step and restarts the method, so ``t`` (without
     ``t_eval``) contains every event time. When a hook changes the state, ``t`` contains the
