@@ -111,6 +111,26 @@ impl Case {
         })
     }
 
+    /// A scene given as JSON text in memory (a library caller's scene, e.g. a Python dict),
+    /// named `name`: recorded like a file case (`case` = name, `scene_sha256` = sha256 of the
+    /// bytes); errors name the case by `name`. Text that is not JSON is an input error.
+    pub fn from_json_bytes(name: &str, bytes: Vec<u8>) -> Result<Case, Error> {
+        if name.is_empty() {
+            return Err(Error::Input("case: empty name".into()));
+        }
+        let json: serde_json::Value = serde_json::from_slice(&bytes)
+            .map_err(|e| Error::Input(format!("case {name} is not valid JSON: {e}")))?;
+        Ok(Case {
+            name: name.to_string(),
+            source: CaseSource::File {
+                path: PathBuf::from(name),
+                sha256: sha256_hex(&bytes),
+                bytes,
+                json,
+            },
+        })
+    }
+
     /// A built-in test problem by its name (without the prefix).
     pub fn builtin(name: &str) -> Result<Case, Error> {
         if !BUILTIN_NAMES.contains(&name) {
@@ -184,6 +204,20 @@ mod tests {
         assert_eq!(c.sha256(), Some(sha256_hex(b"{\"a\": 1}").as_str()));
         let abs = Case::load(p.to_str().unwrap(), None).unwrap();
         assert_eq!(abs, c);
+    }
+
+    #[test]
+    fn a_case_from_memory_is_a_file_case_of_that_name() {
+        let c = Case::from_json_bytes("mine", b"{\"a\": 1}".to_vec()).unwrap();
+        assert_eq!(c.name, "mine");
+        assert_eq!(c.sha256(), Some(sha256_hex(b"{\"a\": 1}").as_str()));
+        let e = Case::from_json_bytes("mine", b"{oops".to_vec()).unwrap_err();
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
+        assert!(
+            e.to_string().starts_with("case mine is not valid JSON"),
+            "{e}"
+        );
+        assert!(Case::from_json_bytes("", b"{}".to_vec()).is_err());
     }
 
     #[test]

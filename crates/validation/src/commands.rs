@@ -107,35 +107,16 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         .max_wall_time
         .map(|w| start + Duration::from_secs_f64(w));
     let case = Case::load(&o.case, None)?;
-    o.solver.apply(&SolverOptions::default())?;
-    let prepared = Prepared::load(case)?;
-    let opts = prepared.options(&o.solver)?;
+    let (prepared, mut req) = run_request(case, o, deadline)?;
     let out = o
         .out
         .clone()
         .unwrap_or_else(|| default_out("run", &prepared.case.name));
-    let mut req = RunRequest::new(opts);
-    req.t_end = o.t_end;
-    req.samples_per_revolution = o.samples_per_revolution;
-    req.output_every = o.output_every;
     req.keep_events = false;
-    req.deadline = deadline;
     let dir = OutDir::create(&out, &report::run_file)?;
     let traj = dir.path().join(TRAJECTORY_FILE);
     let mut sink = CsvFile::create(&traj)?;
-    let outcome = simulate_into(&prepared, &req, &mut sink).and_then(|r| {
-        match deadline.filter(|d| Instant::now() >= *d) {
-            Some(_) => Err(Error::Solver(SolveError::BudgetExhausted {
-                t: r.extra_states.t_final,
-                y: r.extra_states.y_final.clone(),
-                reason: format!(
-                    "wall-clock budget of {} s used before the output was written",
-                    o.solver.max_wall_time.unwrap_or_default()
-                ),
-            })),
-            None => Ok(r),
-        }
-    });
+    let outcome = simulate_into(&prepared, &req, &mut sink).and_then(|r| within(r, o, deadline));
     match outcome {
         Ok(r) => {
             let mut files = vec![traj];
@@ -184,6 +165,62 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         }),
         Err(e) => Err(e),
     }
+}
+
+/// The checked case and the request of a run (the same for [`run`] and [`run_in_memory`]):
+/// the solver choice checked against the defaults before the scene is read, then laid over
+/// the case's own options.
+fn run_request(
+    case: Case,
+    o: &RunOptions,
+    deadline: Option<Instant>,
+) -> Result<(Prepared, RunRequest), Error> {
+    o.solver.apply(&SolverOptions::default())?;
+    let prepared = Prepared::load(case)?;
+    let opts = prepared.options(&o.solver)?;
+    let mut req = RunRequest::new(opts);
+    req.t_end = o.t_end;
+    req.samples_per_revolution = o.samples_per_revolution;
+    req.output_every = o.output_every;
+    req.deadline = deadline;
+    Ok((prepared, req))
+}
+
+/// A finished run, or `BudgetExhausted` when the wall-clock budget ran out meanwhile.
+fn within(r: RunResult, o: &RunOptions, deadline: Option<Instant>) -> Result<RunResult, Error> {
+    match deadline.filter(|d| Instant::now() >= *d) {
+        Some(_) => Err(Error::Solver(SolveError::BudgetExhausted {
+            t: r.extra_states.t_final,
+            y: r.extra_states.y_final.clone(),
+            reason: format!(
+                "wall-clock budget of {} s used before the output was written",
+                o.solver.max_wall_time.unwrap_or_default()
+            ),
+        })),
+        None => Ok(r),
+    }
+}
+
+/// [`run`] without files, for a library caller (the Python binding's `lash.run`): the same
+/// checks, defaults, integration and summary, the trajectory's rows kept in memory
+/// ([`RunResult::trajectory`]) and every event of the run kept ([`RunResult::events`]);
+/// returned with the prepared case, whose [`MechanismInfo`](crate::simulate::MechanismInfo)
+/// names the state components and the event functions.
+///
+/// ```text
+/// case: loaded by the caller (Case::load, or a Case built from JSON text in memory);
+///       o.case and o.out are not used
+/// budget: solver.max_wall_time counts from this call, as in run
+/// solver failure: Error::Solver with time and state; nothing is written
+/// ```
+pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult), Error> {
+    let deadline = o
+        .solver
+        .max_wall_time
+        .map(|w| Instant::now() + Duration::from_secs_f64(w));
+    let (prepared, req) = run_request(case, o, deadline)?;
+    let r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
+    Ok((prepared, r))
 }
 
 /// What to study.

@@ -23,7 +23,7 @@ use lash_solver::SolveError;
 /// Everything that can make the engine fail.
 ///
 /// ```text
-/// Error → kind:  Usage | Option | Input | Io → BadInput,  Solver → Solver,
+/// Error → kind:  Usage | Option | Input | Scene | Io → BadInput,  Solver → Solver,
 ///                NotYetAvailable | Internal → Bug,  Interrupted → Interrupted
 /// SolveError::Interrupted → Error::Interrupted (From), every other SolveError → Error::Solver
 /// ```
@@ -45,6 +45,16 @@ pub enum Error {
     /// Bad input file: a missing or invalid case, sweep file or result directory.
     #[error("{0}")]
     Input(String),
+    /// A scene the model rejects, with its JSON path and reason kept apart
+    /// ([`lash_model::SceneError`]), so that a front end can show them as fields (the Python
+    /// binding's `lash.SceneError`).
+    #[error("case {case}: {error}")]
+    Scene {
+        /// The case as the user named it (the scene file's path, or the case's name).
+        case: String,
+        /// What the model says.
+        error: lash_model::SceneError,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -91,9 +101,11 @@ impl Error {
     /// The class of this error.
     pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Usage(_) | Error::Option(_) | Error::Input(_) | Error::Io { .. } => {
-                ErrorKind::BadInput
-            }
+            Error::Usage(_)
+            | Error::Option(_)
+            | Error::Input(_)
+            | Error::Scene { .. }
+            | Error::Io { .. } => ErrorKind::BadInput,
             Error::Solver(_) => ErrorKind::Solver,
             Error::NotYetAvailable(_) | Error::Internal(_) => ErrorKind::Bug,
             Error::Interrupted(_) => ErrorKind::Interrupted,

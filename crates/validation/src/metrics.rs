@@ -179,6 +179,9 @@ pub struct EventRecord {
     /// The clearance joint (index among the scene's clearance joints) whose δ or ε crossed;
     /// None when not known (every joint counts as the role's).
     pub joint: Option<usize>,
+    /// The event function that crossed (its index in the mechanism's list,
+    /// `lash_model::Mechanism::event_name`; [`crate::simulate::MechanismInfo::event_names`]).
+    pub index: usize,
 }
 
 /// Energy totals over the whole run, J, as the model accumulates them.
@@ -918,6 +921,7 @@ mod tests {
             quantity,
             rising,
             joint: None,
+            index: 0,
         };
         let events = [
             ev(0.1, EventQuantity::Penetration, true), // before the window
@@ -1087,6 +1091,7 @@ mod tests {
             quantity: EventQuantity::Penetration,
             rising: true,
             joint: Some(joint),
+            index: joint,
         };
         let events = [ev(0.5, 1), ev(0.6, 1), ev(0.7, 0)];
         let m = compute(

@@ -197,6 +197,10 @@ pub struct MechanismInfo {
     /// Names of the state components: `<body>.x`, `<body>.y`, `<body>.theta` of every
     /// integrated body, then `<body>.vx`, `<body>.vy`, `<body>.omega`.
     pub state_names: Vec<String>,
+    /// Each event function's kind and element (`lash_model::Mechanism::event_name`:
+    /// `("contact" | "eps_cap", clearance joint)`, `("corner_contact", prismatic joint)`), by
+    /// [`crate::metrics::EventRecord::index`].
+    pub event_names: Vec<(&'static str, String)>,
 }
 
 /// A case ready to run.
@@ -216,12 +220,25 @@ pub struct Prepared {
     pub info: Option<MechanismInfo>,
 }
 
-fn scene_error(case: &Case, e: impl std::fmt::Display) -> Error {
-    let what = match &case.source {
+/// How an error names the case: the scene file's path, else the case's name.
+fn case_label(case: &Case) -> String {
+    match &case.source {
         CaseSource::File { path, .. } => path.display().to_string(),
         CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => case.name.clone(),
-    };
-    Error::Input(format!("case {what}: {e}"))
+    }
+}
+
+/// A case that cannot be used for a reason other than the model's (`case LABEL: REASON`).
+fn case_error(case: &Case, e: impl std::fmt::Display) -> Error {
+    Error::Input(format!("case {}: {e}", case_label(case)))
+}
+
+/// A scene the model rejects (`case LABEL: PATH: REASON`), its path and reason kept.
+fn scene_error(case: &Case, error: lash_model::SceneError) -> Error {
+    Error::Scene {
+        case: case_label(case),
+        error,
+    }
 }
 
 impl Prepared {
@@ -248,7 +265,7 @@ impl Prepared {
                 })
             }
             CaseSource::File { bytes, .. } => {
-                let text = std::str::from_utf8(bytes).map_err(|e| scene_error(&case, e))?;
+                let text = std::str::from_utf8(bytes).map_err(|e| case_error(&case, e))?;
                 let scene = Scene::from_json_str(text).map_err(|e| scene_error(&case, e))?;
                 Prepared::with_scene(case, scene)
             }
@@ -256,7 +273,7 @@ impl Prepared {
                 let scene = lash_model::cases::press_catalogue()
                     .into_iter()
                     .find_map(|(n, s)| (&n == name).then_some(s))
-                    .ok_or_else(|| scene_error(&case, "not in the press catalogue"))?;
+                    .ok_or_else(|| case_error(&case, "not in the press catalogue"))?;
                 Prepared::with_scene(case, scene)
             }
         }
@@ -488,6 +505,10 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
         dim: mech.dim(),
         has_ideal: mech.ideal_slider_crank().is_some(),
         state_names,
+        event_names: (0..mech.n_events())
+            .filter_map(|i| mech.event_name(i))
+            .map(|(kind, name)| (kind, name.to_string()))
+            .collect(),
     }
 }
 
@@ -1442,6 +1463,7 @@ impl Observer for MechanismRun<'_> {
             quantity,
             rising: h.rising,
             joint,
+            index: h.index,
         });
     }
 }

@@ -1,0 +1,47 @@
+"""lash: ODE integrators for stiff contact problems, from Python.
+
+lash is a Rust research solver for planar mechanisms with clearance joints. This package
+runs its scenes from Python and gives its integrators to your own ODE with scipy's
+interface:
+
+- :func:`run` — a scene run as ``lash run`` runs it (same defaults, same numbers), the
+  results in memory: :class:`Run` with ``summary`` (summary.json as a dict), ``columns``
+  (trajectory.csv as numpy arrays), ``events`` (:class:`Event`) and ``to_pandas()``.
+- :func:`solve_ivp` — scipy's ``solve_ivp`` with lash's methods (Rodas5P, BDF, TR-BDF2,
+  ESDIRK3(4), the embedded pairs BS3(2), DP5(4), Tsit5(4), DOP853, fixed-step RK4), its
+  Söderlind step-size controllers, and events with direction, terminal counts and hooks.
+- :class:`OdeResult`, :class:`OdeSolution` — its result and continuous solution.
+- :data:`METHODS`, :data:`CONTROLLERS` — the names lash accepts.
+- Exceptions: :class:`UsageError` (bad arguments), :class:`SolveError` (the integration
+  failed, with time and state), :class:`SceneError` (a scene that cannot be used, with its
+  JSON path), all derived from :class:`LashError`. An exception raised inside your own
+  callback propagates as itself.
+
+Example
+-------
+>>> import lash
+>>> sol = lash.solve_ivp(lambda t, y: [-y[0]], (0, 1), [1.0], rtol=1e-10)
+>>> abs(float(sol.y[0, -1]) - 0.36787944117144233) < 1e-9
+True
+"""
+
+from ._errors import LashError, SceneError, SolveError, UsageError
+from ._ivp import CONTROLLERS, METHODS, OdeResult, OdeSolution, solve_ivp
+from ._lash import __version__
+from ._run import Event, Run, run
+
+__all__ = [
+    "run",
+    "Run",
+    "Event",
+    "solve_ivp",
+    "OdeResult",
+    "OdeSolution",
+    "METHODS",
+    "CONTROLLERS",
+    "LashError",
+    "UsageError",
+    "SolveError",
+    "SceneError",
+    "__version__",
+]

@@ -1,0 +1,257 @@
+"""``lash.run``: a scene run by lash's engine, as ``lash run`` runs it, results in memory."""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import os
+from typing import Any, Dict, List, NamedTuple, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _lash
+from ._errors import UsageError
+
+__all__ = ["run", "Run", "Event"]
+
+
+class Event(NamedTuple):
+    """An event of a scene run.
+
+    Attributes
+    ----------
+    time : float
+        When it happened, s (located on the dense output for adaptive methods; for the
+        fixed-step RK4, which runs without event location, the crossing between two step ends
+        by linear interpolation, as ``lash run`` counts it).
+    name : str
+        The joint it concerns (a clearance joint's, or a prismatic clearance joint's name).
+    kind : str
+        ``"contact_onset"`` / ``"contact_loss"`` (the penetration δ of a clearance joint
+        crossing zero upwards / downwards), ``"eps_cap_reached"`` / ``"eps_cap_left"`` (the
+        eccentricity ratio of a lubricated joint crossing the film's cap ε_cap),
+        ``"corner_contact_onset"`` / ``"corner_contact_loss"`` (a corner of a prismatic
+        clearance joint), docs/model.md §7.
+    """
+
+    time: float
+    name: str
+    kind: str
+
+
+class Run:
+    """The result of :func:`run`: what ``lash run`` writes, in memory.
+
+    Attributes
+    ----------
+    summary : dict
+        Exactly the content of summary.json (docs/outputs.md, "summary.json"): version,
+        case, scene_sha256, method, controller, rtol, atol, step, t_end, stats, wall_time_s,
+        events, metrics, final_state, reference_error.
+    columns : dict of str to numpy.ndarray
+        Each column of trajectory.csv, in the file's order (``t``, ``crank_angle``,
+        ``slider_x``, …, then the scene's ``<body>.x``, … columns; ``y0``, ``y1``, … for a
+        built-in test problem), as a float64 array with one value per row. A column whose
+        role the scene lacks is empty in the CSV and NaN here.
+    events : list of Event
+        Every event of the run, in time order: ``(time, name, kind)``.
+    engine_time_s : float
+        Wall time of the engine's part of the call (reading the scene, the run with its
+        outputs and metrics), s, without Python: ``summary["wall_time_s"]`` is the
+        integration's alone. BENCHMARKS.md ("Python") compares both with the whole call.
+    """
+
+    def __init__(self, summary: Dict[str, Any], columns: Dict[str, np.ndarray],
+                 events: List[Event], engine_time_s: float = math.nan) -> None:
+        self.summary = summary
+        self.columns = columns
+        self.events = events
+        self.engine_time_s = engine_time_s
+
+    def to_pandas(self):
+        """The trajectory as a :class:`pandas.DataFrame`, one column per trajectory.csv
+        column (NaN where the CSV has empty cells): what ``pandas.read_csv`` makes of the
+        file. Needs pandas (``pip install pandas``); raises ImportError without it."""
+        try:
+            import pandas as pd
+        except ImportError as e:
+            raise ImportError("Run.to_pandas needs pandas: pip install pandas") from e
+        return pd.DataFrame(self.columns, copy=False)
+
+    def __repr__(self) -> str:
+        s = self.summary
+        rows = len(self.columns.get("t", ()))
+        return (f"Run(case={s.get('case')!r}, method={s.get('method')!r}, "
+                f"t_end={s.get('t_end')!r}, rows={rows}, events={len(self.events)})")
+
+
+def _positive(name: str, value, what: str = "a finite number > 0") -> Optional[float]:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise UsageError(f"{name} must be {what}, got {value!r}")
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise UsageError(f"{name} must be {what}, got {value!r}")
+    return v
+
+
+def _whole(name: str, value, minimum: int) -> Optional[int]:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise UsageError(f"{name} must be a whole number >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def run(
+    scene: Union[str, "os.PathLike[str]", Dict[str, Any]],
+    method: Optional[str] = None,
+    rtol: Optional[float] = None,
+    atol: Union[None, float, Sequence[float]] = None,
+    controller: Optional[str] = None,
+    step: Optional[float] = None,
+    t_end: Optional[float] = None,
+    samples_per_revolution: Optional[int] = None,
+    max_wall_time: Optional[float] = None,
+    max_steps: Optional[int] = None,
+    *,
+    output_every: Optional[float] = None,
+    name: str = "scene",
+) -> Run:
+    """Run a scene as ``lash run`` does and return its results in memory.
+
+    The same engine, defaults and checks as the command ``lash run SCENE`` with the flags of
+    the same names (docs/outputs.md, "lash run CASE"): the numbers are the command's, bit for
+    bit. Nothing is written to disk. The GIL is released while the scene is read and
+    integrated, so threads can run scenes in parallel.
+
+    Parameters
+    ----------
+    scene : str, os.PathLike or dict
+        A scene file (JSON, docs/scene-format.md), a built-in test problem
+        ``"testset:NAME"`` (rober, vdpolm, hires, orego), or the scene itself as a dict
+        (the same JSON as the files).
+    method : str, optional
+        ``--method``: rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p.
+        Default: the case's (bdf for scenes, rodas5p for test problems).
+    rtol : float, optional
+        ``--rtol``, in [1e-14, 1) (adaptive methods). Default: the case's (1e-8 for scenes).
+    atol : float or sequence of floats, optional
+        ``--atol``: one number, or one per state component; each finite and > 0 (adaptive
+        methods). Default: rtol times the scene's length and speed scales (docs/outputs.md).
+    controller : str, optional
+        ``--controller``: i, pi, pid, h211, h312, gustafsson (lash's adaptive methods, not
+        diffsol's bdf, trbdf2, esdirk34).
+    step : float, optional
+        ``--step``: the fixed step of rk4, s; finite and > 0 (required with rk4).
+    t_end : float, optional
+        ``--t-end``: end time, s; finite and > 0 (scenes only). Default: the scene's.
+    samples_per_revolution : int, optional
+        ``--samples-per-revolution``: trajectory rows per crank revolution, >= 1 (scenes
+        with a crank driver). Default 2000.
+    max_wall_time : float, optional
+        ``--max-wall-time``: wall-clock budget of the whole run, s, counted from the call;
+        running out raises :class:`SolveError` (kind ``"budget_exhausted"``).
+    max_steps : int, optional
+        ``--max-steps``: most step attempts, >= 1; running out raises :class:`SolveError`
+        (kind ``"too_many_steps"``). Default: the case's (50 000 000 for scenes).
+    output_every : float, optional
+        ``--output-every``: time between trajectory rows, s (any scene); not together with
+        ``samples_per_revolution``. Keyword only.
+    name : str, optional
+        The case name recorded in the summary for a dict scene (``lash run`` records a
+        file's stem); its ``scene_sha256`` is the sha256 of the JSON text the dict is
+        serialised to (``json.dumps(scene, allow_nan=False)``). Keyword only.
+
+    Returns
+    -------
+    Run
+        ``summary`` (the content of summary.json), ``columns`` (trajectory.csv as numpy
+        arrays), ``events`` and :meth:`Run.to_pandas`.
+
+    Raises
+    ------
+    SceneError
+        The scene is rejected: ``.path`` is the JSON path of the offending value, ``.reason``
+        why (docs/scene-format.md, "Errors"); a file that is not JSON has path ``"."``.
+    UsageError
+        A bad option or combination (rtol with rk4, a controller with bdf, …), named by its
+        argument name.
+    SolveError
+        The integration failed: ``.t`` and ``.y`` are the time and state of the failure,
+        ``.kind`` what happened.
+    FileNotFoundError
+        ``scene`` names no file.
+
+    Examples
+    --------
+    >>> import lash
+    >>> r = lash.run("cases/press/lubricated_150rpm_c0.1.json", t_end=0.1)  # doctest: +SKIP
+    >>> r.summary["metrics"]["slider_acc_max"], r.columns["slider_a"].max()  # doctest: +SKIP
+    """
+    path, text = None, None
+    if isinstance(scene, dict):
+        if not isinstance(name, str) or not name:
+            raise UsageError(f"name must be a non-empty string, got {name!r}")
+        try:
+            text = json.dumps(scene, allow_nan=False).encode("utf-8")
+        except (TypeError, ValueError) as e:
+            raise UsageError(f"scene is not JSON data: {e}") from None
+    elif isinstance(scene, (str, os.PathLike)):
+        path = os.fspath(scene)
+        if not isinstance(path, str):
+            path = os.fsdecode(path)
+        if not path.startswith("testset:") and not os.path.isfile(path):
+            raise FileNotFoundError(2, "No such scene file", path)
+    else:
+        raise UsageError(f"scene must be a path or a dict, got {type(scene).__name__}")
+    if method is not None:
+        if not isinstance(method, str) or method.lower() not in _lash.METHODS:
+            raise UsageError(f"unknown method {method!r}; lash's methods are "
+                             f"{', '.join(_lash.METHODS)}")
+        method = method.lower()
+    if controller is not None:
+        if not isinstance(controller, str) or controller.lower() not in _lash.CONTROLLERS:
+            raise UsageError(f"unknown controller {controller!r}; lash's controllers are "
+                             f"{', '.join(_lash.CONTROLLERS)}")
+        controller = controller.lower()
+    if rtol is not None:
+        if isinstance(rtol, bool) or not isinstance(rtol, numbers.Real) or \
+                not (1e-14 <= float(rtol) < 1.0):
+            raise UsageError(f"rtol must be in [1e-14, 1), got {rtol!r}")
+        rtol = float(rtol)
+    atol_list = None
+    if atol is not None:
+        try:
+            arr = np.atleast_1d(np.asarray(atol, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise UsageError(f"atol must be a number or a sequence of numbers, "
+                             f"got {atol!r}") from None
+        if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or \
+                not np.all(arr > 0):
+            raise UsageError(f"atol must be finite and > 0 (one number or one per state "
+                             f"component), got {atol!r}")
+        atol_list = [float(a) for a in arr]
+    step = _positive("step", step)
+    t_end = _positive("t_end", t_end)
+    output_every = _positive("output_every", output_every)
+    max_wall_time = _positive("max_wall_time", max_wall_time)
+    samples_per_revolution = _whole("samples_per_revolution", samples_per_revolution, 1)
+    max_steps = _whole("max_steps", max_steps, 1)
+    if samples_per_revolution is not None and output_every is not None:
+        raise UsageError("samples_per_revolution and output_every exclude each other: give "
+                         "one")
+
+    raw = _lash.run_core(path, text, name, method, rtol, atol_list, controller, step, t_end,
+                         samples_per_revolution, output_every, max_wall_time, max_steps)
+
+    summary = json.loads(raw["summary"])
+    rows = raw["rows"]
+    data = np.frombuffer(raw["columns"], dtype=np.float64)
+    columns = {}
+    for k, col in enumerate(raw["names"]):
+        columns[col] = data[k * rows:(k + 1) * rows]
+    events = [Event(float(t), n, kind) for (t, n, kind) in raw["events"]]
+    return Run(summary, columns, events, raw["engine_time_s"])

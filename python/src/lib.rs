@@ -1,0 +1,66 @@
+//! # lash-python
+//!
+//! The extension module `lash._lash` of the Python package `lash` (python/lash/): scenes run
+//! by lash's engine with the results in memory, and lash's integrators, step-size controllers
+//! and event location for a right-hand side written in Python, behind scipy's `solve_ivp`
+//! interface.
+//!
+//! ```text
+//! lash.run (python/lash/_run.py)             checks the options as `lash run` does, builds
+//!        │                                    Run (summary dict, numpy columns, events)
+//!        ▼
+//! _lash.run_core (scene.rs)                   lash_validation::commands::run_in_memory with
+//!                                             the GIL released
+//!
+//! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's
+//!        │                                    meaning), builds OdeResult / OdeSolution
+//!        ▼
+//! _lash.solve_ivp_core (ivp.rs)               PySystem: OdeSystem calling fun, jac, events
+//!        │                                    and hooks with the GIL held; drives lash-solver's
+//!        ▼                                    Integrator, records steps, t_eval, events, dense
+//! lash_solver::Problem → Integrator           output; returns raw arrays as bytes
+//! ```
+//!
+//! Arrays cross the boundary as bytes of native-endian f64 (one copy, no per-element
+//! conversion); the Python side wraps them with `numpy.frombuffer`. Errors: option errors
+//! raise `lash.UsageError`, a rejected scene `lash.SceneError` with its JSON path, solver
+//! failures `lash.SolveError` with time and state (`lash.solve_ivp` adds the partial result),
+//! and an exception raised inside a Python callback stops the integration and propagates as
+//! itself (python/lash/_errors.py).
+
+mod convert;
+mod errors;
+mod ivp;
+mod scene;
+
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+use lash_solver::{ControllerKind, Method};
+
+/// The module `lash._lash`.
+#[pymodule]
+fn _lash(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_function(wrap_pyfunction!(ivp::solve_ivp_core, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::run_core, m)?)?;
+    m.add(
+        "METHODS",
+        PyTuple::new(py, Method::ALL.iter().map(|x| x.name()))?,
+    )?;
+    m.add(
+        "CONTROLLERS",
+        PyTuple::new(py, ControllerKind::ALL.iter().map(|c| c.name()))?,
+    )?;
+    m.add(
+        "DEFAULT_CONTROLLERS",
+        PyTuple::new(
+            py,
+            Method::ALL
+                .iter()
+                .map(|x| (x.name(), ivp::default_controller(*x))),
+        )?,
+    )?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
