@@ -208,7 +208,8 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
                     model: FilmModel::LongGumbel,
                     viscosity: 0.4,
                     length: 0.1,
-                    eps_cap: 0.99,
+                    eps_cap: Some(0.99),
+                    omega0: None,
                 }),
                 initial_eccentricity: [0.0, 0.0],
             }));

@@ -27,7 +27,7 @@ use faer::MatMut;
 use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
 use crate::geometry::{ClearanceInput, ClearanceState};
-use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw};
+use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH};
 use crate::outputs::Roles;
 use crate::scene::{
     Attachment, ClearanceEnd, FrictionSpec, JointSpec, NormalSpec, Scene, SceneError, GROUND,
@@ -421,8 +421,10 @@ impl Mechanism {
         for k in 0..clr.len() {
             events.push(EventKind::Contact(k));
         }
+        // A capped film changes form at ε = ε_cap; a film without a cap has no such point
+        // below contact (docs/model.md §7).
         for (k, c) in clr.iter().enumerate() {
-            if c.film.is_some() {
+            if c.film.is_some_and(|f| f.eps_cap.is_some()) {
                 events.push(EventKind::EpsCap(k));
             }
         }
@@ -882,7 +884,7 @@ impl Mechanism {
             g[i] = match *ev {
                 EventKind::Contact(k) => self.clearance_state(k, sc).delta,
                 EventKind::EpsCap(k) => {
-                    let cap = self.clr[k].film.as_ref().map_or(1.0, |f| f.eps_cap);
+                    let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
                     self.clearance_state(k, sc).eps - cap
                 }
             };
@@ -1066,6 +1068,7 @@ fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::ClearanceSpec) ->
         radius: rj,
         clearance: rb - rj,
         eps_cap: f.eps_cap,
+        mirror_width: f.omega0.unwrap_or(DEFAULT_MIRROR_WIDTH),
     });
     Clr {
         joint: ji,
