@@ -2,7 +2,7 @@
 //! ratio of two measurements taken side by side in one run.
 //!
 //! ```text
-//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [--reps N]
+//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [--reps N]
 //! (a) one RHS evaluation of the dry press (150 rpm, c = 0.1 mm), ns, against 1 µs
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
 //!     second revolution (2001 points); the cheapest run of each method with error ≤ 1e-6 m/s²
@@ -11,6 +11,9 @@
 //!     methods with event location against RK4 without events (its error over h)
 //! (d) rodas5p against bdf at equal error on several press cases (work–precision)
 //! (e) Rodas5P with the previous Jacobian (plain central differences of f) against the new one
+//! (f) lubricated 150 rpm, c = 0.1 mm, as (b): lash's cheapest run with error ≤ 1e-6 m/s²
+//!     against diffsol's BDF alone on the hand-written minimal-coordinate press
+//!     (`lash_benches::handwritten`), finite-difference Jacobians counted
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -528,6 +531,74 @@ fn section_e(ctx: &Ctx) {
     }
 }
 
+fn section_f(ctx: &Ctx) {
+    use lash_benches::handwritten::{diffsol_bdf, HandPress};
+    let stem = "lubricated_150rpm_c0.1";
+    println!(
+        "\n(f) {stem}, two revolutions: lash against diffsol's BDF on the hand-written press \
+         (target {TARGET:.0e} m/s²)"
+    );
+    let (m, times, t_end, reference) = second_revolution(stem);
+    let hand = HandPress::paper(150.0, 1e-4, true);
+    let y0 = HandPress::minimal_state(&m.initial_state());
+    println!("  diffsol bdf on the hand-written press (4 states), atol = rtol·1e-3:");
+    print_header();
+    let mut hand_runs = Vec::new();
+    for rtol in tolerances(4, 12) {
+        let mut best: Option<lash_benches::handwritten::DiffsolRun> = None;
+        for _ in 0..ctx.reps.max(10) {
+            let r = match diffsol_bdf(&hand, m.t_start(), y0, rtol, [rtol * 1e-3; 4], &times) {
+                Ok(r) => r,
+                Err(e) => {
+                    println!("  rtol {rtol:.1e}: {e}");
+                    break;
+                }
+            };
+            if best.as_ref().is_none_or(|b| r.wall < b.wall) {
+                best = Some(r);
+            }
+        }
+        let Some(r) = best else { continue };
+        let run = Run {
+            label: format!("hand bdf rtol {rtol:.1e}"),
+            error: max_abs_diff(&r.slider_a, &reference),
+            wall: r.wall,
+            steps: r.steps,
+            rhs: r.rhs_evals,
+            jac: 0,
+            lu: 0,
+            events: 0,
+        };
+        print_run(&run);
+        let done = run.error < TARGET / 30.0;
+        hand_runs.push(run);
+        if done {
+            break;
+        }
+    }
+    println!("  lash on the general model (12 states), every adaptive method:");
+    print_header();
+    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
+    best.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+    let hand_best = cheapest(&hand_runs, TARGET);
+    println!("  cheapest with error ≤ {TARGET:.0e}:");
+    if let Some(h) = hand_best {
+        print_run(h);
+    }
+    if let Some(b) = best.first() {
+        print_run(b);
+    }
+    if let (Some(h), Some(b)) = (hand_best, best.first()) {
+        println!(
+            "  => {} wall / hand-written diffsol bdf wall = {:.2}×  (goal ≤ 1.5×); RHS {} vs {}",
+            b.label,
+            b.wall / h.wall,
+            b.rhs,
+            h.rhs
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut reps = 3;
@@ -541,15 +612,15 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--reps takes a number");
             }
-            s @ ("a" | "b" | "c" | "d" | "e") => sections.push(s.to_string()),
+            s @ ("a" | "b" | "c" | "d" | "e" | "f") => sections.push(s.to_string()),
             other => {
-                eprintln!("unknown argument {other}: expected a, b, c, d, e, --reps N");
+                eprintln!("unknown argument {other}: expected a, b, c, d, e, f, --reps N");
                 std::process::exit(2);
             }
         }
     }
     if sections.is_empty() {
-        sections = ["a", "b", "c", "d", "e"].map(String::from).to_vec();
+        sections = ["a", "b", "c", "d", "e", "f"].map(String::from).to_vec();
     }
     let ctx = Ctx { reps };
     for s in sections {
@@ -558,7 +629,8 @@ fn main() {
             "b" => section_b(&ctx),
             "c" => section_c(&ctx),
             "d" => section_d(&ctx),
-            _ => section_e(&ctx),
+            "e" => section_e(&ctx),
+            _ => section_f(&ctx),
         }
     }
 }

@@ -9,6 +9,8 @@
 //! The acceleration is `Mechanism::outputs(t, y).slider_a`, the right-hand side at the
 //! dense-output state y(t_i) (docs/outputs.md, "`metrics`").
 
+pub mod handwritten;
+
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -2,9 +2,14 @@
 //!
 //! ```text
 //! main_with(args) = 0 on success; on failure print report() to stderr and return
-//!                   exit_code()  (2 usage/input, 3 solver, 1 bug)
+//!                   exit_code()  (2 usage/input, 3 solver, 1 bug); standard output closed by
+//!                   its reader: quiet, the same code; unwritable (full): 2 after the work
+//!                   (module `out`)
 //! stdout: the command's result (tables, descriptions, "wrote N files to DIR")
 //! stderr: the engine's notes and a sweep's progress bar (StderrProgress), errors
+//! lash run --max-wall-time W: a watchdog ends the process with exit 3 at W + max(1 s, W/4)
+//!                   if the engine has not stopped by itself (work it cannot interrupt: a
+//!                   scene's assembly and initial check, one factorisation of a large system)
 //! ```
 //!
 //! Source: docs/outputs.md ("Exit codes of `lash`"). Commands whose engine (the model, the
@@ -31,25 +36,35 @@ use crate::args::{
     self, Command, CompareArgs, ExtremesArgs, Parsed, PoincareArgs, RunArgs, StiffnessArgs,
     SweepArgs, WorkPrecisionArgs,
 };
-use crate::exit::{ExitStatus, EXIT_BUG, EXIT_OK};
+use crate::exit::{ExitStatus, EXIT_BUG, EXIT_OK, EXIT_SOLVER, EXIT_USAGE};
+use crate::out::{errln, out, outln, stdout_error};
 use crate::progress::StderrProgress;
 
 /// Runs `lash` with these arguments (the first is the program name) and returns the exit code.
 /// A panic (a bug) is caught and becomes exit code 1 (its message is printed by the panic hook).
+/// Standard output that cannot be written (other than closed by its reader) makes a successful
+/// command exit 2 (module `out`).
 pub fn main_with<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    guard(|| {
+    let code = guard(|| {
         args::parse(args).and_then(|p| match p {
             Parsed::Print(s) => {
-                print!("{s}");
+                out(&s);
                 Ok(())
             }
             Parsed::Cli(c) => execute(c.command),
         })
-    })
+    });
+    match stdout_error() {
+        Some(e) if code == EXIT_OK => {
+            errln(&format!("error: writing standard output: {e}"));
+            EXIT_USAGE
+        }
+        _ => code,
+    }
 }
 
 /// Runs `f` and maps its outcome to an exit code: 0, the error's code (its report printed on
@@ -58,7 +73,7 @@ pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
         Ok(Ok(())) => EXIT_OK,
         Ok(Err(e)) => {
-            eprintln!("{}", e.report());
+            errln(&e.report());
             e.exit_code()
         }
         Err(_) => EXIT_BUG,
@@ -75,7 +90,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) => {
             let w = commands::study_paper(&a.options())?;
-            println!("{}", study::describe_paper(&w.result, &w.dir));
+            outln(&study::describe_paper(&w.result, &w.dir));
             Ok(())
         }
         Command::Compare(a) => compare_command(&a).map(|_| ()),
@@ -92,12 +107,12 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Extremes(a) => extremes_command(&a).map(|_| ()),
         Command::Merge(a) => {
             let m = commands::merge(&a.options())?;
-            println!(
+            outln(&format!(
                 "merged {} points into {} and {}",
                 m.table.rows.len(),
                 m.csv.display(),
                 m.md.display()
-            );
+            ));
             Ok(())
         }
     }
@@ -107,18 +122,69 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
 /// written (into `validation/reports/default`).
 pub fn default_command() -> Result<Written<Headline>, Error> {
     let w = commands::default_run(None, &StderrProgress::new())?;
-    print!("{}", w.result.to_markdown());
-    println!("\nwrote {} files to {}", w.files.len(), w.dir.display());
+    out(&w.result.to_markdown());
+    outln(&format!(
+        "\nwrote {} files to {}",
+        w.files.len(),
+        w.dir.display()
+    ));
     Ok(w)
 }
 
 /// `lash run`: the engine's run (module `commands`), then what it did and where the files are.
-/// Returns the result and the output directory.
+/// Returns the result and the output directory. With `--max-wall-time` a watchdog stops the
+/// process (exit 3) if the engine overruns the budget inside work it cannot interrupt.
 pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
-    let w = commands::run(&a.options())?;
-    print!("{}", describe_run(&w.result));
-    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    let _watchdog = a.solver.max_wall_time.map(Watchdog::start);
+    let w = commands::run(&a.options(), &StderrProgress::new())?;
+    out(&describe_run(&w.result));
+    outln(&format!(
+        "wrote {} files to {}",
+        w.files.len(),
+        w.dir.display()
+    ));
     Ok((w.result, w.dir))
+}
+
+/// Ends the process with exit 3 when a wall-clock budget of `w` s is overrun by
+/// max(1 s, w/4) (module doc); dropped (the command ended) it does nothing.
+struct Watchdog {
+    done: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Watchdog {
+    fn start(w: f64) -> Watchdog {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let done = std::sync::Arc::new(AtomicBool::new(false));
+        let flag = done.clone();
+        let grace = (0.25 * w).max(1.0);
+        let limit = std::time::Duration::from_secs_f64(w + grace);
+        let started = std::time::Instant::now();
+        std::thread::spawn(move || {
+            while started.elapsed() < limit {
+                if flag.load(Ordering::Relaxed) {
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+            if !flag.load(Ordering::Relaxed) {
+                errln(&format!(
+                    "error: solver failed: budget exhausted: wall-clock budget of {w} s used; \
+                     stopped {grace:.1} s later inside work that cannot be interrupted (the \
+                     scene's assembly and initial check, or one factorisation of a large \
+                     system); nothing written"
+                ));
+                std::process::exit(i32::from(EXIT_SOLVER));
+            }
+        });
+        Watchdog { done }
+    }
+}
+
+impl Drop for Watchdog {
+    fn drop(&mut self) {
+        self.done.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
 }
 
 /// `lash compare`: RK4 at several steps, every embedded pair and every stiff method at each
@@ -126,8 +192,12 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
 /// compare.md and compare.json and prints the table.
 pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
     let w = commands::compare(&a.options(), &StderrProgress::new())?;
-    print!("{}", w.result.to_markdown());
-    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    out(&w.result.to_markdown());
+    outln(&format!(
+        "wrote {} files to {}",
+        w.files.len(),
+        w.dir.display()
+    ));
     Ok(w.result)
 }
 
@@ -137,29 +207,37 @@ pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
 pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
     let w = commands::work_precision(&a.options(), &StderrProgress::new())?;
     let WorkPrecisionResult { table, reference } = w.result;
-    print!("{}", table.to_markdown());
-    println!(
+    out(&table.to_markdown());
+    outln(&format!(
         "reference: {}\nwrote {} files to {}",
         reference,
         w.files.len(),
         w.dir.display()
-    );
+    ));
     Ok(table)
 }
 
 /// `lash stiffness`: the engine's analysis, then the two limits and the verdict.
 pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf), Error> {
     let w = commands::stiffness(&a.options())?;
-    print!("{}", w.result.report.describe());
-    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    out(&w.result.report.describe());
+    outln(&format!(
+        "wrote {} files to {}",
+        w.files.len(),
+        w.dir.display()
+    ));
     Ok((w.result, w.dir))
 }
 
 /// `lash poincare`: the engine's section and Lyapunov exponent, then the estimate.
 pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), Error> {
     let w = commands::poincare(&a.options())?;
-    print!("{}", w.result.describe());
-    println!("wrote {} files to {}", w.files.len(), w.dir.display());
+    out(&w.result.describe());
+    outln(&format!(
+        "wrote {} files to {}",
+        w.files.len(),
+        w.dir.display()
+    ));
     Ok((w.result, w.dir))
 }
 
@@ -169,10 +247,7 @@ pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), E
 /// written first, to show which).
 pub fn extremes_command(a: &ExtremesArgs) -> Result<Matrix, Error> {
     let w = commands::extremes(&a.options(), &StderrProgress::new())?;
-    print!(
-        "{}",
-        extremes::describe(&w.result, &w.files[0], &w.files[1])
-    );
+    out(&extremes::describe(&w.result, &w.files[0], &w.files[1]));
     extremes::check(&w.result, &w.files[0])?;
     Ok(w.result)
 }
@@ -193,7 +268,7 @@ where
 
 /// Prints the closing line of a sweep on standard error.
 fn print_sweep(o: &SweepOutcome) {
-    eprintln!(
+    errln(&format!(
         "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
         o.shard,
         o.points,
@@ -201,7 +276,7 @@ fn print_sweep(o: &SweepOutcome) {
         o.report.solver_failed,
         o.report.skipped,
         o.dir.display()
-    );
+    ));
 }
 
 #[cfg(test)]

@@ -4,7 +4,8 @@
 //! lash                                   the default run: the 150 rpm press, ideal vs dry vs
 //!                                        lubricated, RK4 against the best adaptive method
 //! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
-//!              [--max-steps N] [--max-wall-time S] [--t-end S] [--out DIR]
+//!              [--max-steps N] [--max-wall-time S] [--t-end S]
+//!              [--samples-per-revolution N | --output-every DT] [--out DIR]
 //! lash study paper [--out DIR]
 //! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
@@ -108,8 +109,9 @@ pub enum Command {
 /// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only;  budgets: any method
 /// ```
 ///
-/// A budget that runs out is a solver failure (exit 3, time and state printed, nothing
-/// written): `--max-steps` as `too many steps`, `--max-wall-time` as `budget exhausted`.
+/// A budget that runs out is a solver failure (exit 3, time and state printed; `lash run`
+/// writes failure.json): `--max-steps` as `too many steps`, `--max-wall-time` as `budget
+/// exhausted`.
 ///
 /// Source: docs/outputs.md ("Method and controller names").
 #[derive(Debug, Clone, Default, PartialEq, Args)]
@@ -135,8 +137,9 @@ pub struct SolverFlags {
     /// scenes).
     #[arg(long = "max-steps", value_name = "N", value_parser = parse_max_steps)]
     pub max_steps: Option<usize>,
-    /// Wall-clock budget of the integration, s; finite and > 0. Running out fails the run
-    /// with "budget exhausted" (exit 3). Default: none.
+    /// Wall-clock budget, s; finite and > 0: of the whole run under `lash run` (reading the
+    /// case, assembly, integration, output), of each integration elsewhere. Running out fails
+    /// the run with "budget exhausted" (exit 3). Default: none.
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
@@ -176,7 +179,8 @@ impl SolverFlags {
 /// Arguments of `lash run`.
 ///
 /// ```text
-/// lash run CASE [solver flags] [--t-end S] [--out DIR]
+/// lash run CASE [solver flags] [--t-end S] [--samples-per-revolution N | --output-every DT]
+///              [--out DIR]
 /// ```
 ///
 /// Source: docs/outputs.md ("`lash run CASE`").
@@ -190,7 +194,18 @@ pub struct RunArgs {
     /// End time override, s (scene cases only; default the scene's t_end or revolutions).
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
-    /// Output directory. Default `out/run/CASE`.
+    /// Rows of trajectory.csv per crank revolution, a whole number >= 1 (scenes with a crank
+    /// driver). Default 2000.
+    #[arg(long = "samples-per-revolution", value_name = "N", value_parser = parse_samples_per_rev,
+          conflicts_with = "output_every")]
+    pub samples_per_revolution: Option<usize>,
+    /// Time between rows of trajectory.csv, s; finite and > 0 (any scene). Default: 2000 rows
+    /// per crank revolution, 4001 rows without a crank driver.
+    #[arg(long = "output-every", value_name = "DT", value_parser = parse_output_every,
+          allow_hyphen_values = true)]
+    pub output_every: Option<f64>,
+    /// Output directory, replaced as a whole when the run ends (it must be new, empty, or an
+    /// earlier run's). Default `out/run/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
 }
@@ -202,6 +217,8 @@ impl RunArgs {
             case: self.case.clone(),
             solver: self.solver.choice(),
             t_end: self.t_end,
+            samples_per_revolution: self.samples_per_revolution,
+            output_every: self.output_every,
             out: self.out.clone(),
         }
     }
@@ -645,6 +662,19 @@ pub fn parse_t_end(s: &str) -> Result<f64, String> {
         return Err(format!("t-end must be > 0, got {s}"));
     }
     Ok(v)
+}
+
+/// Parses a trajectory spacing: finite and > 0 (s).
+pub fn parse_output_every(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "output-every")?;
+    if !(v > 0.0) {
+        return Err(format!("output-every must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
+fn parse_samples_per_rev(s: &str) -> Result<usize, String> {
+    parse_whole(s, "samples-per-revolution", 1)
 }
 
 /// Parses a fixed step: finite and > 0 (s).

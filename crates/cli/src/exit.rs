@@ -61,9 +61,15 @@ impl ExitStatus for Error {
     fn report(&self) -> String {
         let mut s = format!("error: {}", self.message_with(&flag));
         if let Error::Solver(e) = self {
-            if let (Some(t), Some(y)) = (e.time(), e.state()) {
-                let ys: Vec<String> = y.iter().map(|v| format!("{v:e}")).collect();
-                s.push_str(&format!("\n  at t = {t:e}, state = [{}]", ys.join(", ")));
+            match (e.time(), e.state()) {
+                (Some(t), Some(y)) if !y.is_empty() => {
+                    let ys: Vec<String> = y.iter().map(|v| format!("{v:e}")).collect();
+                    s.push_str(&format!("\n  at t = {t:e}, state = [{}]", ys.join(", ")));
+                }
+                (Some(t), _) => s.push_str(&format!(
+                    "\n  at t = {t:e} (no state yet: the run stopped during its set-up)"
+                )),
+                _ => {}
             }
         }
         s

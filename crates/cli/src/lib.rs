@@ -11,7 +11,8 @@
 //! ```
 //!
 //! Modules: [`args`] (clap derive types and value parsers), [`app`] (dispatch and printing),
-//! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`progress`]
+//! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`out`]
+//! (standard output and error without panics), [`progress`]
 //! (notes and the progress bar on standard error).
 
 #![warn(missing_docs)]
@@ -19,4 +20,5 @@
 pub mod app;
 pub mod args;
 pub mod exit;
+pub mod out;
 pub mod progress;

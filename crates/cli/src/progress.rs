@@ -86,8 +86,8 @@ impl Progress for StderrProgress {
     fn note(&self, line: &Message) {
         let text = line.render(&flag);
         match self.bar.get() {
-            Some(b) => b.suspend(|| eprintln!("{text}")),
-            None => eprintln!("{text}"),
+            Some(b) => b.suspend(|| crate::out::errln(&text)),
+            None => crate::out::errln(&text),
         }
     }
 }

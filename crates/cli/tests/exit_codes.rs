@@ -145,21 +145,26 @@ fn merge_of_an_empty_sweep_writes_a_header_only_table() {
     assert_eq!(csv, "id,index,status,error\n");
 }
 
-/// Asserts exit code 3, nothing written to `out`, and a two-line report: the solver's typed error
-/// containing `needle`, then the time and the state (docs/outputs.md, "Exit codes of `lash`").
+/// Asserts exit code 3, a note naming what was written to `out` (failure.json, and the rows
+/// before the failure), then a two-line report: the solver's typed error containing `needle`,
+/// then the time and the state (docs/outputs.md, "Exit codes of `lash`"). Never summary.json.
 fn budget_error(args: &[&str], cwd: &Path, out: &str, needle: &str) {
     let o = lash(args, cwd);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{args:?}: {err}");
     let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 2, "{args:?}: {err}");
-    assert!(lines[0].starts_with("error: solver failed: "), "{err}");
-    assert!(lines[0].contains(needle), "'{needle}' not in {err}");
+    assert_eq!(lines.len(), 3, "{args:?}: {err}");
+    assert!(lines[0].starts_with("wrote failure.json"), "{err}");
+    assert!(lines[1].starts_with("error: solver failed: "), "{err}");
+    assert!(lines[1].contains(needle), "'{needle}' not in {err}");
+    assert!(lines[2].starts_with("  at t = "), "{err}");
+    let dir = cwd.join(out);
+    assert!(dir.join("failure.json").is_file(), "{args:?}");
     assert!(
-        lines[1].starts_with("  at t = ") && lines[1].contains("state = ["),
-        "{err}"
+        !dir.join("summary.json").exists(),
+        "{args:?} wrote a summary"
     );
-    assert!(!cwd.join(out).exists(), "{args:?} wrote {out}");
+    assert!(!dir.join("trajectory.csv").exists(), "{args:?}");
 }
 
 #[test]
@@ -197,6 +202,6 @@ fn exhausted_budgets_exit_3_and_name_the_budget() {
         &["run", case, "--max-wall-time", "1e-6", "--out", "c"],
         d.path(),
         "c",
-        "wall-clock budget of 0.000001 s used",
+        "wall-clock budget of 0.000001 s used before the integration started",
     );
 }

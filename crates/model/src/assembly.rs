@@ -3,19 +3,103 @@
 //!
 //! ```text
 //! Φ_a = (Φ of the ideal joints and non-prescribing drivers,
-//!        r_J^P − r_B^P − e₀ of every clearance joint)               at t = t_start
+//!        r_J^P − r_B^P − e₀ of every clearance joint,
+//!        n·(r_C − o) − offset₀, φ − φ_guide − tilt₀ of every prismatic clearance joint)
+//!                                                                   at t = t_start
 //! positions:  q ← q − Φ_a,q⁺ Φ_a(q)      (Newton, minimum-norm step; until max|Φ_a| ≤ 1e-12)
-//! velocities: q̇ ← q̇ − Φ_a,q⁺ Φ̇_a(q, q̇)  (one exact projection: Φ̇ is linear in q̇; ė = 0)
+//! velocities: minimise ½ (q̇ − q̇₀)ᵀ M (q̇ − q̇₀)  subject to  Φ̇_a = target rates (ė₀, the
+//!             prismatic joints' rates, 0 for the ideal joints) and the exact initial
+//!             velocities of the scene (joint initial_rate, body initial_velocity):
+//!             q̇ = q̇₀ − M^{-1/2} (J M^{-1/2})⁺ Φ̇(q̇₀)   (one exact step: Φ̇ is affine in q̇)
 //! rank check: Φ_q of the ideal equations must have full row rank at the assembled state
 //! ```
-//! Φ⁺ is the Moore–Penrose pseudo-inverse (faer's SVD). The minimum-norm step keeps the bodies
-//! as near their guessed pose as the constraints allow. Source: Nikravesh, Computer-Aided
-//! Analysis of Mechanical Systems (1988), §4 (Newton–Raphson position analysis).
+//! Φ⁺ is the Moore–Penrose pseudo-inverse (faer's SVD). The minimum-norm position step keeps
+//! the bodies as near their guessed pose as the constraints allow; the velocity projection is
+//! the one of least kinetic energy of the change (weighted least squares, the KKT projection).
+//! What both changed is kept in a [`ProjectionReport`]. Sources: Nikravesh, Computer-Aided
+//! Analysis of Mechanical Systems (1988), §4 (Newton–Raphson position analysis); docs/model.md
+//! §1 ("Initial conditions").
+
+use std::fmt;
 
 use faer::Mat;
+use serde::Serialize;
 
 use crate::mechanism::{Mechanism, Owner, Row, Term, TermKind};
-use crate::scene::SceneError;
+use crate::scene::{JointSpec, SceneError, GROUND};
+
+/// Changes below this (SI units, or relative to the given value) are not reported.
+const REPORT_TOL: f64 = 1e-9;
+
+/// One coordinate of an integrated body that the assembly moved.
+///
+/// ```text
+/// change = assembled − given   (coordinate: x, y, theta, vx, vy, omega; SI units)
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CoordinateChange {
+    /// Body name.
+    pub body: String,
+    /// `x`, `y`, `theta` (positions) or `vx`, `vy`, `omega` (velocities).
+    pub coordinate: &'static str,
+    /// The scene's value (its guess, or its exact `initial_velocity`).
+    pub given: f64,
+    /// The value of the assembled initial state.
+    pub assembled: f64,
+    /// assembled − given.
+    pub change: f64,
+}
+
+/// What the assembly changed in the scene's initial guesses (docs/model.md §1, "Initial
+/// conditions").
+///
+/// ```text
+/// positions: Newton's minimum-norm steps onto Φ = 0
+/// velocities: the mass-weighted projection min ½ (q̇ − q̇₀)ᵀ M (q̇ − q̇₀) s.t. Φ̇ = targets
+/// changes: every coordinate with |assembled − given| > 1e-9 · max(1, |given|)
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ProjectionReport {
+    /// The changed coordinates, in body order, positions before velocities.
+    pub changes: Vec<CoordinateChange>,
+    /// Largest |change| of a position coordinate (m or rad).
+    pub max_position_change: f64,
+    /// Largest |change| of a velocity coordinate (m/s or rad/s).
+    pub max_velocity_change: f64,
+    /// Kinetic energy of the given velocities (J, integrated bodies).
+    pub kinetic_energy_given: f64,
+    /// Kinetic energy of the assembled velocities (J, integrated bodies).
+    pub kinetic_energy_assembled: f64,
+}
+
+impl ProjectionReport {
+    /// Whether the assembly changed nothing beyond the reporting tolerance.
+    pub fn is_empty(&self) -> bool {
+        self.changes.is_empty()
+    }
+}
+
+impl fmt::Display for ProjectionReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.changes.is_empty() {
+            return write!(f, "initial conditions: the scene's values are consistent");
+        }
+        write!(
+            f,
+            "initial conditions moved onto the constraints (velocities by the mass-weighted \
+             projection; kinetic energy {:.6e} J → {:.6e} J):",
+            self.kinetic_energy_given, self.kinetic_energy_assembled
+        )?;
+        for c in &self.changes {
+            write!(
+                f,
+                "\n  {}.{}: {:.9e} → {:.9e} (change {:+.3e})",
+                c.body, c.coordinate, c.given, c.assembled, c.change
+            )?;
+        }
+        Ok(())
+    }
+}
 
 /// Position tolerance of the assembly (m or rad).
 const POS_TOL: f64 = 1e-12;
@@ -26,8 +110,17 @@ const MAX_ITER: usize = 50;
 /// Relative singular-value threshold of the rank check.
 const RANK_TOL: f64 = 1e-9;
 
-/// The equations held during assembly: the mechanism's rows, then two per clearance joint.
+/// Sets a row's target rate Φ̇ = v at t₀ without changing Φ(t₀): rate −v, constant + v t₀.
+fn with_rate(mut row: Row, v: f64, t0: f64) -> Row {
+    row.rate -= v;
+    row.konst += v * t0;
+    row
+}
+
+/// The equations held during assembly: the mechanism's rows, then two per clearance joint and
+/// two per prismatic clearance joint (its offset and tilt), with their target rates.
 fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
+    let t0 = mech.t_start;
     let mut rows = mech.rows.clone();
     for c in &mech.clr {
         if !c
@@ -56,10 +149,111 @@ fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
                     }),
                 }
             }
-            rows.push(row);
+            rows.push(with_rate(row, c.e0_rate[axis], t0));
         }
     }
+    for p in &mech.prismatic {
+        if !matches!(mech.bodies[p.body].owner, Owner::Int(_)) {
+            continue;
+        }
+        let mut r1 = Row::new(p.joint, "offset");
+        r1.push(Term {
+            body: p.body,
+            kind: TermKind::Point { s: p.s_c, w: p.n },
+        });
+        r1.konst = -(p.n[0] * p.o[0] + p.n[1] * p.o[1]) - p.offset0;
+        rows.push(with_rate(r1, p.offset_rate0, t0));
+        let mut r2 = Row::new(p.joint, "tilt");
+        r2.push(Term {
+            body: p.body,
+            kind: TermKind::Angle { c: 1.0 },
+        });
+        r2.konst = p.angle_offset - p.tilt0;
+        rows.push(with_rate(r2, p.tilt_rate0, t0));
+    }
     rows
+}
+
+/// Velocity-only equations: the exact initial velocities the scene asks for (joint
+/// `initial_rate`, body `initial_velocity`), each with its JSON path and a description.
+fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
+    let scene = &mech.scene;
+    let t0 = mech.t_start;
+    let mut out = Vec::new();
+    for (ji, j) in scene.joints.iter().enumerate() {
+        match j {
+            JointSpec::Revolute(r) => {
+                let Some(v) = r.initial_rate else { continue };
+                let mut row = Row::new(ji, "initial rate");
+                for (a, c) in [(&r.a, 1.0), (&r.b, -1.0)] {
+                    if a.body != GROUND {
+                        row.push(Term {
+                            body: scene.body_index(&a.body).expect("validated"),
+                            kind: TermKind::Angle { c },
+                        });
+                    }
+                }
+                out.push((
+                    with_rate(row, v, t0),
+                    format!("joints[{ji}].initial_rate"),
+                    format!("the initial rate {v} rad/s of {j}"),
+                ));
+            }
+            JointSpec::Translational(tr) => {
+                let Some(v) = tr.initial_rate else { continue };
+                let k = scene.body_index(&tr.body).expect("validated");
+                let l = tr.direction[0].hypot(tr.direction[1]);
+                let mut row = Row::new(ji, "initial rate");
+                row.push(Term {
+                    body: k,
+                    kind: TermKind::Point {
+                        s: scene.bodies[k].points[&tr.point],
+                        w: [tr.direction[0] / l, tr.direction[1] / l],
+                    },
+                });
+                out.push((
+                    with_rate(row, v, t0),
+                    format!("joints[{ji}].initial_rate"),
+                    format!("the initial rate {v} m/s of {j}"),
+                ));
+            }
+            _ => {}
+        }
+    }
+    for (k, b) in scene.bodies.iter().enumerate() {
+        let Some(iv) = &b.initial_velocity else {
+            continue;
+        };
+        for (name, v, kind) in [
+            (
+                "vx",
+                iv.vx,
+                TermKind::Point {
+                    s: [0.0; 2],
+                    w: [1.0, 0.0],
+                },
+            ),
+            (
+                "vy",
+                iv.vy,
+                TermKind::Point {
+                    s: [0.0; 2],
+                    w: [0.0, 1.0],
+                },
+            ),
+            ("omega", iv.omega, TermKind::Angle { c: 1.0 }),
+        ] {
+            let Some(v) = v else { continue };
+            let mut row = Row::new(usize::MAX, "initial velocity");
+            row.push(Term { body: k, kind });
+            out.push((
+                with_rate(row, v, t0),
+                format!("bodies[{k}].initial_velocity.{name}"),
+                format!("the initial velocity {name} = {v} of body '{}'", b.name),
+            ));
+        }
+    }
+    out
 }
 
 /// Evaluates rows at (t, y): values, rates, and the Jacobian on integrated columns.
@@ -139,23 +333,65 @@ pub(crate) fn check_rank(mech: &Mechanism, rows: &[Row], jac: &Mat<f64>) -> Resu
     Ok(())
 }
 
-/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇).
-pub(crate) fn assemble(mech: &Mechanism) -> Result<Vec<f64>, SceneError> {
+/// The report of what assembly changed: `given` and `assembled` states (q, q̇).
+fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
+    let nq = mech.nq();
+    let mut r = ProjectionReport::default();
+    const NAMES: [&str; 6] = ["x", "y", "theta", "vx", "vy", "omega"];
+    for (i, &k) in mech.int_bodies.iter().enumerate() {
+        let b = &mech.bodies[k];
+        let m = [b.mass, b.mass, b.inertia];
+        for c in 0..3 {
+            let (vg, va) = (given[nq + 3 * i + c], y[nq + 3 * i + c]);
+            r.kinetic_energy_given += 0.5 * m[c] * vg * vg;
+            r.kinetic_energy_assembled += 0.5 * m[c] * va * va;
+        }
+        for (c, name) in NAMES.iter().enumerate() {
+            let j = if c < 3 { 3 * i + c } else { nq + 3 * i + c - 3 };
+            let change = y[j] - given[j];
+            if c < 3 {
+                r.max_position_change = r.max_position_change.max(change.abs());
+            } else {
+                r.max_velocity_change = r.max_velocity_change.max(change.abs());
+            }
+            if change.abs() > REPORT_TOL * given[j].abs().max(1.0) {
+                r.changes.push(CoordinateChange {
+                    body: b.name.clone(),
+                    coordinate: name,
+                    given: given[j],
+                    assembled: y[j],
+                    change,
+                });
+            }
+        }
+    }
+    // Positions first, then velocities (stable within each).
+    r.changes
+        .sort_by_key(|c| matches!(c.coordinate, "vx" | "vy" | "omega"));
+    r
+}
+
+/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇) and what
+/// the assembly changed.
+pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
     let nq = mech.nq();
     let t0 = mech.t_start;
     let mut y = vec![0.0; 2 * nq];
     for (i, &k) in mech.int_bodies.iter().enumerate() {
         let b = &mech.scene.bodies[k];
+        let iv = b.initial_velocity.clone().unwrap_or_default();
         y[3 * i] = b.position[0];
         y[3 * i + 1] = b.position[1];
         y[3 * i + 2] = b.angle;
-        y[nq + 3 * i] = b.velocity[0];
-        y[nq + 3 * i + 1] = b.velocity[1];
-        y[nq + 3 * i + 2] = b.angular_velocity;
+        y[nq + 3 * i] = iv.vx.unwrap_or(b.velocity[0]);
+        y[nq + 3 * i + 1] = iv.vy.unwrap_or(b.velocity[1]);
+        y[nq + 3 * i + 2] = iv.omega.unwrap_or(b.angular_velocity);
     }
+    let given = y.clone();
     let rows = assembly_rows(mech);
-    if rows.is_empty() {
-        return Ok(y);
+    let vrows = velocity_rows(mech);
+    if rows.is_empty() && vrows.is_empty() {
+        return Ok((y, ProjectionReport::default()));
     }
     let worst = |phi: &[f64]| -> (usize, f64) {
         phi.iter().enumerate().fold((0, 0.0), |(bi, bv), (i, v)| {
@@ -175,9 +411,12 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<Vec<f64>, SceneError> {
             reason: format!("{what}: {name} has residual {v:.3e} after {iters} Newton iterations"),
         })
     };
-    let mut converged = false;
+    let mut converged = rows.is_empty();
     let mut iters = 0;
     for it in 0..=MAX_ITER {
+        if rows.is_empty() {
+            break;
+        }
         iters = it;
         let (phi, _, jac) = eval(mech, &rows, t0, &y);
         let (_, err) = worst(&phi);
@@ -196,24 +435,66 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<Vec<f64>, SceneError> {
         }
     }
     debug_assert!(converged, "{iters}");
-    // Velocities: one projection (Φ̇ is affine in q̇), then verify.
-    let (_, phid, jac) = eval(mech, &rows, t0, &y);
-    let Some(dv) = pinv_apply(&jac, &phid) else {
-        return fail(mech, &phid, &jac, "velocities", 0);
+    // Velocities: one mass-weighted projection (Φ̇ is affine in q̇), then verify.
+    let mut all = rows.clone();
+    all.extend(vrows.iter().map(|v| v.0.clone()));
+    // J M^{-1/2}: the projection of least kinetic energy (docs/model.md §1).
+    let w: Vec<f64> = mech.minv.iter().map(|v| v.sqrt()).collect();
+    // The projected state and whether it meets the equations `eqs`.
+    let project = |eqs: &[Row], y: &[f64]| -> (Vec<f64>, bool) {
+        let mut y = y.to_vec();
+        let (_, phid, jac) = eval(mech, eqs, t0, &y);
+        let mut jw = jac.clone();
+        for r in 0..jw.nrows() {
+            for c in 0..nq {
+                jw[(r, c)] *= w[c];
+            }
+        }
+        let Some(dv) = pinv_apply(&jw, &phid) else {
+            return (y, false);
+        };
+        for j in 0..nq {
+            y[nq + j] -= w[j] * dv[j];
+        }
+        let (_, phid, _) = eval(mech, eqs, t0, &y);
+        let (_, verr) = worst(&phid);
+        let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // A huge velocity guess (1e308) overflows in the projection: never a non-finite y0.
+        (
+            y.clone(),
+            vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax),
+        )
     };
-    for j in 0..nq {
-        y[nq + j] -= dv[j];
-    }
-    let (_, phid, jac) = eval(mech, &rows, t0, &y);
-    let (_, verr) = worst(&phid);
-    let vmax = y[nq..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    // A huge velocity guess (1e308) overflows in the projection: never return a non-finite y0.
-    if !(vmax.is_finite() && verr <= VEL_TOL * (1.0 + vmax)) {
+    let (yp, ok) = project(&all, &y);
+    if !ok {
+        // Blame the first exact initial velocity that the constraints (and the ones before it)
+        // cannot meet; else the constraints themselves.
+        for m in 1..=vrows.len() {
+            let mut eqs = rows.clone();
+            eqs.extend(vrows[..m].iter().map(|v| v.0.clone()));
+            let (ym, okm) = project(&eqs, &y);
+            if !okm {
+                let (_, path, what) = &vrows[m - 1];
+                let (_, phid, _) = eval(mech, &eqs, t0, &ym);
+                return Err(SceneError::Assembly {
+                    path: path.clone(),
+                    reason: format!(
+                        "velocities: {what} cannot be met together with the constraints and \
+                         the initial velocities before it (residual {:.3e})",
+                        worst(&phid).1
+                    ),
+                });
+            }
+        }
+        let (_, phid, jac) = eval(mech, &all, t0, &yp);
         return fail(mech, &phid, &jac, "velocities", 1);
     }
+    y = yp;
+    let (_, _, jac) = eval(mech, &all, t0, &y);
     // Rank of the ideal equations (the KKT system) at the assembled state.
     let m = mech.rows.len();
     let ideal = jac.subrows(0, m).to_owned();
     check_rank(mech, &mech.rows, &ideal)?;
-    Ok(y)
+    let rep = report(mech, &given, &y);
+    Ok((y, rep))
 }

@@ -79,6 +79,7 @@ fn body(name: &str, mass: f64, inertia: f64, x: f64, points: &[(&str, [f64; 2])]
         angle: 0.0,
         velocity: [0.0, 0.0],
         angular_velocity: 0.0,
+        initial_velocity: None,
     }
 }
 
@@ -121,6 +122,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
                 point: None,
                 at: Some([0.0, 0.0]),
             },
+            initial_rate: None,
         }),
         JointSpec::Driver(DriverSpec {
             name: "crank_driver".into(),
@@ -133,6 +135,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
             name: "crank_rod".into(),
             a: attach("crank", "A"),
             b: attach("rod", "A"),
+            initial_rate: None,
         }),
         JointSpec::Translational(TranslationalSpec {
             name: "slide".into(),
@@ -141,6 +144,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
             origin: [0.0, 0.0],
             direction: [1.0, 0.0],
             angle: Some(0.0),
+            initial_rate: None,
         }),
     ];
     let mut notes = vec![
@@ -163,6 +167,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
                 name: "rod_slider".into(),
                 a: attach("rod", "B"),
                 b: attach("slider", "B"),
+                initial_rate: None,
             }));
         }
         PressJoint::Dry | PressJoint::Lubricated => {
@@ -212,6 +217,8 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
                     omega0: None,
                 }),
                 initial_eccentricity: [0.0, 0.0],
+                initial_eccentricity_rate: [0.0, 0.0],
+                allow_initial_penetration: false,
             }));
         }
     }
@@ -220,6 +227,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         notes,
         bodies,
         joints,
+        forces: Vec::new(),
         gravity: [0.0, -9.81],
         baumgarte: Baumgarte {
             alpha: 5.0,

@@ -184,7 +184,7 @@ fn check_evaluation(
             ));
         }
     }
-    mech.applied_forces(sc, false);
+    mech.applied_forces(t, sc, false);
     for (k, c) in mech.clr.iter().enumerate() {
         let (ev, st) = (sc.clr[k], sc.clr[k].st);
         let quantities = [

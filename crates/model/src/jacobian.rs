@@ -16,6 +16,10 @@
 //!           a mirrored film caps them so that Ω moves by at most 1e-3 Ω₀ (h_φ̇ ≤ 1e-3 Ω₀,
 //!           h_ė ≤ 1e-3 Ω₀ |e|/2, h_e ≤ 1e-3 Ω₀ |e|²/(2|ė|))
 //! ```
+//! The force elements and prismatic clearance joints of docs/model.md §10–§11 (when the scene
+//! has any) add ∂g/∂y by central differences of their generalized forces alone, with steps
+//! h_j = 1e-8 · max(|y_j|, 1e-2) (positions) and 1e-8 · max(|y_j|, 1e-3) (velocities).
+//!
 //! F is the total force of the joint on its journal (contact, friction, film), T the friction
 //! force (its moment arm R_J or R_B about the pin centres); the journal body receives
 //! (F, (A_J s_J) × F + R_J T), the bearing body the opposite with R_B.
@@ -73,6 +77,9 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
     for k in 0..mech.clr.len() {
         clearance_force_jacobian(mech, k, &sc, n, &mut dg);
     }
+    if !(mech.elements.is_empty() && mech.prismatic.is_empty()) {
+        element_force_jacobian(mech, t, y, &sc, &mut dg);
+    }
     // Lower-left and lower-right blocks: A ∂g/∂y (A applied column by column, with the
     // Cholesky factor of S from the evaluation at y).
     let mut col = vec![0.0; nq];
@@ -124,6 +131,38 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
             } else {
                 f64::NAN
             };
+        }
+    }
+}
+
+/// Adds ∂g/∂y of the force elements and prismatic clearance joints (nq × n, column-major)
+/// by central differences of their generalized forces.
+fn element_force_jacobian(mech: &Mechanism, t: f64, y: &[f64], sc: &Scratch, dg: &mut [f64]) {
+    let n = y.len();
+    let nq = n / 2;
+    let mut s2 = sc.clone();
+    let mut yp = y.to_vec();
+    let mut gp = vec![0.0; nq];
+    let mut gm = vec![0.0; nq];
+    let g_of = |yp: &[f64], s2: &mut Scratch, out: &mut [f64]| {
+        mech.kinematics(t, yp, s2);
+        s2.g.iter_mut().for_each(|v| *v = 0.0);
+        mech.element_forces(t, s2, false);
+        out.copy_from_slice(&s2.g);
+    };
+    for j in 0..n {
+        let floor = if j < nq { 1e-2 } else { 1e-3 };
+        let h = 1e-8 * y[j].abs().max(floor);
+        yp[j] = y[j] + h;
+        let hp = yp[j] - y[j];
+        g_of(&yp, &mut s2, &mut gp);
+        yp[j] = y[j] - h;
+        let hm = y[j] - yp[j];
+        g_of(&yp, &mut s2, &mut gm);
+        yp[j] = y[j];
+        let col = &mut dg[j * nq..(j + 1) * nq];
+        for ((c, p), m) in col.iter_mut().zip(&gp).zip(&gm) {
+            *c += (p - m) / (hp + hm);
         }
     }
 }

@@ -58,6 +58,7 @@
 
 mod assembly;
 pub mod cases;
+pub mod elements;
 pub mod geometry;
 mod initial_check;
 pub mod jacobian;
@@ -66,8 +67,10 @@ pub mod mechanism;
 pub mod outputs;
 pub mod scene;
 
+pub use assembly::{CoordinateChange, ProjectionReport};
 pub use mechanism::Mechanism;
 pub use outputs::{
-    BodyOutput, ClearanceOutput, IdealSliderCrank, Outputs, PointKinematics, PowerTerms, Roles,
+    BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,
+    PowerTerms, PrismaticOutput, Roles,
 };
 pub use scene::{Scene, SceneError, GROUND};

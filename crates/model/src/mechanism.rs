@@ -14,8 +14,9 @@
 //! A body whose motion is prescribed (a rotational driver plus a revolute joint to the ground
 //! or to another prescribed body: the press's crank) is not integrated; its pose, velocity and
 //! acceleration are closed-form functions of t, and the joints to it are rheonomic constraints
-//! on the other body. The clearance joints add forces to g (docs/model.md §2–§4); absent features
-//! (gravity, friction, film) run no code.
+//! on the other body. The clearance joints add forces to g (docs/model.md §2–§4), and so do the
+//! force elements and prismatic clearance joints (§10–§11); absent features (gravity, friction,
+//! film, force elements) run no code.
 //!
 //! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
 //! Baumgarte 1972), Peng et al. 2025 §3.
@@ -26,6 +27,7 @@ use std::collections::BTreeMap;
 use faer::MatMut;
 use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
+use crate::elements::{Element, ElementEval, Prismatic, PrismaticEval};
 use crate::geometry::{ClearanceInput, ClearanceState};
 use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH};
 use crate::outputs::Roles;
@@ -140,6 +142,8 @@ pub(crate) struct Clr {
     pub friction: Option<FrictionLaw>,
     pub film: Option<Film>,
     pub e0: [f64; 2],
+    /// ė(t_start) (m/s).
+    pub e0_rate: [f64; 2],
     /// δ̇⁻ stored at the last contact onset (event hook).
     pub impact_velocity: Cell<f64>,
 }
@@ -161,6 +165,8 @@ pub(crate) enum EventKind {
     Contact(usize),
     /// ε − ε_cap of clearance joint k.
     EpsCap(usize),
+    /// δ_i of corner i of prismatic clearance joint k (docs/model.md §11).
+    Corner(usize, usize),
 }
 
 /// Per-joint results of one evaluation.
@@ -217,6 +223,10 @@ pub(crate) struct Scratch {
     pub lam: Vec<f64>,
     pub qdd: Vec<f64>,
     pub clr: Vec<ClrEval>,
+    /// Every force element (docs/model.md §10).
+    pub el: Vec<ElementEval>,
+    /// Every prismatic clearance joint (docs/model.md §11).
+    pub pr: Vec<PrismaticEval>,
     /// Jacobian blocks of every row with respect to each of its terms' bodies (full mode).
     pub term_jac: Vec<[[f64; 3]; 2]>,
 }
@@ -226,7 +236,8 @@ pub(crate) struct Scratch {
 /// [`Mechanism::outputs`].
 ///
 /// ```text
-/// y' = f(t, y),  y = (q, q̇)  (docs/model.md §1);  events δ_k(q) and ε_k − ε_cap (§7)
+/// y' = f(t, y),  y = (q, q̇)  (docs/model.md §1);  events δ_k(q), ε_k − ε_cap and the
+/// corner gaps δ_i of the prismatic clearance joints (§7, §11)
 /// ```
 #[derive(Debug)]
 pub struct Mechanism {
@@ -237,6 +248,9 @@ pub struct Mechanism {
     pub(crate) pres: Vec<Prescription>,
     pub(crate) rows: Vec<Row>,
     pub(crate) clr: Vec<Clr>,
+    pub(crate) elements: Vec<Element>,
+    pub(crate) prismatic: Vec<Prismatic>,
+    pub(crate) projection: crate::assembly::ProjectionReport,
     pub(crate) events: Vec<EventKind>,
     pub(crate) minv: Vec<f64>,
     pub(crate) gravity: Option<[f64; 2]>,
@@ -347,6 +361,7 @@ impl Mechanism {
         // Constraint equations of the remaining joints.
         let mut rows = Vec::new();
         let mut clr = Vec::new();
+        let mut prismatic = Vec::new();
         for (ji, joint) in scene.joints.iter().enumerate() {
             if used[ji] {
                 continue;
@@ -398,6 +413,9 @@ impl Mechanism {
                 JointSpec::Clearance(c) => {
                     clr.push(build_clearance(scene, ji, c));
                 }
+                JointSpec::PrismaticClearance(c) => {
+                    prismatic.push(Prismatic::new(scene, ji, c));
+                }
             }
             // A joint acting only on the ground and prescribed bodies constrains nothing that
             // moves freely: it repeats or contradicts the prescription.
@@ -428,6 +446,14 @@ impl Mechanism {
                 events.push(EventKind::EpsCap(k));
             }
         }
+        for k in 0..prismatic.len() {
+            for i in 0..4 {
+                events.push(EventKind::Corner(k, i));
+            }
+        }
+        // Defaults that need the assembled state (a spring's free length) are set after the
+        // assembly below.
+        let elements = crate::elements::compile(scene, &|_| f64::NAN);
         let mut minv = Vec::with_capacity(3 * int_bodies.len());
         for &k in &int_bodies {
             let b = &scene.bodies[k];
@@ -455,6 +481,8 @@ impl Mechanism {
             lam: vec![0.0; m],
             qdd: vec![0.0; nq],
             clr: vec![ClrEval::default(); clr.len()],
+            el: vec![ElementEval::default(); elements.len()],
+            pr: vec![PrismaticEval::default(); prismatic.len()],
             term_jac: vec![[[0.0; 3]; 2]; m],
         };
         let roles = Roles::resolve(scene, &clr);
@@ -465,6 +493,9 @@ impl Mechanism {
             pres,
             rows,
             clr,
+            elements,
+            prismatic,
+            projection: Default::default(),
             events,
             minv,
             gravity,
@@ -486,9 +517,51 @@ impl Mechanism {
             }
             (None, None) => unreachable!("validated"),
         };
-        mech.y0 = crate::assembly::assemble(&mech)?;
+        let (y0, projection) = crate::assembly::assemble(&mech)?;
+        mech.y0 = y0;
+        mech.projection = projection;
+        if !mech.elements.is_empty() {
+            mech.element_defaults();
+        }
         crate::initial_check::check(&mech)?;
         Ok(mech)
+    }
+
+    /// The free lengths and angles the scene leaves to the assembled initial state.
+    fn element_defaults(&mut self) {
+        let y0 = self.y0.clone();
+        let t0 = self.t_start;
+        let mut sc = self.scratch.borrow().clone();
+        self.kinematics(t0, &y0, &mut sc);
+        for e in &mut self.elements {
+            match &mut e.kind {
+                crate::elements::Kind::Spring { a, b, l0, .. } if l0.is_nan() => {
+                    *l0 =
+                        crate::elements::Input::Length(*a, *b).value(t0, &sc.pose, &sc.vel, &sc.cs);
+                }
+                crate::elements::Kind::RotSpring { a, b, theta0, .. } if theta0.is_nan() => {
+                    *theta0 = crate::elements::Input::Relative(Some(*a), *b)
+                        .value(t0, &sc.pose, &sc.vel, &sc.cs);
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// What the projection onto the constraints changed in the scene's initial guesses
+    /// (docs/model.md §1, "Initial conditions").
+    pub fn projection_report(&self) -> &crate::assembly::ProjectionReport {
+        &self.projection
+    }
+
+    /// Names of the force elements, in the order of [`crate::Outputs::elements`].
+    pub fn element_names(&self) -> Vec<&str> {
+        self.elements.iter().map(|e| e.name.as_str()).collect()
+    }
+
+    /// Names of the prismatic clearance joints, in the order of [`crate::Outputs::prismatic`].
+    pub fn prismatic_names(&self) -> Vec<&str> {
+        self.prismatic.iter().map(|p| p.name.as_str()).collect()
     }
 
     /// y0 after assembly: (q, q̇) of the integrated bodies.
@@ -639,7 +712,7 @@ impl Mechanism {
 
     /// Adds force f at global point (r_body + A s + arm_extra) to body k.
     #[inline]
-    fn apply(&self, k: usize, arm: [f64; 2], f: [f64; 2], sc: &mut Scratch, full: bool) {
+    pub(crate) fn apply(&self, k: usize, arm: [f64; 2], f: [f64; 2], sc: &mut Scratch, full: bool) {
         let mz = cross(arm, f);
         match self.bodies[k].owner {
             Owner::Int(i) => {
@@ -656,8 +729,9 @@ impl Mechanism {
         }
     }
 
-    /// Applied forces: gravity and the clearance joints (docs/model.md §3–§4).
-    pub(crate) fn applied_forces(&self, sc: &mut Scratch, full: bool) {
+    /// Applied forces: gravity and the clearance joints (docs/model.md §3–§4), then the force
+    /// elements and prismatic clearance joints (§10–§11) when the scene has any.
+    pub(crate) fn applied_forces(&self, t: f64, sc: &mut Scratch, full: bool) {
         sc.g.iter_mut().for_each(|v| *v = 0.0);
         if full {
             sc.gb.iter_mut().for_each(|v| *v = [0.0; 3]);
@@ -710,6 +784,53 @@ impl Mechanism {
                 }
             }
             sc.clr[k] = ev;
+        }
+        if !(self.elements.is_empty() && self.prismatic.is_empty()) {
+            self.element_forces(t, sc, full);
+        }
+    }
+
+    /// Adds a load (body, arm, force, torque) to the generalized forces.
+    #[inline]
+    fn apply_load(&self, l: crate::elements::Load, sc: &mut Scratch, full: bool) {
+        let (k, arm, f, tau) = l;
+        self.apply(k, arm, f, sc, full);
+        if tau != 0.0 {
+            match self.bodies[k].owner {
+                Owner::Int(i) => sc.g[3 * i + 2] += tau,
+                Owner::Pres(_) => {}
+            }
+            if full {
+                sc.gb[k][2] += tau;
+            }
+        }
+    }
+
+    /// The force elements and prismatic clearance joints (docs/model.md §10–§11), after
+    /// `kinematics`.
+    pub(crate) fn element_forces(&self, t: f64, sc: &mut Scratch, full: bool) {
+        let mut loads: [crate::elements::Load; 4] = [(0, [0.0; 2], [0.0; 2], 0.0); 4];
+        for (i, e) in self.elements.iter().enumerate() {
+            let mut n = 0;
+            let ev = e.eval(t, &sc.pose, &sc.vel, &sc.cs, |l| {
+                loads[n] = l;
+                n += 1;
+            });
+            for l in &loads[..n] {
+                self.apply_load(*l, sc, full);
+            }
+            sc.el[i] = ev;
+        }
+        for (i, p) in self.prismatic.iter().enumerate() {
+            let mut n = 0;
+            let ev = p.eval(&sc.pose, &sc.vel, &sc.cs, |l| {
+                loads[n] = l;
+                n += 1;
+            });
+            for l in &loads[..n] {
+                self.apply_load(*l, sc, full);
+            }
+            sc.pr[i] = ev;
         }
     }
 
@@ -869,7 +990,7 @@ impl Mechanism {
     /// After it, `acc` holds every body's acceleration.
     pub(crate) fn evaluate(&self, t: f64, y: &[f64], sc: &mut Scratch, full: bool) -> bool {
         self.kinematics(t, y, sc);
-        self.applied_forces(sc, full);
+        self.applied_forces(t, sc, full);
         self.constraint_rows(t, sc, full);
         let ok = self.solve_kkt(sc);
         for (i, &k) in self.int_bodies.iter().enumerate() {
@@ -887,15 +1008,21 @@ impl Mechanism {
                     let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
                     self.clearance_state(k, sc).eps - cap
                 }
+                EventKind::Corner(k, c) => {
+                    self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs).0
+                }
             };
         }
     }
 
-    /// Which event function index `i` is: ("contact" | "eps_cap", clearance joint name).
+    /// Which event function index `i` is: ("contact" | "eps_cap", clearance joint name), or
+    /// ("corner_contact", prismatic clearance joint name) for the gap δ_i of one of its four
+    /// corners (docs/model.md §11).
     pub fn event_name(&self, i: usize) -> Option<(&'static str, &str)> {
         self.events.get(i).map(|e| match *e {
             EventKind::Contact(k) => ("contact", self.clr[k].name.as_str()),
             EventKind::EpsCap(k) => ("eps_cap", self.clr[k].name.as_str()),
+            EventKind::Corner(k, _) => ("corner_contact", self.prismatic[k].name.as_str()),
         })
     }
 
@@ -1082,6 +1209,7 @@ fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::ClearanceSpec) ->
         friction,
         film,
         e0: c.initial_eccentricity,
+        e0_rate: c.initial_eccentricity_rate,
         impact_velocity: Cell::new(0.0),
     }
 }
@@ -1129,13 +1257,20 @@ impl OdeSystem for Mechanism {
     }
 
     fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {
-        if let Some(EventKind::Contact(k)) = self.events.get(hit.index).copied() {
-            if hit.rising {
+        match self.events.get(hit.index).copied() {
+            Some(EventKind::Contact(k)) if hit.rising => {
                 let mut sc = self.scratch.borrow_mut();
                 self.kinematics(hit.t, y, &mut sc);
                 let st = self.clearance_state(k, &sc);
                 self.clr[k].impact_velocity.set(st.delta_dot);
             }
+            Some(EventKind::Corner(k, c)) if hit.rising => {
+                let mut sc = self.scratch.borrow_mut();
+                self.kinematics(hit.t, y, &mut sc);
+                let (_, ddot) = self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs);
+                self.prismatic[k].impact_velocity[c].set(ddot);
+            }
+            _ => {}
         }
         EventAction::Continue
     }

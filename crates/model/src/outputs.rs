@@ -6,10 +6,13 @@
 //!              τ_d from  J_pᵀ λ_p = g_p + f_c,p − M_p a_p    (prescribed body p, Newton–Euler:
 //!                        λ_p = (pin reaction, driver λ); f_c,p = −Σ J_r,pᵀ λ_r of the other
 //!                        joints on p; g_p gravity and clearance forces on p)
-//! T = Σ ½ m |ṙ|² + ½ I φ̇²     V = −Σ m g·r + Σ 2/5 K δ^{5/2}     (all bodies, prescribed too)
+//! T = Σ ½ m |ṙ|² + ½ I φ̇²     V = −Σ m g·r + Σ 2/5 K δ^{5/2} + Σ V_spring
+//!                                                    (all bodies, prescribed too)
 //! P_driver = Σ τ_d φ̇_d        D_contact = (F_N − K δ^{3/2}) δ̇     D_friction = −F_T v_T
-//! D_film = −(F_r δ̇ + F_t t·ė)
-//! d/dt (T + V) = P_driver − D_contact − D_friction − D_film  (+ work of the Baumgarte terms)
+//! D_film = −(F_r δ̇ + F_t t·ė)  P_load = Σ F·v + τ φ̇ (forces, torques)  P_motor = Σ τ ω
+//! D_damper = Σ c L̇² + c θ̇²
+//! d/dt (T + V) = P_driver + P_load + P_motor − D_contact − D_friction − D_film − D_damper
+//!                (+ work of the Baumgarte terms)
 //! ```
 //! Source: docs/model.md §1–§5, docs/outputs.md ("`energy`", "`trajectory.csv`").
 
@@ -153,6 +156,65 @@ pub const CLEARANCE_COLUMNS: [&str; 6] = [
 ];
 /// Column suffix of a driver.
 pub const DRIVER_COLUMNS: [&str; 1] = ["torque"];
+/// Column suffixes of a prismatic clearance joint, in the order of [`Outputs::column_values`].
+pub const PRISMATIC_COLUMNS: [&str; 5] =
+    ["offset", "tilt", "delta", "contact_force", "friction_force"];
+
+/// One force element at one instant (docs/model.md §10).
+///
+/// ```text
+/// spring_damper             load = F (N, tension > 0),  coordinate = L (m)
+/// rotational_spring_damper  load = τ (N·m),             coordinate = θ = φ_a − φ_b (rad)
+/// force                     load = f (N, along its direction), coordinate = NaN
+/// torque                    load = τ (N·m),             coordinate = NaN
+/// motor                     load = τ (N·m, on the rotor), coordinate = ω (rad/s)
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementOutput {
+    /// Element name.
+    pub name: String,
+    /// Column suffixes of the element (`force`, `length`; `torque`, `angle`; `force`;
+    /// `torque`; `torque`, `speed`): the first is `load`, the second `coordinate`.
+    pub columns: &'static [&'static str],
+    /// The element's force or torque.
+    pub load: f64,
+    /// Its coordinate: length, angle or speed (NaN for forces and torques).
+    pub coordinate: f64,
+    /// Power it puts into the mechanism (W; forces, torques and motors, else 0).
+    pub power: f64,
+    /// Power its damper dissipates (W, ≥ 0; springs, else 0).
+    pub dissipation: f64,
+    /// Its elastic potential (J; springs, else 0).
+    pub potential: f64,
+}
+
+/// One prismatic clearance joint at one instant (docs/model.md §11).
+///
+/// ```text
+/// offset = n·(r_C − o),  tilt = φ − φ_guide,  δ_i of the corners (m, < 0 apart),
+/// F_N,i ≥ 0, F_T,i (along u);  delta = max δ_i, contact_force = Σ F_N,i, friction = Σ F_T,i
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrismaticOutput {
+    /// Joint name.
+    pub name: String,
+    /// Lateral offset of the block centre from the guide's centre line (m).
+    pub offset: f64,
+    /// Tilt of the block from the guide (rad).
+    pub tilt: f64,
+    /// Deepest corner penetration max δ_i (m; negative when apart).
+    pub delta: f64,
+    /// Radial clearance c = (h − w)/2 (m).
+    pub clearance: f64,
+    /// Sum of the corners' normal forces (N).
+    pub contact_force: f64,
+    /// Sum of the corners' friction forces along the guide (N, signed).
+    pub friction_force: f64,
+    /// δ_i of each corner (m): (+ℓ/2, +w/2), (−ℓ/2, +w/2), (−ℓ/2, −w/2), (+ℓ/2, −w/2).
+    pub corner_delta: [f64; 4],
+    /// F_N,i of each corner (N).
+    pub corner_force: [f64; 4],
+}
 
 /// Everything one evaluation at (t, y) reports (trajectory.csv columns and more).
 ///
@@ -180,8 +242,13 @@ pub struct Outputs {
     pub driver_torques: Vec<f64>,
     /// Kinetic energy of all bodies (J).
     pub kinetic_energy: f64,
-    /// Gravity potential of all bodies plus the elastic contact potential (J).
+    /// Gravity potential of all bodies, the elastic contact potential of both kinds of
+    /// clearance joint and the springs' potential (J).
     pub potential_energy: f64,
+    /// Every force element, in scene order (docs/model.md §10).
+    pub elements: Vec<ElementOutput>,
+    /// Every prismatic clearance joint, in scene order (docs/model.md §11).
+    pub prismatic: Vec<PrismaticOutput>,
 }
 
 /// Power terms at one instant (W); integrate them over time for the energy balance.
@@ -191,7 +258,12 @@ pub struct Outputs {
 /// contact_damping  D = Σ (F_N − K δ^{3/2}) δ̇            (≥ 0)
 /// friction         D = −Σ F_T v_T                       (≥ 0)
 /// film             D = −Σ (F_r δ̇ + F_t t·ė)             (dissipated by the film)
-/// balance: ∫P − ΔT − ΔV − ∫(D_contact + D_friction + D_film) = 0 up to the Baumgarte work
+/// load             P = Σ F·ṙ^P + Σ τ φ̇                 (forces and torques, docs/model.md §10.3)
+/// motor            P = Σ τ ω                            (motors, §10.4)
+/// damper           D = Σ c L̇² + Σ c θ̇²                  (spring-dampers, ≥ 0, §10.1–§10.2)
+/// contact_damping and friction include the prismatic clearance joints' corners (§11).
+/// balance: ∫(P_driver + P_load + P_motor) − ΔT − ΔV
+///          − ∫(D_contact + D_friction + D_film + D_damper) = 0 up to the Baumgarte work
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct PowerTerms {
@@ -203,6 +275,24 @@ pub struct PowerTerms {
     pub friction: f64,
     /// Power dissipated by the oil film (W).
     pub film: f64,
+    /// Power of the applied forces and torques (W).
+    pub load: f64,
+    /// Power of the motors (W).
+    pub motor: f64,
+    /// Power dissipated by the dampers of the spring-dampers (W).
+    pub damper: f64,
+}
+
+impl PowerTerms {
+    /// Power put in: driver + load + motor (W).
+    pub fn input(&self) -> f64 {
+        self.driver + self.load + self.motor
+    }
+
+    /// Power dissipated: contact damping + friction + film + damper (W).
+    pub fn dissipated(&self) -> f64 {
+        self.contact_damping + self.friction + self.film + self.damper
+    }
 }
 
 /// The ideal slider-crank of docs/model.md §5, with r, l, ω and the crank angle derived from the
@@ -247,6 +337,15 @@ impl Outputs {
             ]);
         }
         out.extend_from_slice(&self.driver_torques);
+        for e in &self.elements {
+            out.push(e.load);
+            if e.columns.len() > 1 {
+                out.push(e.coordinate);
+            }
+        }
+        for p in &self.prismatic {
+            out.extend_from_slice(&[p.offset, p.tilt, p.delta, p.contact_force, p.friction_force]);
+        }
     }
 }
 
@@ -356,6 +455,10 @@ impl Mechanism {
     /// <joint>.ex_over_c .ey_over_c .delta .contact_force
     ///        .friction_force .film_force                       every clearance joint
     /// <driver>.torque                                          every driver joint
+    /// <spring>.force .length | <rotational spring>.torque .angle | <force>.force
+    /// | <torque>.torque | <motor>.torque .speed                every force element
+    /// <joint>.offset .tilt .delta .contact_force .friction_force
+    ///                                                          every prismatic clearance joint
     /// ```
     pub fn output_columns(&self) -> Vec<String> {
         let mut names = Vec::new();
@@ -369,6 +472,12 @@ impl Mechanism {
             if let JointSpec::Driver(d) = j {
                 names.extend(DRIVER_COLUMNS.iter().map(|s| format!("{}.{s}", d.name)));
             }
+        }
+        for e in &self.elements {
+            names.extend(e.columns().iter().map(|s| format!("{}.{s}", e.name)));
+        }
+        for p in &self.prismatic {
+            names.extend(PRISMATIC_COLUMNS.iter().map(|s| format!("{}.{s}", p.name)));
         }
         names
     }
@@ -436,7 +545,43 @@ impl Mechanism {
         for (c, ev) in self.clr.iter().zip(&sc.clr) {
             potential += c.normal.potential(ev.st.delta);
         }
+        let elements: Vec<ElementOutput> = self
+            .elements
+            .iter()
+            .zip(&sc.el)
+            .map(|(e, ev)| ElementOutput {
+                name: e.name.clone(),
+                columns: e.columns(),
+                load: ev.load,
+                coordinate: ev.coord,
+                power: ev.power,
+                dissipation: ev.dissipation,
+                potential: ev.potential,
+            })
+            .collect();
+        potential += elements.iter().map(|e| e.potential).sum::<f64>();
+        let prismatic: Vec<PrismaticOutput> = self
+            .prismatic
+            .iter()
+            .zip(&sc.pr)
+            .map(|(p, ev)| {
+                potential += ev.delta.iter().map(|&d| p.normal.potential(d)).sum::<f64>();
+                PrismaticOutput {
+                    name: p.name.clone(),
+                    offset: ev.offset,
+                    tilt: ev.tilt,
+                    delta: ev.delta.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                    clearance: p.clearance,
+                    contact_force: ev.f_n.iter().sum(),
+                    friction_force: ev.f_t.iter().sum(),
+                    corner_delta: ev.delta,
+                    corner_force: ev.f_n,
+                }
+            })
+            .collect();
         Outputs {
+            elements,
+            prismatic,
             crank_angle,
             slider_x,
             slider_v,
@@ -477,6 +622,21 @@ impl Mechanism {
                 let ed_t =
                     st.v_t - c.rj * end_omega(&c.journal, sc) + c.rb * end_omega(&c.bearing, sc);
                 p.film -= ev.f_r * st.delta_dot + ev.f_tf * ed_t;
+            }
+        }
+        for (e, ev) in self.elements.iter().zip(&sc.el) {
+            match e.kind {
+                crate::elements::Kind::Motor { .. } => p.motor += ev.power,
+                _ => p.load += ev.power,
+            }
+            p.damper += ev.dissipation;
+        }
+        for ev in &sc.pr {
+            for i in 0..4 {
+                if ev.delta[i] > 0.0 {
+                    p.contact_damping += (ev.f_n[i] - ev.elastic[i]) * ev.delta_dot[i];
+                    p.friction -= ev.f_t[i] * ev.v_t[i];
+                }
             }
         }
         p

@@ -20,6 +20,7 @@ use std::path::Path;
 use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer, Serialize};
 
+use crate::elements::{ForceElementSpec, PrismaticClearanceSpec};
 use crate::laws::FilmModel;
 
 /// The reserved name of the ground (the fixed frame). No body may take it.
@@ -104,7 +105,7 @@ pub enum SceneError {
     },
 }
 
-fn invalid(path: impl Into<String>, reason: impl Into<String>) -> SceneError {
+pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         path: path.into(),
         reason: reason.into(),
@@ -136,6 +137,10 @@ pub struct Scene {
     /// Joints, drivers and clearance joints. Default none.
     #[serde(default)]
     pub joints: Vec<JointSpec>,
+    /// Force elements: springs, dampers, applied forces and torques, motors
+    /// (docs/scene-format.md, "Force elements"). Default none (no code of theirs runs).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub forces: Vec<ForceElementSpec>,
     /// Gravity vector (m/s²). Default [0, 0] (no gravity code runs).
     #[serde(default)]
     pub gravity: [f64; 2],
@@ -185,6 +190,36 @@ pub struct BodySpec {
     /// Initial guess of the angular velocity (rad/s). Default 0.
     #[serde(default)]
     pub angular_velocity: f64,
+    /// Initial velocity components held exactly by the projection onto the velocity
+    /// constraints (the guesses `velocity` and `angular_velocity` are only targets).
+    /// Default none.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "object_opt"
+    )]
+    pub initial_velocity: Option<InitialVelocity>,
+}
+
+/// Initial velocity components of a body that the projection must keep exactly
+/// (docs/model.md §1, "Initial conditions").
+///
+/// ```text
+/// ẋ(t₀) = vx,  ẏ(t₀) = vy,  φ̇(t₀) = omega   (each optional; the others follow from the
+///                                            constraints and the mass-weighted projection)
+/// ```
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialVelocity {
+    /// ẋ of the centre of mass (m/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vx: Option<f64>,
+    /// ẏ of the centre of mass (m/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vy: Option<f64>,
+    /// φ̇ (rad/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
 }
 
 /// Where a joint attaches: a named point of a body, or a fixed location on the ground.
@@ -222,6 +257,10 @@ pub struct RevoluteSpec {
     /// Second attachment.
     #[serde(deserialize_with = "object")]
     pub b: Attachment,
+    /// Initial relative rate φ̇_a − φ̇_b (rad/s), held exactly by the initial projection
+    /// (φ_ground = 0). Default none (it follows from the bodies' guesses).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_rate: Option<f64>,
 }
 
 /// Translational (prismatic) joint: a body point slides along a fixed global line and the body
@@ -249,6 +288,10 @@ pub struct TranslationalSpec {
     /// The fixed body angle φ₀ (rad). Default: the body's initial `angle`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angle: Option<f64>,
+    /// Initial sliding speed u·ṙ^P along the direction (m/s), held exactly by the initial
+    /// projection. Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_rate: Option<f64>,
 }
 
 fn default_direction() -> [f64; 2] {
@@ -338,9 +381,20 @@ pub struct ClearanceSpec {
         deserialize_with = "object_opt"
     )]
     pub film: Option<FilmSpec>,
-    /// Initial eccentricity e(t_start), global (m). Default [0, 0] (centred); ė(t_start) = 0.
+    /// Initial eccentricity e(t_start), global (m). Default [0, 0] (centred). |e| must not
+    /// exceed the clearance unless `allow_initial_penetration` is set.
     #[serde(default)]
     pub initial_eccentricity: [f64; 2],
+    /// Initial eccentricity rate ė(t_start), global (m/s). Default [0, 0].
+    #[serde(default, skip_serializing_if = "is_zero2")]
+    pub initial_eccentricity_rate: [f64; 2],
+    /// Accept |e(t_start)| > c (a start in contact, up to the journal radius). Default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_initial_penetration: bool,
+}
+
+fn is_zero2(v: &[f64; 2]) -> bool {
+    *v == [0.0, 0.0]
 }
 
 /// Elastic properties of one contacting body (for the Hertz stiffness of docs/model.md §3).
@@ -571,6 +625,7 @@ pub struct RoleNames {
 /// translational  Φ = (n·(r^P − o), φ − φ₀)              (2 equations)
 /// driver         Φ = φ − θ₀ − ω t                       (1 equation)
 /// clearance      no equation: the force pair of docs/model.md §2–§4
+/// prismatic_clearance  no equation: the corner contacts of docs/model.md §11
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
@@ -583,6 +638,8 @@ pub enum JointSpec {
     Driver(DriverSpec),
     /// Revolute clearance joint.
     Clearance(ClearanceSpec),
+    /// Translational clearance joint (a block in a guide).
+    PrismaticClearance(PrismaticClearanceSpec),
 }
 
 impl JointSpec {
@@ -593,6 +650,7 @@ impl JointSpec {
             JointSpec::Translational(j) => &j.name,
             JointSpec::Driver(j) => &j.name,
             JointSpec::Clearance(j) => &j.name,
+            JointSpec::PrismaticClearance(j) => &j.name,
         }
     }
 
@@ -603,6 +661,7 @@ impl JointSpec {
             JointSpec::Translational(_) => "translational",
             JointSpec::Driver(_) => "driver",
             JointSpec::Clearance(_) => "clearance",
+            JointSpec::PrismaticClearance(_) => "prismatic_clearance",
         }
     }
 }
@@ -634,7 +693,7 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Obj<T> {
     }
 }
 
-fn object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+pub(crate) fn object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
     Obj::deserialize(d).map(|o| o.0)
 }
 
@@ -655,9 +714,9 @@ fn objects<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T
 // PATH_MARK characters and `SceneError` joins it to the outer path.
 // ---------------------------------------------------------------------------------------------
 
-const PATH_MARK: char = '\u{1}';
+pub(crate) const PATH_MARK: char = '\u{1}';
 
-fn variant<'de, D: Deserializer<'de>, T: DeserializeOwned>(
+pub(crate) fn variant<'de, D: Deserializer<'de>, T: DeserializeOwned>(
     mut obj: serde_json::Map<String, serde_json::Value>,
     tag: &str,
 ) -> Result<T, D::Error> {
@@ -686,7 +745,7 @@ fn split_marked(msg: &str) -> Option<(&str, &str)> {
     Some((&rest[..end], &rest[end + 1..]))
 }
 
-fn tagged_object<'de, D: Deserializer<'de>>(
+pub(crate) fn tagged_object<'de, D: Deserializer<'de>>(
     d: D,
     tag: &str,
 ) -> Result<(String, serde_json::Map<String, serde_json::Value>), D::Error> {
@@ -716,9 +775,12 @@ impl<'de> Deserialize<'de> for JointSpec {
             "translational" => variant::<D, _>(obj, "type").map(JointSpec::Translational),
             "driver" => variant::<D, _>(obj, "type").map(JointSpec::Driver),
             "clearance" => variant::<D, _>(obj, "type").map(JointSpec::Clearance),
+            "prismatic_clearance" => {
+                variant::<D, _>(obj, "type").map(JointSpec::PrismaticClearance)
+            }
             other => Err(D::Error::custom(format!(
                 "{PATH_MARK}type{PATH_MARK}unknown joint type `{other}`, expected one of \
-                 `revolute`, `translational`, `driver`, `clearance`"
+                 `revolute`, `translational`, `driver`, `clearance`, `prismatic_clearance`"
             ))),
         }
     }
@@ -775,6 +837,8 @@ impl Scene {
                 message: format!("expected a JSON object (the scene), got {}", kind(&value)),
             });
         }
+        // A repeated key would silently keep one of its values (docs/scene-format.md).
+        check_duplicate_keys(text)?;
         let de = &mut serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
             let outer = e.path().to_string();
@@ -840,6 +904,87 @@ impl Scene {
     }
 }
 
+/// The first key that an object of `text` repeats, as a [`SceneError::Schema`] at its path.
+fn check_duplicate_keys(text: &str) -> Result<(), SceneError> {
+    use serde::de::DeserializeSeed;
+    let mut de = serde_json::Deserializer::from_str(text);
+    NoDuplicates(".".into()).deserialize(&mut de).map_err(|e| {
+        let msg = strip_position(&e.to_string());
+        match split_marked(&msg) {
+            Some((path, m)) => SceneError::Schema {
+                path: path.to_string(),
+                message: m.to_string(),
+            },
+            None => syntax_error(&e),
+        }
+    })
+}
+
+/// Walks a JSON document and fails at the first repeated key of an object.
+struct NoDuplicates(String);
+
+impl NoDuplicates {
+    fn key(&self, k: &str) -> String {
+        join_path(&self.0, k)
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for NoDuplicates {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for NoDuplicates {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("any JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut i = 0usize;
+        while seq
+            .next_element_seed(NoDuplicates(format!("{}[{i}]", self.0)))?
+            .is_some()
+        {
+            i += 1;
+        }
+        Ok(())
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let mut seen = std::collections::HashSet::new();
+        while let Some(k) = map.next_key::<String>()? {
+            let path = self.key(&k);
+            if !seen.insert(k.clone()) {
+                return Err(A::Error::custom(format!(
+                    "{PATH_MARK}{path}{PATH_MARK}duplicate key `{k}`: an object must not \
+                     repeat a key"
+                )));
+            }
+            map.next_value_seed(NoDuplicates(path))?;
+        }
+        Ok(())
+    }
+}
+
 /// The JSON type of a value, for messages.
 fn kind(v: &serde_json::Value) -> &'static str {
     match v {
@@ -900,10 +1045,10 @@ pub const MAX_MAGNITUDE: f64 = 1e150;
 /// Smallest non-zero magnitude of a number in a scene; see [`MAX_MAGNITUDE`].
 pub const MIN_MAGNITUDE: f64 = 1e-150;
 
-struct Checker;
+pub(crate) struct Checker;
 
 impl Checker {
-    fn finite(path: &str, v: f64) -> Result<(), SceneError> {
+    pub(crate) fn finite(path: &str, v: f64) -> Result<(), SceneError> {
         if !v.is_finite() {
             return Err(invalid(path, format!("must be a finite number, got {v}")));
         }
@@ -918,11 +1063,11 @@ impl Checker {
         }
         Ok(())
     }
-    fn finite2(path: &str, v: [f64; 2]) -> Result<(), SceneError> {
+    pub(crate) fn finite2(path: &str, v: [f64; 2]) -> Result<(), SceneError> {
         Checker::finite(&format!("{path}[0]"), v[0])?;
         Checker::finite(&format!("{path}[1]"), v[1])
     }
-    fn positive(path: &str, v: f64, what: &str) -> Result<(), SceneError> {
+    pub(crate) fn positive(path: &str, v: f64, what: &str) -> Result<(), SceneError> {
         Checker::finite(path, v)?;
         if v > 0.0 {
             Ok(())
@@ -930,7 +1075,7 @@ impl Checker {
             Err(invalid(path, format!("{what} must be > 0, got {v}")))
         }
     }
-    fn non_negative(path: &str, v: f64, what: &str) -> Result<(), SceneError> {
+    pub(crate) fn non_negative(path: &str, v: f64, what: &str) -> Result<(), SceneError> {
         Checker::finite(path, v)?;
         if v >= 0.0 {
             Ok(())
@@ -942,7 +1087,7 @@ impl Checker {
 
 /// A body or joint name: not empty, and usable as the prefix of a `trajectory.csv` column
 /// (`<name>.x`): no comma, no double quote, no control character.
-fn check_name(path: &str, name: &str) -> Result<(), SceneError> {
+pub(crate) fn check_name(path: &str, name: &str) -> Result<(), SceneError> {
     if name.is_empty() {
         return Err(invalid(path, "must not be empty"));
     }
@@ -990,6 +1135,13 @@ impl Scene {
             C::finite(&format!("{p}.angle"), b.angle)?;
             C::finite2(&format!("{p}.velocity"), b.velocity)?;
             C::finite(&format!("{p}.angular_velocity"), b.angular_velocity)?;
+            if let Some(iv) = &b.initial_velocity {
+                for (f, v) in [("vx", iv.vx), ("vy", iv.vy), ("omega", iv.omega)] {
+                    if let Some(v) = v {
+                        C::finite(&format!("{p}.initial_velocity.{f}"), v)?;
+                    }
+                }
+            }
         }
         for (i, j) in self.joints.iter().enumerate() {
             let p = format!("joints[{i}]");
@@ -1046,8 +1198,20 @@ impl Scene {
                     }
                 }
                 JointSpec::Clearance(c) => self.check_clearance(&p, c)?,
+                JointSpec::PrismaticClearance(c) => {
+                    crate::elements::validate_prismatic(self, &p, c)?
+                }
+            }
+            let rate = match j {
+                JointSpec::Revolute(r) => r.initial_rate,
+                JointSpec::Translational(t) => t.initial_rate,
+                _ => None,
+            };
+            if let Some(v) = rate {
+                C::finite(&format!("{p}.initial_rate"), v)?;
             }
         }
+        crate::elements::validate_forces(self)?;
         C::finite2("gravity", self.gravity)?;
         C::non_negative("baumgarte.alpha", self.baumgarte.alpha, "alpha")?;
         C::non_negative("baumgarte.beta", self.baumgarte.beta, "beta")?;
@@ -1183,7 +1347,7 @@ impl Scene {
         Ok(())
     }
 
-    fn check_attachment(
+    pub(crate) fn check_attachment(
         &self,
         path: &str,
         body: &str,
@@ -1376,6 +1540,33 @@ impl Scene {
             }
         }
         C::finite2(&format!("{p}.initial_eccentricity"), c.initial_eccentricity)?;
+        C::finite2(
+            &format!("{p}.initial_eccentricity_rate"),
+            c.initial_eccentricity_rate,
+        )?;
+        let e0 = c.initial_eccentricity[0].hypot(c.initial_eccentricity[1]);
+        if e0 > clearance && !c.allow_initial_penetration {
+            return Err(invalid(
+                format!("{p}.initial_eccentricity"),
+                format!(
+                    "|e| = {e0:e} m exceeds the clearance R_B − R_J = {clearance:e} m (the \
+                     journal would start {:e} m into the bearing); set \
+                     allow_initial_penetration: true to start in contact",
+                    e0 - clearance
+                ),
+            ));
+        }
+        if !(e0 - clearance < j.radius) {
+            return Err(invalid(
+                format!("{p}.initial_eccentricity"),
+                format!(
+                    "|e| = {e0:e} m puts the journal {:e} m into the bearing, beyond the \
+                     journal radius {} m: the contact law does not hold there",
+                    e0 - clearance,
+                    j.radius
+                ),
+            ));
+        }
         Ok(())
     }
 }

@@ -16,7 +16,7 @@ fn driver_lambda_balances_the_friction_moment() {
              "journal": {"body": "disk", "point": "c", "radius": 0.009},
              "normal": {"law": "impact", "k": 1e9, "c_max": 100.0, "d_max": 1e-5},
              "friction": {"law": "coulomb", "mu": 0.3, "v0": 1e-4, "v1": 2e-4},
-             "initial_eccentricity": [0.0, -0.00102]}
+             "initial_eccentricity": [0.0, -0.00102], "allow_initial_penetration": true}
         ],
         "gravity": [0.0, -9.81],
         "t_end": 1.0

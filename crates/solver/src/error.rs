@@ -25,14 +25,32 @@ pub enum SolveError {
         y: Vec<f64>,
     },
     /// The right-hand side or the state became non-finite (NaN or ±∞), or the state grew past
-    /// the divergence bound, or (fixed-step RK4 with `rk4_instability_steps` > 0) the steps
-    /// stayed outside RK4's stability region that many times in a row (`rk4` module doc).
+    /// the divergence bound.
     #[error("non-finite or diverging state at t = {t:e}")]
     NonFiniteState {
         /// Time of the last finite state.
         t: f64,
         /// Last finite state.
         y: Vec<f64>,
+    },
+    /// Fixed-step RK4 (with `rk4_instability_steps` > 0) took that many steps in a row outside
+    /// its stability region: h·ρ > 2.785 with ρ estimated from the stages (`rk4` module doc).
+    /// The state is finite; its numbers are not a solution any more.
+    #[error(
+        "RK4 beyond its stability limit at t = {t:e}: step {h:e} s, estimated limit {h_limit:.3e} s \
+         (h·ρ > 2.785 on {steps} steps in a row)"
+    )]
+    Rk4Unstable {
+        /// Time of the last accepted state.
+        t: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+        /// The step, s.
+        h: f64,
+        /// The largest stable step estimated at the last flagged step, 2.785/ρ, s.
+        h_limit: f64,
+        /// Flagged steps in a row (`rk4_instability_steps`).
+        steps: usize,
     },
     /// The Newton iteration of an implicit method failed to converge even at the smallest step.
     #[error("Newton iteration failed at t = {t:e}: {reason}")]
@@ -66,6 +84,7 @@ impl SolveError {
             SolveError::StepSizeTooSmall { t, .. }
             | SolveError::TooManySteps { t, .. }
             | SolveError::NonFiniteState { t, .. }
+            | SolveError::Rk4Unstable { t, .. }
             | SolveError::NewtonFailure { t, .. }
             | SolveError::BudgetExhausted { t, .. } => Some(*t),
             SolveError::InvalidOptions(_) => None,
@@ -78,6 +97,7 @@ impl SolveError {
             SolveError::StepSizeTooSmall { y, .. }
             | SolveError::TooManySteps { y, .. }
             | SolveError::NonFiniteState { y, .. }
+            | SolveError::Rk4Unstable { y, .. }
             | SolveError::NewtonFailure { y, .. }
             | SolveError::BudgetExhausted { y, .. } => Some(y),
             SolveError::InvalidOptions(_) => None,

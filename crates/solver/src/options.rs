@@ -177,7 +177,7 @@ pub struct SolverOptions {
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
-    /// Stability check of fixed-step RK4: fail with `NonFiniteState` once this many
+    /// Stability check of fixed-step RK4: fail with `Rk4Unstable` once this many
     /// consecutive steps lie outside RK4's stability region by the estimate of
     /// [`crate::rk4::RK4_STABILITY_RADIUS`] (h·ρ > 2.785). Default 0: off (the paper's RK4
     /// unchanged); `lash` turns it on (15) for mechanism runs. Ignored by the other methods.

@@ -27,7 +27,8 @@
 //!   ρ = ‖k3 − k2‖ / ‖Y3 − Y2‖,   h ρ = 2 ‖k3 − k2‖ / ‖k2 − k1‖       (Euclidean norms)
 //! estimates h|λ| of the dominant mode (HNW II §IV.2, the stiffness detection of DOPRI5).
 //! a step is outside the stability region when h ρ > r = 2.785293563 (RK4's radius on the
-//! negative real axis); the run fails with NonFiniteState after n such steps in a row
+//! negative real axis); the run fails with Rk4Unstable (the step, the estimated limit
+//! 2.785/ρ of the last flagged step, the time and state) after n such steps in a row
 //! (n = rk4_instability_steps; 15 as in DOPRI5's detection). Steps where ‖k2 − k1‖ is at
 //! rounding level (‖k2 − k1‖² ≤ (64 ε)² · 2 (‖k1‖² + ‖k2‖²)) are not judged.
 //! ```
@@ -117,9 +118,9 @@ impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
         }
     }
 
-    /// Whether h ρ = 2 ‖k3 − k2‖ / ‖k2 − k1‖ exceeds [`RK4_STABILITY_RADIUS`] (module doc);
-    /// false when ‖k2 − k1‖ is at rounding level.
-    fn outside_stability_region(&self) -> bool {
+    /// h ρ = 2 ‖k3 − k2‖ / ‖k2 − k1‖ when it exceeds [`RK4_STABILITY_RADIUS`] (module doc);
+    /// None inside the region or when ‖k2 − k1‖ is at rounding level.
+    fn outside_stability_region(&self) -> Option<f64> {
         let (mut num, mut den, mut size) = (0.0, 0.0, 0.0);
         for i in 0..self.y.len() {
             let (k1, k2, k3) = (self.f[i], self.k2[i], self.k3[i]);
@@ -129,9 +130,10 @@ impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
         }
         let floor = 64.0 * f64::EPSILON;
         if !(den > floor * floor * 2.0 * size) {
-            return false;
+            return None;
         }
-        4.0 * num > RK4_STABILITY_RADIUS * RK4_STABILITY_RADIUS * den
+        (4.0 * num > RK4_STABILITY_RADIUS * RK4_STABILITY_RADIUS * den)
+            .then(|| 2.0 * (num / den).sqrt())
     }
 }
 
@@ -165,12 +167,15 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
         }
         sys.rhs(t + 0.5 * h, &self.tmp, &mut self.k3);
         if self.instability_steps > 0 {
-            if self.outside_stability_region() {
+            if let Some(h_rho) = self.outside_stability_region() {
                 self.unstable_run += 1;
                 if self.unstable_run >= self.instability_steps {
-                    return Err(SolveError::NonFiniteState {
+                    return Err(SolveError::Rk4Unstable {
                         t: self.t,
                         y: self.y.clone(),
+                        h,
+                        h_limit: h * RK4_STABILITY_RADIUS / h_rho,
+                        steps: self.unstable_run,
                     });
                 }
             } else {

@@ -108,14 +108,27 @@ fn stability_check_catches_spurious_bounded_solutions() {
     // below 1e-3·e^{−k t/(1 + 1e-6)}, i.e. 0 in double precision at t = 2).
     let y = run(4.0, 0).unwrap().y_final[0].abs();
     assert!(y > 0.05 && y < 1.0, "spurious solution {y}");
-    // With the check: NonFiniteState within the first 15 + a few steps (the amplitude must
-    // first grow from 1e-3; the flagged run starts at once since h ρ ≈ h k = 4 there).
+    // With the check: Rk4Unstable within the first 15 + a few steps (the amplitude must
+    // first grow from 1e-3; the flagged run starts at once since h ρ ≈ h k = 4 there). The
+    // estimated limit is 2.785/ρ with ρ ≈ |∂f/∂y| = k/(1 + (y/s)²)² ≤ k, so at least 2.785/k,
+    // and at most the step (the step was flagged).
     for hk in [3.0, 4.0, 6.0] {
         match run(hk, 15) {
-            Err(SolveError::NonFiniteState { t, y }) => {
-                let h = hk / sys.k;
+            Err(SolveError::Rk4Unstable {
+                t,
+                y,
+                h,
+                h_limit,
+                steps,
+            }) => {
+                assert_eq!(h, hk / sys.k);
                 assert!(t <= 40.0 * h && t >= 14.0 * h, "h k = {hk}: t = {t}");
                 assert!(y[0].is_finite());
+                assert_eq!(steps, 15);
+                assert!(
+                    h_limit >= 0.99 * RK4_STABILITY_RADIUS / sys.k && h_limit < h,
+                    "h k = {hk}: limit {h_limit}"
+                );
             }
             other => panic!("h k = {hk}: {other:?}"),
         }

@@ -4,7 +4,10 @@
 //!
 //! ```text
 //! default_run(out, progress)            → Written<Headline>     (module headline)
-//! run(RunOptions)                       → Written<RunResult>    summary.json, trajectory.csv, figures
+//! run(RunOptions, progress)             → Written<RunResult>    summary.json, trajectory.csv
+//!                                                               (streamed), figures; on a
+//!                                                               solver failure failure.json,
+//!                                                               partial_trajectory.csv
 //! study_paper(StudyOptions)             → Written<StudyResult>  figures, report.md, study.json
 //! compare(CompareOptions, progress)     → Written<Comparison>   compare.md, compare.json
 //! work_precision(WorkPrecisionOptions, progress) → Written<WorkPrecisionResult>
@@ -24,22 +27,26 @@
 //! engine behind every front end, knowing no command line).
 
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
-use lash_solver::{ControllerKind, Method, SolverOptions};
+use lash_solver::{ControllerKind, Method, SolveError, SolverOptions};
 
 use crate::case::Case;
 use crate::compare::{self, Compared, Comparison, Reference, COMPARE_TOLERANCES};
 use crate::error::{Error, Message, OptionError};
 use crate::extremes::{self, Matrix};
 use crate::headline::{self, Headline};
-use crate::io::Written;
+use crate::io::{OutDir, Written};
 use crate::options::SolverChoice;
 use crate::poincare::{self, PoincareResult, PoincareSettings};
 use crate::progress::Progress;
-use crate::simulate::{simulate, Prepared, RunRequest, RunResult};
+use crate::report::{self, Failure, FAILURE_FILE};
+use crate::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
 use crate::stiffness_cmd::{self, StiffnessResult, StiffnessSettings, DEFAULT_SAMPLES};
 use crate::study::{self, StudyResult};
+use crate::summary::RunHeader;
 use crate::sweep::{self, MergedTable, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
+use crate::trajectory::{CsvFile, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
 use crate::workprecision::{WorkPrecisionPlan, WpRun, WpTable, DEFAULT_TARGETS};
 
 /// The default run (module `headline`): the 150 rpm press, ideal vs dry vs lubricated, RK4
@@ -54,7 +61,7 @@ pub fn default_run(
 /// What to run: one case.
 ///
 /// ```text
-/// case [solver choice] [t_end] [out]
+/// case [solver choice] [t_end] [samples_per_revolution | output_every] [out]
 /// ```
 ///
 /// Source: docs/outputs.md ("`lash run CASE`").
@@ -62,18 +69,38 @@ pub fn default_run(
 pub struct RunOptions {
     /// The case: a scene file (JSON) or a built-in test problem `testset:NAME`.
     pub case: String,
-    /// Solver choice over the case's defaults.
+    /// Solver choice over the case's defaults. Its `max_wall_time` is the budget of the whole
+    /// run, counted from the call (reading the case, assembly, integration, output).
     pub solver: SolverChoice,
     /// End time override, s (scene cases only).
     pub t_end: Option<f64>,
+    /// Trajectory rows per crank revolution (scenes with a crank driver); None = 2000.
+    pub samples_per_revolution: Option<usize>,
+    /// Spacing of the trajectory's rows, s (scene cases); overrides the rows per revolution.
+    pub output_every: Option<f64>,
     /// Output directory; None = `out/run/CASE`.
     pub out: Option<PathBuf>,
 }
 
-/// Runs one case: checks the case and the solver choice (the choice first against the
-/// defaults, so that an inconsistent choice is reported before the scene is read),
-/// integrates, and writes DIR/summary.json, DIR/trajectory.csv and the figures.
-pub fn run(o: &RunOptions) -> Result<Written<RunResult>, Error> {
+/// Runs one case into its directory: checks the case and the solver choice (the choice first
+/// against the defaults, so that an inconsistent choice is reported before the scene is
+/// read), integrates while streaming trajectory.csv, and writes the figures and summary.json.
+///
+/// ```text
+/// everything goes into a fresh sibling of DIR, swapped in when complete (io::OutDir): DIR
+/// never mixes two runs; an error other than the solver's (I/O, a bug, an interruption)
+/// leaves DIR as it was
+/// solver failure (exit 3): DIR = failure.json + partial_trajectory.csv (the rows up to the
+/// failure), never summary.json; `progress` notes what was written
+/// budget: solver.max_wall_time counts from this call; past it the run fails with
+/// BudgetExhausted, also after the integration (before the figures)
+/// ```
+pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>, Error> {
+    let start = Instant::now();
+    let deadline = o
+        .solver
+        .max_wall_time
+        .map(|w| start + Duration::from_secs_f64(w));
     let case = Case::load(&o.case, None)?;
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
@@ -84,13 +111,74 @@ pub fn run(o: &RunOptions) -> Result<Written<RunResult>, Error> {
         .unwrap_or_else(|| default_out("run", &prepared.case.name));
     let mut req = RunRequest::new(opts);
     req.t_end = o.t_end;
-    let r = simulate(&prepared, &req)?;
-    let files = r.write(&out)?;
-    Ok(Written {
-        result: r,
-        dir: out,
-        files,
-    })
+    req.samples_per_revolution = o.samples_per_revolution;
+    req.output_every = o.output_every;
+    req.keep_events = false;
+    req.deadline = deadline;
+    let dir = OutDir::create(&out, &report::run_file)?;
+    let traj = dir.path().join(TRAJECTORY_FILE);
+    let mut sink = CsvFile::create(&traj)?;
+    let outcome = simulate_into(&prepared, &req, &mut sink).and_then(|r| {
+        match deadline.filter(|d| Instant::now() >= *d) {
+            Some(_) => Err(Error::Solver(SolveError::BudgetExhausted {
+                t: r.extra_states.t_final,
+                y: r.extra_states.y_final.clone(),
+                reason: format!(
+                    "wall-clock budget of {} s used before the output was written",
+                    o.solver.max_wall_time.unwrap_or_default()
+                ),
+            })),
+            None => Ok(r),
+        }
+    });
+    match outcome {
+        Ok(r) => {
+            let mut files = vec![traj];
+            files.extend(r.write(dir.path())?);
+            let files = files.iter().map(|f| dir.final_path(f)).collect();
+            dir.commit()?;
+            Ok(Written {
+                result: r,
+                dir: out,
+                files,
+            })
+        }
+        Err(Error::Solver(e)) => {
+            let (t_span_end, rows) = (prepared.t_span(o.t_end)?.1, sink.rows());
+            let partial = dir.path().join(PARTIAL_TRAJECTORY_FILE);
+            if rows > 0 {
+                std::fs::rename(&traj, &partial).map_err(|err| Error::io(&partial, err))?;
+            } else {
+                std::fs::remove_file(&traj).map_err(|err| Error::io(&traj, err))?;
+            }
+            Failure::new(
+                RunHeader::new(&prepared.case, &req.opts),
+                t_span_end,
+                &e,
+                &prepared.state_names(),
+                (rows > 0).then_some(rows),
+            )
+            .write(dir.path())?;
+            dir.commit()?;
+            let what = if rows > 0 {
+                format!(
+                    "{FAILURE_FILE} and {PARTIAL_TRAJECTORY_FILE} ({rows} row{} before the \
+                     failure)",
+                    if rows == 1 { "" } else { "s" }
+                )
+            } else {
+                FAILURE_FILE.to_string()
+            };
+            progress.note(&format!("wrote {what} to {}", out.display()).into());
+            Err(Error::Solver(e))
+        }
+        // The file as the user knows it, not its temporary place.
+        Err(Error::Io { path, source }) => Err(Error::Io {
+            path: dir.final_path(&path),
+            source,
+        }),
+        Err(e) => Err(e),
+    }
 }
 
 /// What to study.
@@ -724,6 +812,7 @@ pub fn describe_run(r: &RunResult) -> String {
     if let Some(e) = s.reference_error {
         out.push_str(&format!("  reference error {e:.3e}\n"));
     }
+    out.push_str(&format!("  trajectory: {} rows\n", r.trajectory_rows));
     if let Some(m) = &s.metrics {
         let f = |v: Option<f64>| v.map_or("null".to_string(), |x| format!("{x:.6}"));
         let mut parts = Vec::new();

@@ -501,9 +501,10 @@ pub fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
                 Ok(r) => {
                     let phi = r
                         .trajectory
+                        .column("constraint_violation")
+                        .unwrap_or_default()
                         .iter()
-                        .map(|s| s.constraint_violation)
-                        .fold(0.0, f64::max);
+                        .fold(0.0, |m: f64, v| m.max(*v));
                     if phi < STABLE_PHI_MAX {
                         return Ok(h);
                     }

@@ -32,7 +32,7 @@
 //! outcomes    allowed:  agreement (the promise holds); a typed solver error (step size too
 //!                       small, too many steps, non-finite state, Newton failure, budget
 //!                       exhausted) with a finite time inside the run and a finite state;
-//!                       rk4 beyond its limit: only NonFiniteState
+//!                       rk4 beyond its limit: only Rk4Unstable or NonFiniteState
 //!             known:    a result that breaks the promise in a run of KNOWN_FINDINGS (findings,
 //!                       reported, not failures)
 //!             failures: any other result that breaks the promise, non-finite numbers in a
@@ -176,7 +176,8 @@ pub fn alpha(m: Method) -> f64 {
 /// ```text
 /// stem, what it stresses, the scene (press_scene + one parameter at a corner),
 /// h_in: RK4 runs (stability check on, simulate.rs) and meets its promise;
-/// h_out: RK4 fails with NonFiniteState (its stability check or the divergence bound)
+/// h_out: RK4 fails with Rk4Unstable (its stability check) or NonFiniteState (the divergence
+/// bound)
 /// ```
 ///
 /// Source: module doc.
@@ -280,7 +281,7 @@ fn corner_scene(stem: &str, stresses: &str, c: Corner, notes: &[&str]) -> Scene 
 ///
 /// ```text
 /// scan (examples/extremes_rk4_scan.rs): RK4 at the 1–2–5 series from t_end/10 down
-/// rk4_beyond  the smallest step of the scan that was stopped (NonFiniteState) while every
+/// rk4_beyond  the smallest step of the scan that was stopped (Rk4Unstable, NonFiniteState) while every
 ///             larger one was too, chosen so that the stop comes within the quick budget
 /// rk4_inside  one series value below the largest step that ran to t_end and met its promise;
 ///             where no step up to 2e6 steps ran to t_end (lubricated_clearance_1um,
@@ -613,7 +614,7 @@ pub enum Setting {
         /// Step, s.
         h: f64,
     },
-    /// RK4 at a step beyond its stability limit: must fail with NonFiniteState.
+    /// RK4 at a step beyond its stability limit: must fail with Rk4Unstable or NonFiniteState.
     Rk4Beyond {
         /// Step, s.
         h: f64,
@@ -649,7 +650,8 @@ impl Setting {
 /// A typed solver failure, by kind.
 ///
 /// ```text
-/// StepSizeTooSmall | TooManySteps | NonFiniteState | NewtonFailure | BudgetExhausted
+/// StepSizeTooSmall | TooManySteps | NonFiniteState | Rk4Unstable | NewtonFailure
+/// | BudgetExhausted
 /// ```
 ///
 /// Source: `lash_solver::SolveError`.
@@ -662,8 +664,10 @@ pub enum FailureKind {
     StepSizeTooSmall,
     /// The step budget ran out.
     TooManySteps,
-    /// A non-finite or diverging state (or RK4 outside its stability region).
+    /// A non-finite or diverging state.
     NonFiniteState,
+    /// RK4 outside its stability region (its stability check).
+    Rk4Unstable,
     /// Newton's iteration failed.
     NewtonFailure,
     /// The wall-clock budget ran out.
@@ -677,6 +681,7 @@ impl FailureKind {
             FailureKind::StepSizeTooSmall => "h-min",
             FailureKind::TooManySteps => "steps",
             FailureKind::NonFiniteState => "diverged",
+            FailureKind::Rk4Unstable => "unstable",
             FailureKind::NewtonFailure => "newton",
             FailureKind::BudgetExhausted => "wall",
         }
@@ -687,6 +692,7 @@ impl FailureKind {
             SolveError::StepSizeTooSmall { .. } => FailureKind::StepSizeTooSmall,
             SolveError::TooManySteps { .. } => FailureKind::TooManySteps,
             SolveError::NonFiniteState { .. } => FailureKind::NonFiniteState,
+            SolveError::Rk4Unstable { .. } => FailureKind::Rk4Unstable,
             SolveError::NewtonFailure { .. } => FailureKind::NewtonFailure,
             SolveError::BudgetExhausted { .. } => FailureKind::BudgetExhausted,
             SolveError::InvalidOptions(_) => return None,
@@ -798,7 +804,8 @@ pub enum Outcome {
         message: String,
     },
     /// Any other ending: non-finite numbers returned, an untyped error, a typed error without
-    /// a finite time or state, RK4 beyond its limit not failing with NonFiniteState (a failure).
+    /// a finite time or state, RK4 beyond its limit not failing with Rk4Unstable or
+    /// NonFiniteState (a failure).
     Rejected {
         /// Why.
         reason: String,
@@ -1253,11 +1260,11 @@ pub fn run_cell(r: &Ready, setting: Setting, budget: &Budget) -> Cell {
                 if let (Setting::Rk4Beyond { .. }, Outcome::Failed { kind, .. }) =
                     (setting, &cell.outcome)
                 {
-                    if *kind != FailureKind::NonFiniteState {
+                    if !matches!(kind, FailureKind::NonFiniteState | FailureKind::Rk4Unstable) {
                         cell.outcome = Outcome::Rejected {
                             reason: format!(
-                                "rk4 beyond its stability limit failed with {e} instead of a \
-                                 non-finite state"
+                                "rk4 beyond its stability limit failed with {e} instead of its \
+                                 stability stop or a non-finite state"
                             ),
                         };
                     }

@@ -32,7 +32,7 @@ use lash_solver::Method;
 
 use crate::compare::{self, Compared, ErrorNorms, ErrorWindow, Reference};
 use crate::error::Error;
-use crate::io::{self, Written};
+use crate::io::{self, OutDir, Written};
 use crate::metrics::{Metrics, Sample};
 use crate::plot::{self, Axes, Series, SeriesStyle};
 use crate::progress::{NoProgress, Progress};
@@ -392,7 +392,7 @@ pub fn run_with_progress(
 ) -> Result<Written<Headline>, Error> {
     let clock = Instant::now();
     let root = workspace_root();
-    let dir = out.unwrap_or_else(|| root.join("validation/reports/default"));
+    let target = out.unwrap_or_else(|| root.join("validation/reports/default"));
     let mut cases = Vec::new();
     let mut runs = Vec::new();
     for c in &CASES {
@@ -401,7 +401,9 @@ pub fn run_with_progress(
         cases.push(report);
         runs.push((*c, run));
     }
-    io::create_dir(&dir)?;
+    // The whole directory is replaced when complete (io::OutDir): never a mix of two runs.
+    let out_dir = OutDir::create(&target, &default_run_file)?;
+    let dir = out_dir.path().to_path_buf();
     let mut written = figures(&dir, &runs)?;
     for (c, r) in &runs {
         written.extend(r.write(&dir.join(c.stem))?);
@@ -416,9 +418,34 @@ pub fn run_with_progress(
     io::write_atomic(&readme, md.as_bytes())?;
     io::write_json_atomic(&json, &h)?;
     written.extend([readme, json]);
+    let files = written.iter().map(|f| out_dir.final_path(f)).collect();
+    out_dir.commit()?;
     Ok(Written {
         result: h,
-        dir,
-        files: written,
+        dir: target,
+        files,
     })
+}
+
+/// Whether `name` is an entry the default run's directory holds (what its next run may
+/// replace): README.md, default.json, the figures, one directory per case.
+fn default_run_file(name: &str, is_dir: bool) -> bool {
+    if is_dir {
+        return CASES.iter().any(|c| c.stem == name);
+    }
+    ["README.md", "default.json"].contains(&name)
+        || ["slider_acceleration", "orbits"]
+            .iter()
+            .any(|f| name == format!("{f}.svg") || name == format!("{f}.png"))
+}
+
+/// The comparison table of [`Headline::to_markdown`] (its first table: header, rule and one
+/// row per run), the one README.md shows.
+pub fn comparison_table(markdown: &str) -> Vec<String> {
+    markdown
+        .lines()
+        .skip_while(|l| !l.starts_with("| case | method |"))
+        .take_while(|l| l.starts_with('|'))
+        .map(str::to_string)
+        .collect()
 }

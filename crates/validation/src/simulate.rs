@@ -5,15 +5,22 @@
 //! Prepared::load(case)        scene file → checked Scene (SceneError → exit 2) | testset:NAME
 //!                             | a catalogue scene (Case::catalogue)
 //! Prepared::options(choice)   the defaults below, the request's SolverChoice laid over them
-//! simulate(prepared, request) → RunResult { summary, window samples (2001-point metrics grid of
-//!                               the last revolution), trajectory samples, extra samples,
-//!                               states, events, energy totals, ideal slider-crank }
+//! simulate_into(prepared, request, sink)
+//!                             → RunResult { summary, window samples (2001-point metrics grid of
+//!                               the last revolution), extra samples and states, events,
+//!                               energy totals, ideal slider-crank }; the trajectory's rows go
+//!                               to the sink as the run makes them (trajectory::TrajectorySink)
+//! simulate(prepared, request) the same with the rows kept in memory (RunResult::trajectory)
 //!
 //! the integration loop (Integrator, one accepted step at a time):
 //!   wall time     = time spent in Problem::new, Problem::integrator and Integrator::step only (no output, no
 //!                   energy quadrature, no I/O)
-//!   outputs       = dense output at every requested time; mechanism samples are evaluated
-//!                   at once (so a contact law's stored impact velocity is the one in force)
+//!   outputs       = dense output at every requested time (the trajectory grid, the metrics
+//!                   grid, the extra times, merged in time order and computed one at a time);
+//!                   mechanism samples are evaluated at once (so a contact law's stored impact
+//!                   velocity is the one in force)
+//!   extrema       every accepted step in the metrics window: metrics::Peaks on its dense
+//!                   output (5 samples, golden-section search where a maximum appears)
 //!   energy        ∫ P dt of Mechanism::power over every accepted step: Boole's rule on five
 //!                   equally spaced nodes, error estimate |S₂ − S₁|/15 (S₁, S₂ Simpson on one
 //!                   and two panels), panels no longer than T/400; a fixed-step method groups
@@ -23,6 +30,25 @@
 //!   events        located hits; a run without event location (the paper's RK4) counts the
 //!                   sign changes of the event functions between consecutive step ends
 //!                   (crossing time by linear interpolation), so contact onsets are still counted
+//!
+//! memory: independent of the run's length — the mechanism and the solver's state (O(n²) for
+//!   the implicit methods), the 2001 window samples, the extra samples asked for, the events
+//!   of the window (all of them only with RunRequest::keep_events), and what the sink keeps
+//!   (trajectory::CsvFile: one 64 KiB buffer)
+//! ```
+//!
+//! Checks before a run (exit 2, naming the field or option; nothing runs):
+//!
+//! ```text
+//! step          RK4's step longer than the run                                → step
+//! trajectory    more than MAX_TRAJECTORY_ROWS rows                            → samples_per_
+//!                                                                    revolution, output_every
+//! time axis     16 ε max(|t_start|, |t_end|) (the smallest step f64 allows there) above
+//!               TIME_RESOLUTION × the shortest time the run must resolve: the trajectory's
+//!               and the metrics grid's spacing, h_max, the RK4 step, span/100 → t_start,
+//!               t_end or revolutions (t_start = 1e15 s: steps ≥ 3.6 s)
+//! deadline      RunRequest::deadline (a command's budget from its start) already past
+//!               → BudgetExhausted (exit 3); otherwise the integration gets what is left
 //! ```
 //!
 //! Defaults of a mechanism run (a scene), each overridable by a request's SolverChoice:
@@ -85,21 +111,22 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use lash_model::scene::JointSpec;
-use lash_model::{IdealSliderCrank, Mechanism, Scene};
+use lash_model::{IdealSliderCrank, Mechanism, Outputs, Scene};
 use lash_solver::{
-    testset, Atol, EventHit, Method, OdeSystem, Problem, Solution, SolverOptions, Stats,
-    StepOutcome,
+    testset, Atol, EventHit, Method, OdeSystem, Problem, Solution, SolveError, SolverOptions,
+    Stats, StepOutcome,
 };
 
 use crate::case::{Case, CaseSource};
 use crate::error::{Error, OptionError};
 use crate::metrics::{
-    self, EnergyTotals, EventQuantity, EventRecord, JointInfo, Sample, Window, GRID_POINTS,
+    self, DenseExtremes, EnergyTotals, EventQuantity, EventRecord, JointExtremes, JointInfo, Peaks,
+    Sample, Window, GRID_POINTS,
 };
 use crate::options::SolverChoice;
 use crate::report::{self, RunOutput};
 use crate::summary::Summary;
-use crate::trajectory::Extra;
+use crate::trajectory::{fmt_num, Columns, Header, TrajectorySink};
 
 /// Default method of a mechanism run.
 pub const DEFAULT_METHOD: Method = Method::Bdf;
@@ -167,6 +194,9 @@ pub struct MechanismInfo {
     pub dim: usize,
     /// Whether the scene is an in-line slider-crank with a closed-form ideal.
     pub has_ideal: bool,
+    /// Names of the state components: `<body>.x`, `<body>.y`, `<body>.theta` of every
+    /// integrated body, then `<body>.vx`, `<body>.vy`, `<body>.omega`.
+    pub state_names: Vec<String>,
 }
 
 /// A case ready to run.
@@ -266,6 +296,15 @@ impl Prepared {
             (Some(i), _) => i.dim,
             (None, Some(p)) => p.y0.len(),
             (None, None) => 0,
+        }
+    }
+
+    /// Names of the state components (`<body>.x`, … for a scene; `y0`, `y1`, … for a test
+    /// problem).
+    pub fn state_names(&self) -> Vec<String> {
+        match &self.info {
+            Some(i) => i.state_names.clone(),
+            None => (0..self.dim()).map(|i| format!("y{i}")).collect(),
         }
     }
 
@@ -414,16 +453,30 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
             dry |= c.film.is_none();
         }
     }
-    let joint = mech
-        .roles()
-        .clearance_joint
-        .and_then(|j| match &scene.joints[j] {
-            JointSpec::Clearance(c) => Some(JointInfo {
-                clearance: c.bearing.radius - c.journal.radius,
-                lubricated: c.film.is_some(),
-            }),
-            _ => None,
-        });
+    let roles = mech.roles();
+    let joint =
+        roles
+            .clearance_joint
+            .zip(roles.clearance_index)
+            .and_then(|(j, index)| match &scene.joints[j] {
+                JointSpec::Clearance(c) => Some(JointInfo {
+                    index,
+                    clearance: c.bearing.radius - c.journal.radius,
+                    lubricated: c.film.is_some(),
+                }),
+                _ => None,
+            });
+    // y = (q, q̇), q = (x, y, θ) per integrated body (docs/model.md §1).
+    let bodies = mech.integrated_bodies();
+    let mut state_names: Vec<String> = Vec::with_capacity(mech.dim());
+    for suffixes in [["x", "y", "theta"], ["vx", "vy", "omega"]] {
+        for b in &bodies {
+            state_names.extend(suffixes.iter().map(|s| format!("{b}.{s}")));
+        }
+    }
+    if state_names.len() != mech.dim() {
+        state_names = (0..mech.dim()).map(|i| format!("y{i}")).collect();
+    }
     MechanismInfo {
         period: w.map(|w| 2.0 * std::f64::consts::PI / w),
         crank_speed: w,
@@ -434,43 +487,76 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
         has_dry_joint: dry,
         dim: mech.dim(),
         has_ideal: mech.ideal_slider_crank().is_some(),
+        state_names,
     }
 }
+
+/// Longest trajectory a run writes, rows: beyond it a run is refused (exit 2) and asks to be
+/// thinned. At the press's 47 columns a row is about 1 KB of CSV, so this is about 100 GB, a
+/// file no script reads whole.
+pub const MAX_TRAJECTORY_ROWS: u64 = 100_000_000;
+
+/// The steps the f64 time axis must resolve: 16 ε |t| (the smallest step the solvers take at
+/// time t, `lash_solver` step floor) must stay below this fraction of the shortest time the
+/// run must resolve (module doc, "Checks before a run").
+pub const TIME_RESOLUTION: f64 = 1e-3;
+
+/// Default trajectory rows per crank revolution.
+pub const SAMPLES_PER_REVOLUTION: usize = 2000;
 
 /// What to run and what to record.
 ///
 /// ```text
 /// opts (method, tolerances, …; opts.output is ignored: the grids below are recorded),
-/// t_end override, trajectory grid size, extra output times, energy on/off
+/// t_end override, trajectory grid, extra output times, energy on/off, events kept,
+/// the whole run's wall-clock deadline
+/// trajectory grid: trajectory_points (a total, both ends) | output_every DT | samples per
+///   revolution N (default 2000) | 4001 points without a crank driver
 /// ```
 ///
 /// Source: docs/outputs.md (`trajectory.csv`, `metrics`, `energy`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunRequest {
-    /// Solver options (from [`Prepared::options`]).
+    /// Solver options (from [`Prepared::options`]). Their `max_wall_time` counts from the
+    /// start of the integration unless `deadline` is given.
     pub opts: SolverOptions,
     /// End time override, s (mechanisms only). None = the scene's.
     pub t_end: Option<f64>,
-    /// Points of the trajectory grid (uniform over the whole run, both ends). None = 2000 per
-    /// crank revolution plus one (4001 without a crank driver); Some(0) = no trajectory.
-    /// Test problems record every accepted step instead.
+    /// Points of the trajectory grid (uniform over the whole run, both ends); Some(0) = no
+    /// trajectory. Overrides `output_every` and `samples_per_revolution`. Test problems
+    /// record every accepted step instead.
     pub trajectory_points: Option<usize>,
+    /// Spacing of the trajectory grid, s: t_start + k·DT, and t_end (mechanisms).
+    pub output_every: Option<f64>,
+    /// Trajectory rows per crank revolution (scenes with a crank driver); None = 2000.
+    pub samples_per_revolution: Option<usize>,
     /// Further output times (sorted, inside the run), sampled like the others.
     pub extra_times: Vec<f64>,
     /// Whether to integrate the power terms for the energy balance (mechanisms only).
     pub energy: bool,
+    /// Whether [`RunResult::events`] keeps every event of the run; false: only those of the
+    /// metrics window (memory independent of the run's length).
+    pub keep_events: bool,
+    /// Wall-clock deadline of the whole run (a command's `max_wall_time` counted from its
+    /// start): the integration gets what is left, and a run past it fails with
+    /// `BudgetExhausted`.
+    pub deadline: Option<Instant>,
 }
 
 impl RunRequest {
     /// A request with these options and the defaults: the scene's end time, the default
-    /// trajectory grid, no extra times, energy on.
+    /// trajectory grid, no extra times, energy on, every event kept, no deadline.
     pub fn new(opts: SolverOptions) -> RunRequest {
         RunRequest {
             opts,
             t_end: None,
             trajectory_points: None,
+            output_every: None,
+            samples_per_revolution: None,
             extra_times: Vec::new(),
             energy: true,
+            keep_events: true,
+            deadline: None,
         }
     }
 }
@@ -478,8 +564,8 @@ impl RunRequest {
 /// Everything one run produced.
 ///
 /// ```text
-/// summary (metrics filled in), samples on the metrics grid (window), on the trajectory grid
-/// and at the extra times, with the raw states; events; energy totals; the ideal mechanism
+/// summary (metrics filled in), samples on the metrics grid (window) and at the extra times,
+/// the trajectory (when collected in memory), events, energy totals, the ideal mechanism
 /// ```
 ///
 /// Source: docs/outputs.md ("`summary.json`", "`trajectory.csv`").
@@ -490,18 +576,17 @@ pub struct RunResult {
     pub summary: Summary,
     /// Samples on the 2001-point metrics grid (empty for test problems).
     pub window: Vec<Sample>,
-    /// States on the metrics grid.
-    pub window_states: Solution,
-    /// Samples on the trajectory grid (test problems: `Sample::at` of every accepted step).
-    pub trajectory: Vec<Sample>,
-    /// States on the trajectory grid (test problems: every accepted step, the start
-    /// included).
-    pub trajectory_states: Solution,
+    /// The trajectory's rows ([`simulate`]); empty when they went to a sink
+    /// ([`simulate_into`]).
+    pub trajectory: Columns,
+    /// Rows of the trajectory, wherever they went.
+    pub trajectory_rows: usize,
     /// Samples at the extra times.
     pub extra: Vec<Sample>,
     /// States at the extra times.
     pub extra_states: Solution,
-    /// Events: located ones, or crossings at the step ends of a run without location.
+    /// Events: located ones, or crossings at the step ends of a run without location (all of
+    /// them, or those of the metrics window: [`RunRequest::keep_events`]).
     pub events: Vec<EventRecord>,
     /// Energy totals over the whole run (mechanisms with `energy`).
     pub energy: Option<EnergyTotals>,
@@ -511,39 +596,20 @@ pub struct RunResult {
     pub metrics_window: Option<Window>,
     /// Power evaluations spent on the energy quadrature.
     pub energy_evals: usize,
+    /// Output evaluations spent on the extrema over the dense output, and their searches.
+    pub peak_evals: (usize, usize),
 }
 
 impl RunResult {
-    /// Extra trajectory.csv columns: `y0..y{n-1}` for test problems, none for mechanisms.
-    pub fn extra_columns(&self) -> Vec<(String, Vec<f64>)> {
-        if !self.window.is_empty() || self.summary.final_state.is_none() {
-            return Vec::new();
-        }
-        let s = &self.trajectory_states;
-        (0..s.dim)
-            .map(|i| {
-                (
-                    format!("y{i}"),
-                    (0..s.len()).map(|k| s.state(k)[i]).collect(),
-                )
-            })
-            .collect()
-    }
-
-    /// Writes summary.json, trajectory.csv and the figures into `dir` (report::write_run:
-    /// everything checked first, summary last).
+    /// Writes the figures, trajectory.csv (from the collected rows; none when they went to a
+    /// sink) and summary.json into `dir` (report::write_run: summary last).
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
-        let cols = self.extra_columns();
-        let extra: Vec<Extra<'_>> = cols
-            .iter()
-            .map(|(n, v)| Extra { name: n, values: v })
-            .collect();
+        let traj = (self.trajectory.header().is_some()).then_some(&self.trajectory);
         report::write_run(
             dir,
             &RunOutput {
                 summary: &self.summary,
-                trajectory: &self.trajectory,
-                extra: &extra,
+                trajectory: traj,
                 window: &self.window,
                 ideal: self.ideal.as_ref(),
             },
@@ -553,25 +619,96 @@ impl RunResult {
 
 /// Uniform grid of `n ≥ 2` points over [a, b], both ends exact.
 pub fn uniform_grid(a: f64, b: f64, n: usize) -> Vec<f64> {
-    let n = n.max(2);
-    (0..n)
-        .map(|i| {
-            if i == n - 1 {
-                b
-            } else {
-                a + (b - a) * i as f64 / (n - 1) as f64
-            }
-        })
-        .collect()
+    let g = Grid::uniform(a, b, n.max(2));
+    (0..g.n).map(|i| g.time(i)).collect()
 }
 
-/// Runs a case. Solver failures are `Error::Solver` (exit 3); nothing is written.
-pub fn simulate(p: &Prepared, req: &RunRequest) -> Result<RunResult, Error> {
-    let (t0, t_end) = p.t_span(req.t_end)?;
-    match &p.model {
-        Model::Mechanism(scene) => simulate_mechanism(p, scene, req, t0, t_end),
-        Model::TestSet(_) => simulate_testset(p, req, t0, t_end),
+/// The trajectory's output times, computed one at a time (never held as a whole).
+///
+/// ```text
+/// uniform:  t_i = a + (b − a) i/(n − 1), t_{n−1} = b
+/// spaced:   t_i = a + i·dt for i < n − 1, t_{n−1} = b
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Grid {
+    a: f64,
+    b: f64,
+    n: usize,
+    dt: Option<f64>,
+}
+
+impl Grid {
+    fn uniform(a: f64, b: f64, n: usize) -> Grid {
+        Grid { a, b, n, dt: None }
     }
+
+    fn time(&self, i: usize) -> f64 {
+        if i + 1 == self.n {
+            return self.b;
+        }
+        match self.dt {
+            Some(dt) => self.a + dt * i as f64,
+            None => self.a + (self.b - self.a) * i as f64 / (self.n - 1) as f64,
+        }
+    }
+
+    /// The shortest spacing of the grid (∞ with fewer than two points).
+    fn spacing(&self) -> f64 {
+        match (self.n, self.dt) {
+            (0 | 1, _) => f64::INFINITY,
+            (_, Some(dt)) => dt.min(self.b - self.time(self.n - 2)),
+            (n, None) => (self.b - self.a) / (n - 1) as f64,
+        }
+    }
+}
+
+/// Runs a case, keeping the trajectory's rows in memory ([`RunResult::trajectory`]). Solver
+/// failures are `Error::Solver` (exit 3); nothing is written.
+pub fn simulate(p: &Prepared, req: &RunRequest) -> Result<RunResult, Error> {
+    let mut rows = Columns::new();
+    let mut r = simulate_into(p, req, &mut rows)?;
+    r.trajectory = rows;
+    Ok(r)
+}
+
+/// Runs a case, pushing the trajectory's rows into `sink` as the run goes (module doc);
+/// memory does not grow with the run's length unless the sink keeps the rows. On a solver
+/// failure (`Error::Solver`, exit 3) the sink holds the rows up to it, and has been finished.
+pub fn simulate_into(
+    p: &Prepared,
+    req: &RunRequest,
+    sink: &mut dyn TrajectorySink,
+) -> Result<RunResult, Error> {
+    let (t0, t_end) = p.t_span(req.t_end)?;
+    let result = match &p.model {
+        Model::Mechanism(scene) => simulate_mechanism(p, scene, req, t0, t_end, sink),
+        Model::TestSet(_) => simulate_testset(p, req, t0, t_end, sink),
+    };
+    let finished = sink.finish();
+    let r = result?;
+    finished?;
+    Ok(r)
+}
+
+/// The solver options of a request: its `max_wall_time` cut to what is left before its
+/// deadline; a deadline already past is `BudgetExhausted` at (t0, y0).
+fn options_within(req: &RunRequest, t0: f64, y0: &[f64]) -> Result<SolverOptions, Error> {
+    let mut opts = req.opts.clone();
+    if let Some(d) = req.deadline {
+        let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+        if !(left > 0.0) {
+            return Err(Error::Solver(SolveError::BudgetExhausted {
+                t: t0,
+                y: y0.to_vec(),
+                reason: format!(
+                    "wall-clock budget of {} s used before the integration started",
+                    opts.max_wall_time.unwrap_or_default()
+                ),
+            }));
+        }
+        opts.max_wall_time = Some(left);
+    }
+    Ok(opts)
 }
 
 fn check_times(times: &[f64], t0: f64, t_end: f64) -> Result<(), Error> {
@@ -587,40 +724,390 @@ fn check_times(times: &[f64], t0: f64, t_end: f64) -> Result<(), Error> {
     Ok(())
 }
 
+/// The checks of a request against its case before anything runs (module doc, "Checks before
+/// a run"); returns the trajectory grid.
+fn plan_run(p: &Prepared, req: &RunRequest, t0: f64, t_end: f64) -> Result<Grid, Error> {
+    let o = &req.opts;
+    let span = t_end - t0;
+    let period = p.period();
+    if let Some(h) = o.step.filter(|_| o.method.is_fixed_step()) {
+        if h > span {
+            return Err(OptionError::leading(
+                "step",
+                format!(
+                    " {} s is longer than the run ({} s from t_start {} s to t_end {} s)",
+                    fmt_num(h),
+                    fmt_num(span),
+                    fmt_num(t0),
+                    fmt_num(t_end)
+                ),
+            )
+            .into());
+        }
+    }
+    if p.info.is_none() {
+        return Ok(Grid::uniform(t0, t_end, 0));
+    }
+    // The trajectory grid.
+    if let Some(n) = req.samples_per_revolution {
+        if period.is_none() {
+            return Err(OptionError::leading(
+                "samples_per_revolution",
+                format!(" needs a crank driver, and {} has none", p.case.name),
+            )
+            .text("; ")
+            .name("output_every")
+            .text(" spaces rows in time")
+            .into());
+        }
+        if n == 0 {
+            return Err(OptionError::leading("samples_per_revolution", " must be >= 1").into());
+        }
+    }
+    if let Some(dt) = req.output_every {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(OptionError::leading(
+                "output_every",
+                format!(" must be finite and > 0, got {dt}"),
+            )
+            .into());
+        }
+    }
+    let rows: f64 = match (req.trajectory_points, req.output_every, period) {
+        (Some(n), _, _) => n as f64,
+        (None, Some(dt), _) => (span / dt * (1.0 - 1e-9)).ceil().max(1.0) + 1.0,
+        (None, None, Some(t)) => {
+            let n = req.samples_per_revolution.unwrap_or(SAMPLES_PER_REVOLUTION) as f64;
+            1.0 + (n * span / t).round().max(1.0)
+        }
+        (None, None, None) => (2 * (GRID_POINTS - 1) + 1) as f64,
+    };
+    if rows > MAX_TRAJECTORY_ROWS as f64 {
+        let thin = if period.is_some() {
+            OptionError::new("samples_per_revolution")
+                .text(format!(
+                    "the trajectory would have {} rows, more than the {} lash writes: thin it \
+                     with ",
+                    fmt_count(rows),
+                    fmt_count(MAX_TRAJECTORY_ROWS as f64)
+                ))
+                .name("samples_per_revolution")
+                .text(" or ")
+        } else {
+            OptionError::new("output_every").text(format!(
+                "the trajectory would have {} rows, more than the {} lash writes: thin it with ",
+                fmt_count(rows),
+                fmt_count(MAX_TRAJECTORY_ROWS as f64)
+            ))
+        };
+        return Err(thin
+            .name("output_every")
+            .text(", or shorten ")
+            .name("t_end")
+            .into());
+    }
+    let n = rows as usize;
+    let grid = match (req.trajectory_points, req.output_every) {
+        (None, Some(dt)) => Grid {
+            a: t0,
+            b: t_end,
+            n,
+            dt: Some(dt),
+        },
+        _ => Grid::uniform(t0, t_end, n),
+    };
+    // The time axis: f64 must resolve the shortest time the run must resolve.
+    let mut need = vec![(grid.spacing(), "the trajectory's spacing".to_string())];
+    if let Some(t) = period {
+        need.push((
+            t / (GRID_POINTS - 1) as f64,
+            "the metrics grid's spacing T/2000".into(),
+        ));
+    }
+    if o.h_max.is_finite() {
+        need.push((o.h_max, "h_max".into()));
+    }
+    if let Some(h) = o.step.filter(|_| o.method.is_fixed_step()) {
+        need.push((h, "the RK4 step".into()));
+    }
+    need.push((span / 100.0, "a hundredth of the run".into()));
+    let (need, what) = need
+        .into_iter()
+        .fold((f64::INFINITY, String::new()), |a, b| {
+            if b.0 < a.0 {
+                b
+            } else {
+                a
+            }
+        });
+    let floor_at = |t: f64| 16.0 * f64::EPSILON * t.abs();
+    let floor = floor_at(t0).max(floor_at(t_end));
+    if floor > TIME_RESOLUTION * need {
+        // Blame t_start when it alone is too far out, else the end time.
+        let start = floor_at(t0) > TIME_RESOLUTION * need;
+        let text = format!(
+            " = {:.6e} s is too far from 0 for f64 time: steps there are at least {:.2e} s \
+             (16 ε |t|), but the run must resolve {:.2e} s ({what}); shift the scene's times \
+             toward 0",
+            if start { t0 } else { t_end },
+            floor,
+            need
+        );
+        let scene_field =
+            |field: &str| Err(Error::Input(format!("case {}: {field}{text}", p.case.name)));
+        return if start {
+            scene_field("t_start")
+        } else if req.t_end.is_some() {
+            Err(OptionError::leading("t_end", text).into())
+        } else if p.scene().is_some_and(|s| s.t_end.is_none()) {
+            scene_field("revolutions (t_end)")
+        } else {
+            scene_field("t_end")
+        };
+    }
+    Ok(grid)
+}
+
+/// A count in words a reader takes in at once: 5e9, 2.5e8, 40000.
+fn fmt_count(x: f64) -> String {
+    if x < 1e6 {
+        format!("{x:.0}")
+    } else {
+        let s = format!("{x:.1e}");
+        s.replace(".0e", "e")
+    }
+}
+
+/// Receives what a run produces, as `drive` integrates (module doc).
+trait Observer {
+    /// The next requested output time (sorted), if any.
+    fn next_time(&self) -> Option<f64>;
+    /// The state at the next requested output time.
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), Error>;
+    /// An accepted step [ta, tb] (`cut`: ended at an event); `dense(t, out)` is its dense
+    /// output; `y` the state at tb (after the event hook).
+    fn step(
+        &mut self,
+        ta: f64,
+        tb: f64,
+        cut: bool,
+        y: &[f64],
+        dense: &dyn Fn(f64, &mut [f64]),
+    ) -> Result<(), Error>;
+    /// An event (located, or a crossing between step ends).
+    fn event(&mut self, hit: EventHit);
+}
+
+/// What the integration loop produced.
+struct Drive {
+    stats: Stats,
+    wall: f64,
+    t_final: f64,
+    y_final: Vec<f64>,
+    located: usize,
+}
+
+impl Drive {
+    /// summary.json of the run, without metrics or test-problem fields.
+    fn summary(&self, p: &Prepared, opts: &SolverOptions, t_end: f64) -> Summary {
+        Summary::new(&p.case, opts, t_end, self.stats, self.wall, self.located)
+    }
+}
+
+/// Integrates from t0 to t_end, handing the observer every requested output time (as soon as
+/// the dense output covers it), every accepted step and every event.
+fn drive<S: OdeSystem + ?Sized>(
+    sys: &S,
+    t0: f64,
+    t_end: f64,
+    y0: &[f64],
+    opts: &SolverOptions,
+    obs: &mut dyn Observer,
+) -> Result<Drive, Error> {
+    let n = y0.len();
+    let mut wall = Duration::ZERO;
+    let clock = Instant::now();
+    let problem = Problem::new(sys, opts)?;
+    let mut it = problem.integrator(t0, t_end, y0)?;
+    wall += clock.elapsed();
+    while let Some(t) = obs.next_time().filter(|t| *t <= t0) {
+        obs.output(t, y0)?;
+    }
+    let m = sys.n_events();
+    let detect = !opts.events && m > 0;
+    let mut g_prev = vec![0.0; if detect { m } else { 0 }];
+    let mut g_now = g_prev.clone();
+    let mut t_g = t0;
+    if detect {
+        sys.events(t0, y0, &mut g_prev);
+    }
+    let mut located = 0;
+    let mut buf = vec![0.0; n];
+    loop {
+        let clock = Instant::now();
+        let outcome = it.step()?;
+        wall += clock.elapsed();
+        let (ta, tb) = (it.t_prev(), it.t());
+        while let Some(t) = obs.next_time().filter(|t| *t <= tb) {
+            it.interpolate(t, &mut buf);
+            obs.output(t, &buf)?;
+        }
+        let cut = matches!(outcome, StepOutcome::Event { .. });
+        obs.step(ta, tb, cut, it.y(), &|t, out| it.interpolate(t, out))?;
+        if detect {
+            sys.events(tb, it.y(), &mut g_now);
+            for i in 0..m {
+                let (a, b) = (g_prev[i], g_now[i]);
+                if (a < 0.0 && b > 0.0) || (a > 0.0 && b < 0.0) {
+                    obs.event(EventHit {
+                        index: i,
+                        t: t_g + (tb - t_g) * a / (a - b),
+                        rising: b > 0.0,
+                    });
+                }
+                if b != 0.0 {
+                    g_prev[i] = b;
+                }
+            }
+            t_g = tb;
+        }
+        match outcome {
+            StepOutcome::Accepted { .. } => {}
+            StepOutcome::Event {
+                hits: h, stopped, ..
+            } => {
+                located += h.len();
+                for hit in h {
+                    obs.event(hit);
+                }
+                if stopped {
+                    break;
+                }
+            }
+            StepOutcome::StopTime { .. } => break,
+        }
+        if it.is_finished() {
+            break;
+        }
+    }
+    // Requested times past a stopping event get the final state.
+    while let Some(t) = obs.next_time() {
+        obs.output(t, it.y())?;
+    }
+    Ok(Drive {
+        stats: it.stats(),
+        wall: wall.as_secs_f64(),
+        t_final: it.t(),
+        y_final: it.y().to_vec(),
+        located,
+    })
+}
+
+fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 4], Error> {
+    let v = pw(t, y);
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(v)
+    } else {
+        Err(Error::Internal(format!(
+            "energy: power terms {v:?} not finite at t = {t:e}"
+        )))
+    }
+}
+
+type PowerFn<'a> = &'a dyn Fn(f64, &[f64]) -> [f64; 4];
+
+fn empty_solution(dim: usize) -> Solution {
+    Solution {
+        dim,
+        ..Default::default()
+    }
+}
+
+/// The observer of a test problem: a row per accepted step (the start included), states at
+/// the extra times.
+struct TestSetRun<'a> {
+    header: Header,
+    sink: &'a mut dyn TrajectorySink,
+    rows: usize,
+    row: Vec<f64>,
+    extra_times: &'a [f64],
+    next: usize,
+    extra_states: Solution,
+}
+
+impl TestSetRun<'_> {
+    fn push(&mut self, t: f64, y: &[f64]) -> Result<(), Error> {
+        self.row.clear();
+        self.row.push(t);
+        self.row.extend([f64::NAN; 10]);
+        self.row.push(0.0);
+        self.row.push(f64::NAN);
+        self.row.extend_from_slice(y);
+        self.header.check(&self.row)?;
+        self.sink.row(&self.row)?;
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+impl Observer for TestSetRun<'_> {
+    fn next_time(&self) -> Option<f64> {
+        self.extra_times.get(self.next).copied()
+    }
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), Error> {
+        self.extra_states.t.push(t);
+        self.extra_states.y.extend_from_slice(y);
+        self.next += 1;
+        Ok(())
+    }
+    fn step(
+        &mut self,
+        _: f64,
+        tb: f64,
+        _: bool,
+        y: &[f64],
+        _: &dyn Fn(f64, &mut [f64]),
+    ) -> Result<(), Error> {
+        self.push(tb, y)
+    }
+    fn event(&mut self, _: EventHit) {}
+}
+
 fn simulate_testset(
     p: &Prepared,
     req: &RunRequest,
     t0: f64,
     t_end: f64,
+    sink: &mut dyn TrajectorySink,
 ) -> Result<RunResult, Error> {
     let prob = p
         .test_problem()
         .ok_or_else(|| Error::Internal("not a test problem".into()))?;
     check_times(&req.extra_times, t0, t_end)?;
+    plan_run(p, req, t0, t_end)?;
+    let opts = &options_within(req, t0, &prob.y0)?;
     let n = prob.y0.len();
-    let mut extra_states = empty_solution(n);
-    let mut sink = |_: usize, t: f64, y: &[f64]| -> Result<(), Error> {
-        extra_states.t.push(t);
-        extra_states.y.extend_from_slice(y);
-        Ok(())
+    let mut fixed = [false; 13];
+    fixed[0] = true;
+    fixed[11] = true;
+    let header = Header::new(fixed, (0..n).map(|i| format!("y{i}")).collect())?;
+    sink.start(&header)?;
+    let mut obs = TestSetRun {
+        header,
+        sink,
+        rows: 0,
+        row: Vec::with_capacity(13 + n),
+        extra_times: &req.extra_times,
+        next: 0,
+        extra_states: empty_solution(n),
     };
-    let mut d = drive(
-        &*prob.system,
-        t0,
-        t_end,
-        &prob.y0,
-        &req.opts,
-        &req.extra_times,
-        true,
-        None,
-        f64::INFINITY,
-        &mut sink,
-    )?;
-    let mut traj = d.steps.take().unwrap_or_else(|| empty_solution(n));
-    for s in [&mut traj, &mut extra_states] {
-        d.finish(s);
-    }
-    let mut summary = d.summary(p, &req.opts, t_end);
+    obs.push(t0, &prob.y0)?;
+    let d = drive(&*prob.system, t0, t_end, &prob.y0, opts, &mut obs)?;
+    let mut extra_states = obs.extra_states;
+    extra_states.stats = d.stats;
+    extra_states.t_final = d.t_final;
+    extra_states.y_final = d.y_final.clone();
+    let mut summary = d.summary(p, opts, t_end);
     let err = testset::reference_error(&d.y_final, &prob.reference, prob.atol);
     if !err.is_finite() {
         return Err(Error::Internal(format!(
@@ -630,13 +1117,11 @@ fn simulate_testset(
     }
     summary.final_state = Some(d.y_final.clone());
     summary.reference_error = Some(err);
-    let trajectory = traj.t.iter().map(|&t| Sample::at(t)).collect();
     Ok(RunResult {
         summary,
         window: Vec::new(),
-        window_states: empty_solution(n),
-        trajectory,
-        trajectory_states: traj,
+        trajectory: Columns::new(),
+        trajectory_rows: obs.rows,
         extra: Vec::new(),
         extra_states,
         events: Vec::new(),
@@ -644,14 +1129,8 @@ fn simulate_testset(
         ideal: None,
         metrics_window: None,
         energy_evals: 0,
+        peak_evals: (0, 0),
     })
-}
-
-fn empty_solution(dim: usize) -> Solution {
-    Solution {
-        dim,
-        ..Default::default()
-    }
 }
 
 /// The role-based view of one mechanism evaluation: maps `Mechanism::outputs` to a metrics
@@ -684,7 +1163,11 @@ impl<'a> Sampler<'a> {
 
     /// One sample at (t, y).
     pub fn sample(&self, t: f64, y: &[f64]) -> Sample {
-        let o = self.mech.outputs(t, y);
+        self.of_outputs(t, &self.mech.outputs(t, y))
+    }
+
+    /// The sample of one evaluation `o` at time t.
+    pub fn of_outputs(&self, t: f64, o: &Outputs) -> Sample {
         let c = self.clearance_index.and_then(|k| o.clearance.get(k));
         let ideal_a = match (&self.ideal, o.crank_angle, o.slider_a) {
             (Some(i), Some(phi), Some(_)) => Some(i.a_at(i.theta_of_crank_angle(phi))),
@@ -710,14 +1193,257 @@ impl<'a> Sampler<'a> {
             ideal_slider_a: ideal_a,
         }
     }
+
+    /// Which fixed trajectory columns ([`crate::trajectory::COLUMNS`]) this mechanism fills.
+    pub fn fixed_present(&self) -> [bool; 13] {
+        let roles = self.mech.roles();
+        let (crank, slider, joint) = (
+            roles.crank_body.is_some(),
+            roles.slider.is_some(),
+            self.clearance_index.is_some(),
+        );
+        [
+            true,
+            crank,
+            slider,
+            slider,
+            slider,
+            joint,
+            joint,
+            joint,
+            joint,
+            joint,
+            joint,
+            true,
+            self.driver_pos.is_some(),
+        ]
+    }
+}
+
+/// The fixed trajectory columns of a sample (NaN where absent), in the order of
+/// [`crate::trajectory::COLUMNS`].
+fn fixed_values(s: &Sample) -> [f64; 13] {
+    let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
+    [
+        s.t,
+        v(s.crank_angle),
+        v(s.slider_x),
+        v(s.slider_v),
+        v(s.slider_a),
+        v(s.ex_over_c),
+        v(s.ey_over_c),
+        v(s.delta),
+        v(s.contact_force),
+        v(s.friction_force),
+        v(s.film_force),
+        s.constraint_violation,
+        v(s.driver_torque),
+    ]
 }
 
 /// Output lists of a mechanism run, merged in time order.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum List {
     Window,
     Trajectory,
     Extra,
+}
+
+/// The observer of a mechanism run (module doc): rows into the sink, samples of the window
+/// and at the extra times, the extrema over the dense output, the energy quadrature, events.
+struct MechanismRun<'a> {
+    mech: &'a Mechanism,
+    sampler: Sampler<'a>,
+    header: Header,
+    sink: &'a mut dyn TrajectorySink,
+    row: Vec<f64>,
+    // The three output lists, merged lazily.
+    wgrid: Vec<f64>,
+    tgrid: Grid,
+    extra_times: &'a [f64],
+    idx: [usize; 3],
+    t0: f64,
+    t_end: f64,
+    window: Vec<Sample>,
+    extra: Vec<Sample>,
+    extra_states: Solution,
+    rows: usize,
+    // Extrema over the window's dense output.
+    w0: f64,
+    peaks: Peaks,
+    cv_max: f64,
+    has_slider: bool,
+    n_clr: usize,
+    // Energy.
+    quad: Option<Quadrature>,
+    power: Option<PowerFn<'a>>,
+    // Events.
+    names: Vec<(&'static str, Option<usize>)>,
+    keep_events: bool,
+    events: Vec<EventRecord>,
+    ybuf: Vec<f64>,
+}
+
+impl MechanismRun<'_> {
+    fn next(&self) -> Option<(f64, List)> {
+        let w = self.wgrid.get(self.idx[0]).map(|&t| (t, List::Window));
+        let tr =
+            (self.idx[1] < self.tgrid.n).then(|| (self.tgrid.time(self.idx[1]), List::Trajectory));
+        let x = self.extra_times.get(self.idx[2]).map(|&t| (t, List::Extra));
+        [w, tr, x]
+            .into_iter()
+            .flatten()
+            .fold(None, |best: Option<(f64, List)>, c| match best {
+                Some(b) if b.0 <= c.0 => Some(b),
+                _ => Some(c),
+            })
+    }
+
+    /// The quantities whose extrema the metrics take (module doc): slider a and −a, then per
+    /// clearance joint ε, δ, F_N, |F_film|.
+    fn quantities(&mut self, o: &Outputs) -> Result<Vec<f64>, Error> {
+        let mut v = Vec::with_capacity(2 + 4 * self.n_clr);
+        if self.has_slider {
+            let a = o.slider_a.unwrap_or(f64::NAN);
+            v.extend([a, -a]);
+        }
+        for c in &o.clearance {
+            v.extend([c.eps, c.delta, c.contact_force, c.film_force.abs()]);
+        }
+        if v.iter().any(|x| !x.is_finite()) || !o.constraint_violation.is_finite() {
+            return Err(Error::Internal(format!(
+                "metrics: a non-finite output on the dense output: {v:?}, ‖Φ‖ = {}",
+                o.constraint_violation
+            )));
+        }
+        self.cv_max = self.cv_max.max(o.constraint_violation);
+        Ok(v)
+    }
+
+    fn dense_extremes(&self, scene: &Scene) -> DenseExtremes {
+        let m = self.peaks.max();
+        let found = |x: f64| x.is_finite().then_some(x);
+        let (slider_acc, off) = if self.has_slider {
+            (found(-m[1]).zip(found(m[0])), 2)
+        } else {
+            (None, 0)
+        };
+        let joints = scene
+            .joints
+            .iter()
+            .filter_map(|j| match j {
+                JointSpec::Clearance(c) => Some(c),
+                _ => None,
+            })
+            .enumerate()
+            .map(|(k, c)| {
+                let q = &m[off + 4 * k..off + 4 * k + 4];
+                JointExtremes {
+                    name: c.name.clone(),
+                    clearance: c.bearing.radius - c.journal.radius,
+                    lubricated: c.film.is_some(),
+                    eps_max: q[0],
+                    delta_max: q[1],
+                    contact_force_max: q[2],
+                    film_force_max: q[3],
+                }
+            })
+            .collect();
+        DenseExtremes {
+            slider_acc,
+            constraint_violation_max: self.cv_max,
+            joints,
+        }
+    }
+}
+
+impl Observer for MechanismRun<'_> {
+    fn next_time(&self) -> Option<f64> {
+        // The metrics grid may start a few ulps before t0 (t_end − T): clamp into the run.
+        self.next().map(|(t, _)| t.clamp(self.t0, self.t_end))
+    }
+
+    fn output(&mut self, _t: f64, y: &[f64]) -> Result<(), Error> {
+        let Some((t_req, list)) = self.next() else {
+            return Err(Error::Internal(
+                "an output past the last requested time".into(),
+            ));
+        };
+        let o = self.mech.outputs(t_req, y);
+        let s = self.sampler.of_outputs(t_req, &o);
+        match list {
+            List::Window => {
+                self.window.push(s);
+                self.idx[0] += 1;
+            }
+            List::Extra => {
+                self.extra_states.t.push(t_req);
+                self.extra_states.y.extend_from_slice(y);
+                self.extra.push(s);
+                self.idx[2] += 1;
+            }
+            List::Trajectory => {
+                self.row.clear();
+                self.row.extend(fixed_values(&s));
+                o.column_values(&mut self.row);
+                self.header.check(&self.row)?;
+                self.sink.row(&self.row)?;
+                self.rows += 1;
+                self.idx[1] += 1;
+            }
+        }
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        ta: f64,
+        tb: f64,
+        cut: bool,
+        _y: &[f64],
+        dense: &dyn Fn(f64, &mut [f64]),
+    ) -> Result<(), Error> {
+        if let (Some(q), Some(pw)) = (self.quad.as_mut(), self.power) {
+            let buf = &mut self.ybuf;
+            let mut node = |t: f64| -> Result<[f64; 4], Error> {
+                dense(t, buf);
+                checked_power(pw, t, buf)
+            };
+            q.step(ta, tb, cut, &mut node)?;
+        }
+        if tb >= self.w0 {
+            let a = ta.max(self.w0);
+            let mut peaks = std::mem::replace(&mut self.peaks, Peaks::new(0));
+            let mut buf = std::mem::take(&mut self.ybuf);
+            let r = peaks.step(a, tb, &mut |t| {
+                dense(t, &mut buf);
+                let o = self.mech.outputs(t, &buf);
+                self.quantities(&o)
+            });
+            self.ybuf = buf;
+            self.peaks = peaks;
+            r?;
+        }
+        Ok(())
+    }
+
+    fn event(&mut self, h: EventHit) {
+        if !self.keep_events && h.t < self.w0 {
+            return;
+        }
+        let (kind, joint) = self.names.get(h.index).copied().unwrap_or(("", None));
+        let quantity = match kind {
+            "contact" => EventQuantity::Penetration,
+            "eps_cap" => EventQuantity::FilmCap,
+            _ => EventQuantity::Other,
+        };
+        self.events.push(EventRecord {
+            t: h.t,
+            quantity,
+            rising: h.rising,
+            joint,
+        });
+    }
 }
 
 fn simulate_mechanism(
@@ -726,113 +1452,96 @@ fn simulate_mechanism(
     req: &RunRequest,
     t0: f64,
     t_end: f64,
+    sink: &mut dyn TrajectorySink,
 ) -> Result<RunResult, Error> {
     let info = p
         .info
         .as_ref()
         .ok_or_else(|| Error::Internal("mechanism without info".into()))?;
     check_times(&req.extra_times, t0, t_end)?;
+    let tgrid = plan_run(p, req, t0, t_end)?;
+    options_within(req, t0, &[])?;
     let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
+    let opts = &options_within(req, t0, &mech.initial_state())?;
     let sampler = Sampler::new(&mech, scene);
     let window = p.metrics_window(t0, t_end);
-    let wgrid = metrics::grid(window.t_end, window.period);
-    let n_traj = match req.trajectory_points {
-        Some(n) => n,
-        None => match info.period {
-            Some(t) => 1 + (2000.0 * (t_end - t0) / t).round().max(1.0) as usize,
-            None => 2 * (GRID_POINTS - 1) + 1,
-        },
-    };
-    let tgrid = if n_traj == 0 {
-        Vec::new()
-    } else {
-        uniform_grid(t0, t_end, n_traj)
-    };
-    let mut merged: Vec<(f64, List, usize)> = Vec::new();
-    merged.extend(wgrid.iter().enumerate().map(|(i, &t)| (t, List::Window, i)));
-    merged.extend(
-        tgrid
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| (t, List::Trajectory, i)),
-    );
-    merged.extend(
-        req.extra_times
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| (t, List::Extra, i)),
-    );
-    merged.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // The metrics grid may start a few ulps before t0 (t_end − T): clamp into the run.
-    let times: Vec<f64> = merged.iter().map(|m| m.0.clamp(t0, t_end)).collect();
+    let header = Header::new(sampler.fixed_present(), mech.output_columns())?;
+    sink.start(&header)?;
     let y0 = mech.initial_state();
     let n = y0.len();
-    let mut sol_w = empty_solution(n);
-    let mut sol_t = empty_solution(n);
-    let mut sol_x = empty_solution(n);
-    let mut s_w: Vec<Sample> = Vec::with_capacity(wgrid.len());
-    let mut s_t: Vec<Sample> = Vec::with_capacity(tgrid.len());
-    let mut s_x: Vec<Sample> = Vec::with_capacity(req.extra_times.len());
-    let mut sink = |k: usize, _t: f64, y: &[f64]| -> Result<(), Error> {
-        let (t_req, list, _) = merged[k];
-        let s = sampler.sample(t_req, y);
-        let (sol, samples) = match list {
-            List::Window => (&mut sol_w, &mut s_w),
-            List::Trajectory => (&mut sol_t, &mut s_t),
-            List::Extra => (&mut sol_x, &mut s_x),
-        };
-        sol.t.push(t_req);
-        sol.y.extend_from_slice(y);
-        samples.push(s);
-        Ok(())
-    };
+    let clr_names = mech.clearance_names();
+    let names: Vec<(&'static str, Option<usize>)> = (0..mech.n_events())
+        .map(|i| match mech.event_name(i) {
+            Some((kind, j)) => (kind, clr_names.iter().position(|c| *c == j)),
+            None => ("", None),
+        })
+        .collect();
     let power = |t: f64, y: &[f64]| {
         let p = mech.power(t, y);
         [p.driver, p.contact_damping, p.friction, p.film]
     };
-    let d = drive(
-        &mech,
+    let power_ref: PowerFn<'_> = &power;
+    let max_panel = info
+        .period
+        .map_or(f64::INFINITY, |t| t * QUADRATURE_PANEL_PER_PERIOD);
+    let quad = if req.energy {
+        Some(Quadrature::new(
+            opts.method.is_fixed_step(),
+            max_panel,
+            t0,
+            checked_power(power_ref, t0, &y0)?,
+        ))
+    } else {
+        None
+    };
+    let has_slider = mech.roles().slider.is_some();
+    let n_clr = clr_names.len();
+    let n_q = if has_slider { 2 } else { 0 } + 4 * n_clr;
+    let w0 = window.t_end - window.period;
+    let mut obs = MechanismRun {
+        mech: &mech,
+        sampler,
+        header,
+        sink,
+        row: Vec::new(),
+        wgrid: metrics::grid(window.t_end, window.period),
+        tgrid,
+        extra_times: &req.extra_times,
+        idx: [0; 3],
         t0,
         t_end,
-        &y0,
-        &req.opts,
-        &times,
-        false,
-        if req.energy { Some(&power) } else { None },
-        info.period
-            .map_or(f64::INFINITY, |t| t * QUADRATURE_PANEL_PER_PERIOD),
-        &mut sink,
-    )?;
-    for s in [&mut sol_w, &mut sol_t, &mut sol_x] {
-        d.finish(s);
-    }
-    let role_joint = sampler
-        .clearance_index
-        .and_then(|k| mech.clearance_names().get(k).map(|s| s.to_string()));
-    let hits = if req.opts.events {
-        &d.hits
-    } else {
-        &d.crossings
+        window: Vec::with_capacity(GRID_POINTS),
+        extra: Vec::with_capacity(req.extra_times.len()),
+        extra_states: empty_solution(n),
+        rows: 0,
+        w0,
+        peaks: Peaks::new(n_q),
+        cv_max: 0.0,
+        has_slider,
+        n_clr,
+        quad,
+        power: req.energy.then_some(power_ref),
+        names,
+        keep_events: req.keep_events,
+        events: Vec::new(),
+        ybuf: vec![0.0; n],
     };
-    let events: Vec<EventRecord> = hits
-        .iter()
-        .map(|h| {
-            let quantity = match mech.event_name(h.index) {
-                Some(("contact", j)) if role_joint.as_deref() == Some(j) => {
-                    EventQuantity::Penetration
-                }
-                Some(("eps_cap", j)) if role_joint.as_deref() == Some(j) => EventQuantity::FilmCap,
-                _ => EventQuantity::Other,
-            };
-            EventRecord {
-                t: h.t,
-                quantity,
-                rising: h.rising,
-            }
-        })
-        .collect();
-    let energy = match &d.energy {
+    let d = drive(&mech, t0, t_end, &y0, opts, &mut obs)?;
+    // The window's grid samples are samples of the extrema too.
+    let mut dense = obs.dense_extremes(scene);
+    for s in &obs.window {
+        if let (Some(a), Some((lo, hi))) = (s.slider_a, dense.slider_acc.as_mut()) {
+            *lo = lo.min(a);
+            *hi = hi.max(a);
+        }
+    }
+    let mut extra_states = std::mem::replace(&mut obs.extra_states, empty_solution(n));
+    extra_states.stats = d.stats;
+    extra_states.t_final = d.t_final;
+    extra_states.y_final = d.y_final.clone();
+    let energy = match obs.quad.as_mut() {
         Some(q) => {
+            q.finish();
             let o0 = mech.outputs(t0, &y0);
             let o1 = mech.outputs(d.t_final, &d.y_final);
             Some(EnergyTotals {
@@ -847,192 +1556,31 @@ fn simulate_mechanism(
         }
         None => None,
     };
-    let energy_evals = d.energy.as_ref().map_or(0, |q| q.evals);
-    let metrics = metrics::compute(&s_w, window, info.joint, &events, energy)?;
-    let mut summary = d.summary(p, &req.opts, t_end);
+    let energy_evals = obs.quad.as_ref().map_or(0, |q| q.evals);
+    let metrics = metrics::compute(
+        &obs.window,
+        window,
+        info.joint,
+        &obs.events,
+        energy,
+        Some(&dense),
+    )?;
+    let mut summary = d.summary(p, opts, t_end);
     summary.metrics = Some(metrics);
     Ok(RunResult {
         summary,
-        window: s_w,
-        window_states: sol_w,
-        trajectory: s_t,
-        trajectory_states: sol_t,
-        extra: s_x,
-        extra_states: sol_x,
-        events,
+        window: std::mem::take(&mut obs.window),
+        trajectory: Columns::new(),
+        trajectory_rows: obs.rows,
+        extra: std::mem::take(&mut obs.extra),
+        extra_states,
+        events: std::mem::take(&mut obs.events),
         energy,
-        ideal: sampler.ideal,
+        ideal: obs.sampler.ideal,
         metrics_window: Some(window),
         energy_evals,
+        peak_evals: (obs.peaks.evals, obs.peaks.refinements),
     })
-}
-
-/// What the integration loop produced.
-struct Drive {
-    steps: Option<Solution>,
-    hits: Vec<EventHit>,
-    crossings: Vec<EventHit>,
-    stats: Stats,
-    wall: f64,
-    t_final: f64,
-    y_final: Vec<f64>,
-    energy: Option<Quadrature>,
-}
-
-impl Drive {
-    /// Copies the end of the run (stats, located events, final time and state) into `s`.
-    fn finish(&self, s: &mut Solution) {
-        s.stats = self.stats;
-        s.events = self.hits.clone();
-        s.t_final = self.t_final;
-        s.y_final = self.y_final.clone();
-    }
-
-    /// summary.json of the run, without metrics or test-problem fields.
-    fn summary(&self, p: &Prepared, opts: &SolverOptions, t_end: f64) -> Summary {
-        Summary::new(&p.case, opts, t_end, self.stats, self.wall, self.hits.len())
-    }
-}
-
-type PowerFn<'a> = &'a dyn Fn(f64, &[f64]) -> [f64; 4];
-
-/// Integrates from t0 to t_end, calling `sink(k, t, y)` for every requested time (sorted) as
-/// soon as the dense output covers it.
-#[allow(clippy::type_complexity)]
-fn drive<S: OdeSystem + ?Sized>(
-    sys: &S,
-    t0: f64,
-    t_end: f64,
-    y0: &[f64],
-    opts: &SolverOptions,
-    times: &[f64],
-    record_steps: bool,
-    power: Option<PowerFn<'_>>,
-    max_panel: f64,
-    sink: &mut dyn FnMut(usize, f64, &[f64]) -> Result<(), Error>,
-) -> Result<Drive, Error> {
-    let n = y0.len();
-    let mut wall = Duration::ZERO;
-    let clock = Instant::now();
-    let problem = Problem::new(sys, opts)?;
-    let mut it = problem.integrator(t0, t_end, y0)?;
-    wall += clock.elapsed();
-    let mut next = 0;
-    while next < times.len() && times[next] <= t0 {
-        sink(next, times[next], y0)?;
-        next += 1;
-    }
-    let mut steps = record_steps.then(|| {
-        let mut s = empty_solution(n);
-        s.t.push(t0);
-        s.y.extend_from_slice(y0);
-        s
-    });
-    let m = sys.n_events();
-    let detect = !opts.events && m > 0;
-    let mut g_prev = vec![0.0; if detect { m } else { 0 }];
-    let mut g_now = g_prev.clone();
-    let mut t_g = t0;
-    if detect {
-        sys.events(t0, y0, &mut g_prev);
-    }
-    let mut quad = match power {
-        Some(pw) => Some(Quadrature::new(
-            opts.method.is_fixed_step(),
-            max_panel,
-            t0,
-            checked_power(pw, t0, y0)?,
-        )),
-        None => None,
-    };
-    let mut hits = Vec::new();
-    let mut crossings = Vec::new();
-    let mut buf = vec![0.0; n];
-    loop {
-        let clock = Instant::now();
-        let outcome = it.step()?;
-        wall += clock.elapsed();
-        let (ta, tb) = (it.t_prev(), it.t());
-        while next < times.len() && times[next] <= tb {
-            it.interpolate(times[next], &mut buf);
-            sink(next, times[next], &buf)?;
-            next += 1;
-        }
-        if let Some(s) = steps.as_mut() {
-            s.t.push(tb);
-            s.y.extend_from_slice(it.y());
-        }
-        let cut = matches!(outcome, StepOutcome::Event { .. });
-        if let (Some(q), Some(pw)) = (quad.as_mut(), power) {
-            let mut node = |t: f64| -> Result<[f64; 4], Error> {
-                it.interpolate(t, &mut buf);
-                checked_power(pw, t, &buf)
-            };
-            q.step(ta, tb, cut, &mut node)?;
-        }
-        if detect {
-            sys.events(tb, it.y(), &mut g_now);
-            for i in 0..m {
-                let (a, b) = (g_prev[i], g_now[i]);
-                if (a < 0.0 && b > 0.0) || (a > 0.0 && b < 0.0) {
-                    crossings.push(EventHit {
-                        index: i,
-                        t: t_g + (tb - t_g) * a / (a - b),
-                        rising: b > 0.0,
-                    });
-                }
-                if b != 0.0 {
-                    g_prev[i] = b;
-                }
-            }
-            t_g = tb;
-        }
-        match outcome {
-            StepOutcome::Accepted { .. } => {}
-            StepOutcome::Event {
-                hits: h, stopped, ..
-            } => {
-                hits.extend(h);
-                if stopped {
-                    break;
-                }
-            }
-            StepOutcome::StopTime { .. } => break,
-        }
-        if it.is_finished() {
-            break;
-        }
-    }
-    // Requested times past a stopping event get the final state.
-    while next < times.len() {
-        sink(next, times[next], it.y())?;
-        next += 1;
-    }
-    if let Some(q) = quad.as_mut() {
-        q.finish();
-    }
-    let stats = it.stats();
-    Ok(Drive {
-        steps,
-        hits,
-        crossings,
-        stats,
-        wall: wall.as_secs_f64(),
-        t_final: it.t(),
-        y_final: it.y().to_vec(),
-        energy: quad,
-    })
-}
-
-fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 4], Error> {
-    let v = pw(t, y);
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(v)
-    } else {
-        Err(Error::Internal(format!(
-            "energy: power terms {v:?} not finite at t = {t:e}"
-        )))
-    }
 }
 
 /// Time integrals of the power terms over accepted steps.

@@ -357,6 +357,7 @@ mod tests {
             None,
             &[],
             None,
+            None,
         )
         .unwrap();
         let case = Case {

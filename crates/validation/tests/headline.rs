@@ -50,4 +50,36 @@ fn default_run_compares_rk4_with_the_best_adaptive_method() {
     let md = std::fs::read_to_string(d.path().join("README.md")).unwrap();
     assert!(md.contains("| lubricated | bdf | rtol "));
     assert!(md.contains("checked by esdirk34"));
+    readme_shows_the_table_the_run_prints(&md);
+}
+
+/// README.md ("What the default run shows") holds the comparison table the run prints: every
+/// cell but the wall times (column 5), which vary from run to run. `LASH_BLESS=1` rewrites
+/// the README's table with this run's.
+fn readme_shows_the_table_the_run_prints(printed: &str) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md");
+    let readme = std::fs::read_to_string(&path).unwrap();
+    let marker = "<!-- The table `cargo run --release` prints;";
+    let at = readme.find(marker).expect("the README's table marker");
+    let start = at + readme[at..].find('\n').unwrap() + 1;
+    let end = start + readme[start..].find("\n\n").unwrap();
+    let shown: Vec<&str> = readme[start..end].lines().collect();
+    let run = headline::comparison_table(printed);
+    if std::env::var_os("LASH_BLESS").is_some() {
+        let text = format!("{}{}{}", &readme[..start], run.join("\n"), &readme[end..]);
+        std::fs::write(&path, text).unwrap();
+        return;
+    }
+    assert_eq!(shown.len(), run.len(), "README:\n{}\nrun:\n{}", shown.join("\n"), run.join("\n"));
+    assert_eq!(run.len(), 2 + 6);
+    for (a, b) in shown.iter().zip(&run) {
+        let cells = |l: &str| -> Vec<String> {
+            l.split('|')
+                .enumerate()
+                .filter(|(k, _)| *k != 5)
+                .map(|(_, c)| c.trim().to_string())
+                .collect()
+        };
+        assert_eq!(cells(a), cells(b), "README: {a}\nrun:    {b}");
+    }
 }

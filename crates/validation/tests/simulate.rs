@@ -7,8 +7,11 @@ use std::path::PathBuf;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;
+use lash_validation::case::Case;
 use lash_validation::metrics::EventQuantity;
-use lash_validation::simulate::{simulate, Prepared, RunRequest, RunResult};
+use lash_validation::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
+use lash_validation::trajectory::{Columns, CsvFile, Header, TrajectorySink};
+use lash_validation::{Error, ErrorKind};
 
 fn case(stem: &str) -> Prepared {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -212,8 +215,16 @@ fn hires_reference_error_at_rtol_1e8() {
     // Rodas5P is order 5: rtol 1e-8 gives an error well below 1e-5 (measured 7e-10).
     assert!(err < 1e-5 && err > 0.0, "{err}");
     assert_eq!(s.final_state.as_ref().unwrap().len(), 8);
-    assert_eq!(r.extra_columns().len(), 8);
+    // One row per accepted step and the start, the state in columns y0..y7.
+    let h = r.trajectory.header().unwrap();
+    assert_eq!(
+        h.names()[13..],
+        ["y0", "y1", "y2", "y3", "y4", "y5", "y6", "y7"]
+    );
     assert_eq!(r.trajectory.len(), s.stats.accepted + 1);
+    assert_eq!(r.trajectory_rows, r.trajectory.len());
+    let y7 = r.trajectory.column("y7").unwrap();
+    assert_eq!(y7.last(), s.final_state.as_ref().unwrap().last());
     assert!(p.t_span(Some(1.0)).is_err());
 }
 
@@ -229,4 +240,305 @@ fn catalogue_case_prepares_the_scene_of_its_file() {
     assert_eq!(from_code.info, from_file.info);
     assert_eq!(from_code.case.name, from_file.case.name);
     assert_eq!(from_code.case.sha256(), None);
+}
+
+/// The two-link pendulum of README.md ("Writing a scene"), read from the README itself.
+fn readme_pendulum() -> String {
+    let readme =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../README.md"))
+            .unwrap();
+    let from = readme.find("A two-link pendulum").unwrap();
+    let rest = &readme[from..];
+    let start = rest.find("```json\n").unwrap() + "```json\n".len();
+    let end = start + rest[start..].find("```").unwrap();
+    rest[start..end].to_string()
+}
+
+fn prepared(name: &str, json: &str) -> Prepared {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join(format!("{name}.json"));
+    std::fs::write(&p, json).unwrap();
+    Prepared::load(Case::load(p.to_str().unwrap(), None).unwrap()).unwrap()
+}
+
+/// Keeps the largest value of one column over a trajectory's rows: a sink that sees a
+/// million rows in constant memory.
+struct MaxOf {
+    name: &'static str,
+    col: usize,
+    max: f64,
+    rows: usize,
+}
+
+impl TrajectorySink for MaxOf {
+    fn start(&mut self, h: &Header) -> Result<(), Error> {
+        self.col = h.index(self.name).unwrap();
+        Ok(())
+    }
+    fn row(&mut self, v: &[f64]) -> Result<(), Error> {
+        self.max = self.max.max(v[self.col]);
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+/// docs/outputs.md (`metrics`): the maxima are taken over every accepted step's dense output,
+/// not over the output grid. The README's pendulum hits its elbow in impacts shorter than the
+/// 2001-point grid's spacing (0.5 ms): the grid sees a fraction of the peak force. The true
+/// peak comes from a tight run (dop853, rtol 1e-11) sampled every 5 µs (its error there is
+/// (5 µs / 0.3 ms)² ≈ 3e-4 of the peak; the impact's time scale is about 0.3 ms).
+#[test]
+fn the_pendulums_peak_contact_force_is_the_true_peak() {
+    let p = prepared("pendulum", &readme_pendulum());
+    let r = run(&p, lash_validation::simulate::DEFAULT_METHOD, 1e-8, None);
+    let m = r.summary.metrics.as_ref().unwrap();
+    let peak = m.contact_force_max.unwrap();
+    let mut req = RunRequest::new(
+        p.options_for(Method::Dop853, Some(1e-11), None, None)
+            .unwrap(),
+    );
+    req.trajectory_points = Some(200_001);
+    req.energy = false;
+    let mut fine = MaxOf {
+        name: "contact_force",
+        col: 0,
+        max: 0.0,
+        rows: 0,
+    };
+    let tight = simulate_into(&p, &req, &mut fine).unwrap();
+    assert_eq!((fine.rows, tight.trajectory_rows), (200_001, 200_001));
+    assert!(tight.trajectory.is_empty(), "a sink run keeps no rows");
+    assert!(
+        (peak - fine.max).abs() < 2e-3 * fine.max,
+        "metrics {peak} N, true peak {} N",
+        fine.max
+    );
+    // The tight run's own dense maximum agrees with its 5 µs grid.
+    let tight_peak = tight.summary.metrics.unwrap().contact_force_max.unwrap();
+    assert!((tight_peak - fine.max).abs() < 1e-3 * fine.max);
+    // The 2001-point grid (the definition before) misses most of it.
+    let grid = r
+        .window
+        .iter()
+        .filter_map(|s| s.contact_force)
+        .fold(0.0, f64::max);
+    assert!(grid < 0.9 * fine.max, "grid {grid} N vs {} N", fine.max);
+    // The peak is found where the force peaks: penetration and ε agree with it.
+    let j = &m.clearance_joints["elbow"];
+    assert_eq!(j.contact_force_max, peak);
+    // δ = c (ε − 1), c = 1 mm.
+    let from_eps = (m.eps_max.unwrap() - 1.0) * 1e-3;
+    assert!(
+        j.penetration_max > 0.0 && (from_eps - j.penetration_max).abs() < 1e-6 * j.penetration_max
+    );
+}
+
+/// docs/outputs.md (`trajectory.csv`): every body, every clearance joint, every driver by name
+/// after the fixed columns; the second clearance joint of a mechanism has its columns and its
+/// metrics. A two-link pendulum hanging from a clearance pivot with a clearance elbow.
+#[test]
+fn every_element_has_its_columns_and_every_clearance_joint_its_metrics() {
+    let mut scene: serde_json::Value = serde_json::from_str(&readme_pendulum()).unwrap();
+    scene["joints"][0] = serde_json::json!({"type": "clearance", "name": "pivot",
+        "bearing": {"body": "ground", "at": [0.0, 0.0], "radius": 0.010},
+        "journal": {"body": "link1", "point": "O", "radius": 0.0095},
+        "normal": {"law": "impact", "k": 1e9, "c_max": 2000.0, "d_max": 1e-5}});
+    scene["t_end"] = serde_json::json!(0.3);
+    let p = prepared("two_clearances", &scene.to_string());
+    let r = run(&p, Method::Dop853, 1e-8, None);
+    let h = r.trajectory.header().unwrap();
+    let names = h.names();
+    for b in ["link1", "link2"] {
+        for c in ["x", "y", "theta", "vx", "vy", "omega", "ax", "ay", "alpha"] {
+            assert!(names.contains(&format!("{b}.{c}")), "{b}.{c}");
+        }
+    }
+    for j in ["pivot", "elbow"] {
+        for c in [
+            "ex_over_c",
+            "ey_over_c",
+            "delta",
+            "contact_force",
+            "friction_force",
+            "film_force",
+        ] {
+            assert!(names.contains(&format!("{j}.{c}")), "{j}.{c}");
+        }
+    }
+    // The role's columns are the elbow's; the pivot's are its own.
+    assert_eq!(
+        r.trajectory.column("delta"),
+        r.trajectory.column("elbow.delta")
+    );
+    assert_ne!(
+        r.trajectory.column("delta"),
+        r.trajectory.column("pivot.delta")
+    );
+    // No slider, no crank: those fixed columns are absent (empty in the CSV).
+    assert_eq!(r.trajectory.column("slider_x"), None);
+    // Gravity pulls the pivot's journal into its bearing: the pivot touches (δ ≥ 0 somewhere)
+    // and its contact force carries the pendulum's weight, about 2 × 9.81 N.
+    let m = r.summary.metrics.unwrap();
+    let piv = &m.clearance_joints["pivot"];
+    let max_delta = r
+        .trajectory
+        .column("pivot.delta")
+        .unwrap()
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, b| a.max(*b));
+    assert!(
+        max_delta > 0.0 && piv.penetration_max >= max_delta,
+        "{piv:?}"
+    );
+    assert!(piv.contact_force_max > 2.0 * 9.81, "{piv:?}");
+    assert!(piv.contact_onsets >= 1);
+    assert!(m.clearance_joints["elbow"].contact_onsets >= 1);
+    assert_eq!(
+        m.contact_onsets,
+        Some(m.clearance_joints["elbow"].contact_onsets)
+    );
+}
+
+/// trajectory.csv streamed to a file is byte for byte the rows a run collects in memory
+/// (module trajectory: every sink gets the same rows).
+#[test]
+fn streamed_and_collected_trajectories_are_identical() {
+    let p = case("dry_150rpm_c0.1");
+    let mut req = RunRequest::new(
+        p.options_for(Method::Tsit54, Some(1e-6), None, None)
+            .unwrap(),
+    );
+    req.t_end = Some(0.1);
+    let mem = simulate(&p, &req).unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("trajectory.csv");
+    let mut f = CsvFile::create(&path).unwrap();
+    let streamed = simulate_into(&p, &req, &mut f).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        mem.trajectory.to_csv()
+    );
+    assert_eq!((f.rows(), mem.trajectory.len()), (501, 501));
+    assert_eq!(streamed.summary.metrics, mem.summary.metrics);
+    // Thinned: 20 rows per revolution, or one every 10 ms; both ends exact.
+    for (spr, every, rows) in [
+        (Some(20), None, 6),
+        (None, Some(0.01), 11),
+        (None, Some(0.03), 5),
+    ] {
+        req.samples_per_revolution = spr;
+        req.output_every = every;
+        let r = simulate(&p, &req).unwrap();
+        let t = r.trajectory.column("t").unwrap();
+        assert_eq!(t.len(), rows, "{spr:?} {every:?}");
+        assert_eq!((t[0], t[rows - 1]), (0.0, 0.1));
+        if let Some(dt) = every {
+            assert!((t[1] - dt).abs() < 1e-15);
+        }
+    }
+}
+
+fn expect_error(p: &Prepared, req: &RunRequest, kind: ErrorKind, needle: &str) {
+    let mut sink = Columns::new();
+    match simulate_into(p, req, &mut sink) {
+        Err(e) => {
+            assert_eq!(e.kind(), kind, "{e}");
+            let m = e.to_string();
+            assert!(m.contains(needle) && !m.contains('\n'), "{m}");
+        }
+        Ok(_) => panic!("{needle}: the run succeeded"),
+    }
+}
+
+/// docs/outputs.md ("Exit codes of `lash`"): requests f64 or the budgets cannot carry are input
+/// errors naming the field, before anything runs; RK4 past its stability limit has its own
+/// error.
+#[test]
+fn runs_that_cannot_be_done_right_are_refused_by_name() {
+    let p = case("ideal_150rpm");
+    let req = |method: Method, step: Option<f64>| {
+        let rtol = (!method.is_fixed_step()).then_some(1e-8);
+        RunRequest::new(p.options_for(method, rtol, step, None).unwrap())
+    };
+    // A time span far from 0: the output spacing 2e-4 s is below f64's resolution there.
+    let mut far: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(press_path("ideal_150rpm")).unwrap()).unwrap();
+    far["t_start"] = serde_json::json!(1e15);
+    let pf = prepared("far", &far.to_string());
+    let r = RunRequest::new(pf.options_for(Method::Bdf, Some(1e-8), None, None).unwrap());
+    expect_error(
+        &pf,
+        &r,
+        ErrorKind::BadInput,
+        "t_start = 1.000000e15 s is too far from 0",
+    );
+    // At 1e6 s the same spacing still resolves; at 1e11 s it does not (the end time).
+    far["t_start"] = serde_json::json!(1e6);
+    let pf = prepared("far", &far.to_string());
+    let mut r = RunRequest::new(pf.options_for(Method::Bdf, Some(1e-8), None, None).unwrap());
+    r.t_end = Some(1e6 + 0.05);
+    simulate(&pf, &r).unwrap();
+    r.t_end = Some(1e11);
+    r.output_every = Some(1e4);
+    expect_error(
+        &pf,
+        &r,
+        ErrorKind::BadInput,
+        "t_end = 1.000000e11 s is too far from 0",
+    );
+    // RK4's step longer than the run.
+    expect_error(
+        &p,
+        &req(Method::Rk4, Some(1.0)),
+        ErrorKind::BadInput,
+        "step 1 s is longer than the run (0.8 s",
+    );
+    // A trajectory of 5e9 rows.
+    let mut r = req(Method::Bdf, None);
+    r.t_end = Some(1e6);
+    expect_error(&p, &r, ErrorKind::BadInput, "5e9 rows, more than the 1e8 lash writes: thin it with samples_per_revolution or output_every");
+    // Rows per revolution of a scene without a crank.
+    let pend = prepared("pendulum", &readme_pendulum());
+    let mut r = RunRequest::new(
+        pend.options_for(Method::Bdf, Some(1e-6), None, None)
+            .unwrap(),
+    );
+    r.samples_per_revolution = Some(10);
+    expect_error(
+        &pend,
+        &r,
+        ErrorKind::BadInput,
+        "samples_per_revolution needs a crank driver",
+    );
+    // RK4 beyond the film's stability limit (2e-6 s, BENCHMARKS.md): its own error, with the
+    // step and the estimated limit.
+    let lub = case("lubricated_150rpm_c0.1");
+    let r = RunRequest::new(
+        lub.options_for(Method::Rk4, None, Some(3e-6), None)
+            .unwrap(),
+    );
+    let mut rows = Columns::new();
+    match simulate_into(&lub, &r, &mut rows) {
+        Err(Error::Solver(lash_solver::SolveError::Rk4Unstable {
+            t,
+            h,
+            h_limit,
+            steps,
+            ..
+        })) => {
+            assert_eq!((h, steps), (3e-6, 15));
+            assert!(h_limit > 1e-6 && h_limit < h, "{h_limit}");
+            assert!(t > 0.0 && t < 0.01, "{t}");
+            // The rows up to the failure reached the sink.
+            let last = *rows.column("t").unwrap().last().unwrap();
+            assert!(last <= t && t - last <= 0.4 / 2000.0 + 1e-12, "{last} {t}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+fn press_path(stem: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/press")
+        .join(format!("{stem}.json"))
 }

@@ -886,6 +886,7 @@ mod tests {
                 film_thickness_min: None,
                 slider_x_end: Some(0.365),
                 constraint_violation_max: 1e-9,
+                clearance_joints: Default::default(),
                 energy: None,
             },
             dev: Deviations {
