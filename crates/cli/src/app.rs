@@ -6,7 +6,8 @@
 //!                   its reader: quiet, the same code; unwritable (full): 2 after the work
 //!                   (module `out`)
 //! stdout: the command's result (tables, descriptions, "wrote N files to DIR")
-//! stderr: the engine's notes and a sweep's progress bar (StderrProgress), errors
+//! stderr: the engine's notes and the progress of long commands (StderrProgress: a bar on a
+//!         terminal, else a line per finished item), errors
 //! lash run --max-wall-time W: a watchdog ends the process with exit 3 at W + max(1 s, W/4)
 //!                   if the engine has not stopped by itself (work it cannot interrupt: a
 //!                   scene's assembly and initial check, one factorisation of a large system)
@@ -36,7 +37,7 @@ use crate::args::{
     self, Command, CompareArgs, ExtremesArgs, Parsed, PoincareArgs, RunArgs, StiffnessArgs,
     SweepArgs, WorkPrecisionArgs,
 };
-use crate::exit::{ExitStatus, EXIT_BUG, EXIT_OK, EXIT_SOLVER, EXIT_USAGE};
+use crate::exit::{flagged, ExitStatus, EXIT_BUG, EXIT_OK, EXIT_SOLVER, EXIT_USAGE};
 use crate::out::{errln, out, outln, stdout_error};
 use crate::progress::StderrProgress;
 
@@ -89,7 +90,10 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
     match command {
         Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) => {
-            let w = commands::study_paper(&a.options())?;
+            let progress = StderrProgress::new();
+            let w = commands::study_paper(&a.options(), &progress);
+            progress.clear();
+            let w = w?;
             outln(&study::describe_paper(&w.result, &w.dir));
             Ok(())
         }
@@ -106,13 +110,20 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Poincare(a) => poincare_command(&a).map(|_| ()),
         Command::Extremes(a) => extremes_command(&a).map(|_| ()),
         Command::Merge(a) => {
-            let m = commands::merge(&a.options())?;
+            let m = commands::merge(&a.options()).map_err(flagged)?;
+            let missing = m.table.unfinished.len() + m.table.corrupt.len();
             outln(&format!(
                 "merged {} points into {} and {}",
-                m.table.rows.len(),
+                m.table.rows.len() - missing,
                 m.csv.display(),
                 m.md.display()
             ));
+            if missing > 0 {
+                errln(&format!(
+                    "merge: {} (rows with status unfinished / corrupt)",
+                    m.table.missing_summary(20)
+                ));
+            }
             Ok(())
         }
     }
@@ -191,7 +202,10 @@ impl Drop for Watchdog {
 /// tolerance, against the case's reference; notes the reference on standard error, writes
 /// compare.md and compare.json and prints the table.
 pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
-    let w = commands::compare(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::compare(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     out(&w.result.to_markdown());
     outln(&format!(
         "wrote {} files to {}",
@@ -205,7 +219,10 @@ pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
 /// compared on one method of ours, against the case's reference; notes each run on standard
 /// error, writes the markdown and JSON tables and the log–log figures, prints the table.
 pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
-    let w = commands::work_precision(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::work_precision(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     let WorkPrecisionResult { table, reference } = w.result;
     out(&table.to_markdown());
     outln(&format!(
@@ -219,7 +236,10 @@ pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
 
 /// `lash stiffness`: the engine's analysis, then the two limits and the verdict.
 pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf), Error> {
-    let w = commands::stiffness(&a.options())?;
+    let progress = StderrProgress::new();
+    let w = commands::stiffness(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     out(&w.result.report.describe());
     outln(&format!(
         "wrote {} files to {}",
@@ -231,7 +251,10 @@ pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf)
 
 /// `lash poincare`: the engine's section and Lyapunov exponent, then the estimate.
 pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), Error> {
-    let w = commands::poincare(&a.options())?;
+    let progress = StderrProgress::new();
+    let w = commands::poincare(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     out(&w.result.describe());
     outln(&format!(
         "wrote {} files to {}",
@@ -246,7 +269,10 @@ pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), E
 /// exit code 1 (a bug) when some run ended in an outcome that is not allowed (the report is
 /// written first, to show which).
 pub fn extremes_command(a: &ExtremesArgs) -> Result<Matrix, Error> {
-    let w = commands::extremes(&a.options(), &StderrProgress::new())?;
+    let progress = StderrProgress::new();
+    let w = commands::extremes(&a.options(), &progress);
+    progress.clear();
+    let w = w?;
     out(&extremes::describe(&w.result, &w.files[0], &w.files[1]));
     extremes::check(&w.result, &w.files[0])?;
     Ok(w.result)
@@ -268,8 +294,13 @@ where
 
 /// Prints the closing line of a sweep on standard error.
 fn print_sweep(o: &SweepOutcome) {
+    let busy = if o.report.busy.is_empty() {
+        String::new()
+    } else {
+        format!(", {} claimed by other processes", o.report.busy.len())
+    };
     errln(&format!(
-        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done; results in {}",
+        "sweep: shard {} of {} points: {} ran, {} solver failures, {} already done{busy}; results in {}",
         o.shard,
         o.points,
         o.report.ok,
@@ -314,6 +345,7 @@ mod tests {
         execute(Some(Command::Merge(MergeArgs {
             dirs: vec![out.clone()],
             out: None,
+            allow_partial: false,
         })))
         .unwrap();
         let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();

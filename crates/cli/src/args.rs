@@ -11,7 +11,7 @@
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
 //!                          [--controllers C,..] [--t-end S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
-//! lash merge DIR... [--out DIR]
+//! lash merge DIR... [--out DIR] [--allow-partial]
 //! lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
 //!                    [solver flags] [--out DIR]
@@ -117,19 +117,24 @@ pub enum Command {
 #[derive(Debug, Clone, Default, PartialEq, Args)]
 pub struct SolverFlags {
     /// Integration method (rk4, bs32, dopri54, tsit54, dop853, bdf, trbdf2, esdirk34, rodas5p).
+    /// Default: the case's: bdf for scenes, rodas5p for test problems.
     #[arg(long, value_name = "M", value_parser = parse_method)]
     pub method: Option<Method>,
-    /// Relative tolerance of adaptive methods, in [1e-14, 1).
+    /// Relative tolerance of adaptive methods, in [1e-14, 1). Default: the case's: 1e-8 for
+    /// scenes, 1e-6 for test problems.
     #[arg(long, value_name = "R", value_parser = parse_rtol, allow_hyphen_values = true)]
     pub rtol: Option<f64>,
     /// Absolute tolerance of adaptive methods: one number, or one per state component
-    /// (comma-separated); each finite and > 0.
+    /// (comma-separated); each finite and > 0. Default: scenes rtol × the smallest clearance
+    /// (positions) and × that × the crank speed (velocities); test problems their own.
     #[arg(long, value_name = "A", value_parser = parse_atol, allow_hyphen_values = true)]
     pub atol: Option<Atol>,
-    /// Fixed step of fixed-step methods, s; finite and > 0.
+    /// Fixed step of fixed-step methods, s; finite and > 0. Default: none (rk4 needs it).
     #[arg(long, value_name = "H", value_parser = parse_step, allow_hyphen_values = true)]
     pub step: Option<f64>,
-    /// Step-size controller of adaptive methods (i, pi, pid, h211, h312, gustafsson).
+    /// Step-size controller of adaptive methods (i, pi, pid, h211, h312, gustafsson). Default:
+    /// the method's own: pi for the explicit pairs, gustafsson for rodas5p (diffsol's methods
+    /// take none).
     #[arg(long, value_name = "C", value_parser = parse_controller)]
     pub controller: Option<ControllerKind>,
     /// Step budget: most step attempts (accepted and rejected), a whole number >= 1. Running
@@ -191,7 +196,7 @@ pub struct RunArgs {
     /// Solver choice.
     #[command(flatten)]
     pub solver: SolverFlags,
-    /// End time override, s (scene cases only; default the scene's t_end or revolutions).
+    /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Rows of trajectory.csv per crank revolution, a whole number >= 1 (scenes with a crank
@@ -284,7 +289,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
           allow_hyphen_values = true)]
     pub steps: Option<Vec<f64>>,
-    /// End time override, s (scene cases only).
+    /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Output directory. Default `out/compare/CASE`.
@@ -325,14 +330,17 @@ pub struct WorkPrecisionArgs {
     #[arg(long, value_name = "R,..", value_delimiter = ',', value_parser = parse_rtol,
           allow_hyphen_values = true)]
     pub tolerances: Option<Vec<f64>>,
-    /// Steps of the fixed-step methods, s, comma-separated. Default: derived from the case.
+    /// Steps of the fixed-step methods, s, comma-separated. Default: the largest stable RK4
+    /// step h of the case and h/2, h/4, h/8 (scene cases with a crank; test problems need
+    /// the list).
     #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
           allow_hyphen_values = true)]
     pub steps: Option<Vec<f64>>,
-    /// Controllers compared on one adaptive method, comma-separated. Default: all.
+    /// Controllers compared on dop853 (else the first adaptive method of ours listed),
+    /// comma-separated. Default: all (i, pi, pid, h211, h312, gustafsson).
     #[arg(long, value_name = "C,..", value_delimiter = ',', value_parser = parse_controller)]
     pub controllers: Option<Vec<ControllerKind>>,
-    /// End time override, s (scene cases only).
+    /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Output directory. Default `out/work-precision/CASE`.
@@ -372,10 +380,12 @@ impl WorkPrecisionArgs {
 pub struct SweepArgs {
     /// The sweep file (JSON): a base case and lists of parameter values.
     pub file: PathBuf,
-    /// Parallel jobs (≥ 1). Default: the number of cores.
+    /// Parallel jobs (≥ 1; more than the cores available are capped with a note). Default:
+    /// the number of cores.
     #[arg(long, value_name = "N", value_parser = parse_jobs)]
     pub jobs: Option<usize>,
-    /// Run only the points whose index modulo N equals I (I counts from 0).
+    /// Run only the points whose index modulo N equals I (I counts from 0). Default: 0/1,
+    /// every point.
     #[arg(long, value_name = "I/N", value_parser = parse_shard)]
     pub shard: Option<Shard>,
     /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
@@ -408,16 +418,17 @@ impl SweepArgs {
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct ExtremesArgs {
     /// The quick subset (3 scenes × every method × 3 tolerances), as in the default tests.
+    /// Default: off (the full matrix).
     #[arg(long)]
     pub quick: bool,
-    /// Parallel runs (≥ 1). Default 1: the wall-clock budget is per run, and parallel runs
-    /// share the cores.
+    /// Parallel runs (≥ 1; more than the cores available are capped with a note). Default 1:
+    /// the wall-clock budget is per run, and parallel runs share the cores.
     #[arg(long, value_name = "N", value_parser = parse_jobs)]
     pub jobs: Option<usize>,
-    /// Step budget of every run (attempts). Default 1 000 000.
+    /// Step budget of every run (attempts). Default 1 000 000 (100 000 with --quick).
     #[arg(long = "max-steps", value_name = "N", value_parser = parse_max_steps)]
     pub max_steps: Option<usize>,
-    /// Wall-clock budget of every run, s. Default 20.
+    /// Wall-clock budget of every run, s. Default 20 (10 with --quick).
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
@@ -442,7 +453,7 @@ impl ExtremesArgs {
 /// Arguments of `lash merge`.
 ///
 /// ```text
-/// lash merge DIR... [--out DIR]  →  DIR/merged.csv, DIR/merged.md
+/// lash merge DIR... [--out DIR] [--allow-partial]  →  DIR/merged.csv, DIR/merged.md
 /// ```
 ///
 /// Source: docs/outputs.md ("Sweeps").
@@ -454,6 +465,11 @@ pub struct MergeArgs {
     /// Where merged.csv and merged.md go. Default: the first DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Merge what finished although some points of the grid are unfinished or have a corrupt
+    /// result (they get rows with status unfinished / corrupt). Default: off, and an
+    /// incomplete sweep is an error (exit 2) that names the missing points.
+    #[arg(long = "allow-partial")]
+    pub allow_partial: bool,
 }
 
 impl MergeArgs {
@@ -462,6 +478,7 @@ impl MergeArgs {
         MergeOptions {
             dirs: self.dirs.clone(),
             out: self.out.clone(),
+            allow_partial: self.allow_partial,
         }
     }
 }
@@ -483,10 +500,11 @@ pub struct StiffnessArgs {
     /// Sample points along the run, both ends included (≥ 2). Default 1000.
     #[arg(long, value_name = "N", value_parser = parse_samples)]
     pub samples: Option<usize>,
-    /// End time override, s (scene cases only).
+    /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Skip the measured RK4 limit (the bisection runs RK4 over the whole run many times).
+    /// Default: off (the limit is measured).
     #[arg(long = "no-measure")]
     pub no_measure: bool,
     /// Output directory. Default `out/stiffness/CASE`.
@@ -1107,6 +1125,40 @@ mod tests {
         assert!(usage(&["stiffness", "c.json", "--samples", "1"]).contains("samples must be"));
         assert!(usage(&["poincare", "c.json", "--perturbation", "0"]).contains("perturbation"));
         assert!(usage(&["poincare", "c.json", "--renorm-per-rev", "0"]).contains(">= 1"));
+    }
+
+    #[test]
+    fn every_option_states_its_default() {
+        use clap::CommandFactory;
+        let cli = Cli::command();
+        let mut missing = Vec::new();
+        for sub in cli.get_subcommands() {
+            for a in sub.get_arguments() {
+                if a.is_positional() || ["help", "version"].contains(&a.get_id().as_str()) {
+                    continue;
+                }
+                let help = a
+                    .get_long_help()
+                    .or(a.get_help())
+                    .map(|h| h.to_string())
+                    .unwrap_or_default();
+                if !help.contains("Default") && !help.contains("default:") {
+                    missing.push(format!("{} --{}", sub.get_name(), a.get_id()));
+                }
+            }
+        }
+        assert!(
+            missing.is_empty(),
+            "options without a default in --help: {missing:?}"
+        );
+        // The defaults reach the printed help.
+        let Parsed::Print(h) = parse(["lash", "merge", "--help"]).unwrap() else {
+            panic!()
+        };
+        assert!(
+            h.contains("--allow-partial") && h.contains("Default: off"),
+            "{h}"
+        );
     }
 
     #[test]

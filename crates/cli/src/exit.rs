@@ -5,6 +5,8 @@
 //!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Io)
 //!             3  the solver failed       (ErrorKind::Solver)
 //!             1  a bug                   (ErrorKind::Bug: NotYetAvailable, Internal; a panic)
+//!           130  interrupted             (ErrorKind::Interrupted: SIGINT or SIGTERM; the item
+//!                                         in flight abandoned, what had finished kept)
 //! ```
 //!
 //! The engine names options by its own names (`rtol`, `t_end`); `lash` spells them as its
@@ -22,6 +24,9 @@ pub const EXIT_BUG: u8 = 1;
 pub const EXIT_USAGE: u8 = 2;
 /// Exit code of a solver failure.
 pub const EXIT_SOLVER: u8 = 3;
+/// Exit code of an interrupted command (SIGINT or SIGTERM): 128 + 2, the shell's convention
+/// for SIGINT, for both signals.
+pub const EXIT_INTERRUPTED: u8 = 130;
 
 /// The flag of an engine option: `t_end` → `--t-end`.
 pub fn flag(option: &str) -> String {
@@ -55,6 +60,7 @@ impl ExitStatus for Error {
             ErrorKind::BadInput => EXIT_USAGE,
             ErrorKind::Solver => EXIT_SOLVER,
             ErrorKind::Bug => EXIT_BUG,
+            ErrorKind::Interrupted => EXIT_INTERRUPTED,
         }
     }
 
@@ -93,6 +99,15 @@ mod tests {
         assert_eq!(s.exit_code(), 3);
         assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
         assert_eq!(Error::Internal("x".into()).exit_code(), 1);
+        let i = Error::from(SolveError::Interrupted {
+            t: 0.5,
+            y: vec![1.0],
+        });
+        assert_eq!(i.exit_code(), 130);
+        assert_eq!(
+            i.report(),
+            "error: interrupted: stop requested; the run in flight stopped at t = 5e-1"
+        );
     }
 
     #[test]

@@ -7,13 +7,15 @@
 //! ```text
 //! argv ──args::parse──▶ Command ──args: .options()──▶ lash_validation::commands::*
 //!      ──Written<result> | Error──▶ app: print (stdout), exit: report (stderr) + exit code
-//! engine notes, sweep progress ──Progress──▶ progress::StderrProgress (bar on a terminal)
+//! engine notes, progress ──Progress──▶ progress::StderrProgress (bar on a terminal, else lines)
+//! SIGINT, SIGTERM ──signals──▶ lash_solver::interrupt::request_stop() → exit code 130
 //! ```
 //!
 //! Modules: [`args`] (clap derive types and value parsers), [`app`] (dispatch and printing),
 //! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`out`]
-//! (standard output and error without panics), [`progress`]
-//! (notes and the progress bar on standard error).
+//! (standard output and error without panics), [`progress`] (notes, the progress bar or
+//! per-item log lines on standard error), [`signals`] (SIGINT and SIGTERM stop the work
+//! cleanly).
 
 #![warn(missing_docs)]
 
@@ -22,3 +24,4 @@ pub mod args;
 pub mod exit;
 pub mod out;
 pub mod progress;
+pub mod signals;

@@ -3,5 +3,6 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    lash_cli::signals::install();
     ExitCode::from(lash_cli::app::main_with(std::env::args_os()))
 }

@@ -75,6 +75,15 @@ pub enum SolveError {
         /// Which budget.
         reason: String,
     },
+    /// A stop was requested ([`crate::interrupt::request_stop`], e.g. by SIGINT) and the
+    /// integration ended at a step boundary.
+    #[error("interrupted at t = {t:e}")]
+    Interrupted {
+        /// Time of the last accepted state.
+        t: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+    },
 }
 
 impl SolveError {
@@ -86,7 +95,8 @@ impl SolveError {
             | SolveError::NonFiniteState { t, .. }
             | SolveError::Rk4Unstable { t, .. }
             | SolveError::NewtonFailure { t, .. }
-            | SolveError::BudgetExhausted { t, .. } => Some(*t),
+            | SolveError::BudgetExhausted { t, .. }
+            | SolveError::Interrupted { t, .. } => Some(*t),
             SolveError::InvalidOptions(_) => None,
         }
     }
@@ -99,7 +109,8 @@ impl SolveError {
             | SolveError::NonFiniteState { y, .. }
             | SolveError::Rk4Unstable { y, .. }
             | SolveError::NewtonFailure { y, .. }
-            | SolveError::BudgetExhausted { y, .. } => Some(y),
+            | SolveError::BudgetExhausted { y, .. }
+            | SolveError::Interrupted { y, .. } => Some(y),
             SolveError::InvalidOptions(_) => None,
         }
     }

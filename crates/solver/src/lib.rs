@@ -111,6 +111,7 @@ pub mod diffsol_backend;
 pub mod erk;
 pub mod error;
 pub mod integrator;
+pub mod interrupt;
 pub mod jacobian;
 pub mod onestep;
 pub mod options;

@@ -17,7 +17,8 @@
 //! - the stop time must lie after t ([`check_stop`]), else [`SolveError::InvalidOptions`];
 //! - the smallest step is max(h_min, 16 ε |t|) ([`step_floor`]);
 //! - budgets ([`Budget`]): `max_steps` attempts (accepted and rejected) and the wall-clock
-//!   budget `max_wall_time`, counted from the stepper's construction.
+//!   budget `max_wall_time`, counted from the stepper's construction; and the process-wide
+//!   stop request ([`crate::interrupt`]).
 
 use std::time::{Duration, Instant};
 
@@ -124,6 +125,7 @@ pub fn step_floor(h_min: f64, t: f64) -> f64 {
 /// The budgets of one integration: step attempts and wall-clock time.
 ///
 /// ```text
+/// stop requested            → Interrupted   (crate::interrupt)
 /// attempts ≥ max_steps      → TooManySteps
 /// now ≥ start + max_wall    → BudgetExhausted
 /// ```
@@ -147,6 +149,9 @@ impl Budget {
     /// Checks the budgets before an attempt, with `attempts` made so far; the error carries
     /// the time and state of the last accepted step.
     pub fn check(&self, attempts: usize, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        if crate::interrupt::stop_requested() {
+            return Err(SolveError::Interrupted { t, y: y.to_vec() });
+        }
         if attempts >= self.max_steps {
             return Err(SolveError::TooManySteps {
                 t,

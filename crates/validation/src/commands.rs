@@ -8,20 +8,24 @@
 //!                                                               (streamed), figures; on a
 //!                                                               solver failure failure.json,
 //!                                                               partial_trajectory.csv
-//! study_paper(StudyOptions)             → Written<StudyResult>  figures, report.md, study.json
+//! study_paper(StudyOptions, progress)   → Written<StudyResult>  figures, report.md, study.json
 //! compare(CompareOptions, progress)     → Written<Comparison>   compare.md, compare.json
 //! work_precision(WorkPrecisionOptions, progress) → Written<WorkPrecisionResult>
 //! sweep(SweepRunOptions, progress)      → SweepOutcome          one result.json per point
 //! merge(MergeOptions)                   → Merged                merged.csv, merged.md
-//! stiffness(StiffnessOptions)           → Written<StiffnessResult>
-//! poincare(PoincareOptions)             → Written<PoincareResult>
+//! stiffness(StiffnessOptions, progress) → Written<StiffnessResult>
+//! poincare(PoincareOptions, progress)   → Written<PoincareResult>
 //! extremes(ExtremesOptions, progress)   → Written<Matrix>       extremes.md, extremes.json
 //! out = the option, else default_out(COMMAND, case name) = out/COMMAND/NAME
 //! ```
 //!
 //! Progress ([`Progress`]) gets the notes a command makes while it works (the reference of a
-//! comparison, a derived RK4 step, each finished work–precision run) and the progress of a
-//! sweep. Errors are typed ([`Error`]); those about options name them by the engine's names.
+//! comparison, a derived RK4 step, runs reused from a cache) and every long command's work
+//! as batches of items (a sweep's points, a study's runs, the extremes matrix's references
+//! and runs, a comparison's reference and runs, a diagnostic's phases). A stop request
+//! (`lash_solver::interrupt`, raised by SIGINT or SIGTERM in `lash`) ends every command with
+//! [`Error::Interrupted`]: the item in flight abandoned, finished items kept (a sweep's
+//! points, the study's and the extremes matrix's caches of finished runs). Errors are typed ([`Error`]); those about options name them by the engine's names.
 //!
 //! Source: docs/outputs.md ("Files each command writes"); ARCHITECTURE.md ("Invariants": one
 //! engine behind every front end, knowing no command line).
@@ -31,6 +35,7 @@ use std::time::{Duration, Instant};
 
 use lash_solver::{ControllerKind, Method, SolveError, SolverOptions};
 
+use crate::cache::{RunCache, CACHE_DIR};
 use crate::case::Case;
 use crate::compare::{self, Compared, Comparison, Reference, COMPARE_TOLERANCES};
 use crate::error::{Error, Message, OptionError};
@@ -195,13 +200,17 @@ pub struct StudyOptions {
 }
 
 /// Runs the paper's study (module `study`): figures, report.md and study.json in the output
-/// directory ([`study::describe_paper`] says it in one line).
-pub fn study_paper(o: &StudyOptions) -> Result<Written<StudyResult>, Error> {
+/// directory ([`study::describe_paper`] says it in one line); each run as an item of
+/// `progress`; finished runs are kept in DIR/cache/ and reused by a rerun.
+pub fn study_paper(
+    o: &StudyOptions,
+    progress: &dyn Progress,
+) -> Result<Written<StudyResult>, Error> {
     let out = o
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let r = study::paper(&out)?;
+    let r = study::paper(&out, progress)?;
     let files = vec![out.join(study::REPORT_FILE), out.join(study::JSON_FILE)];
     Ok(Written {
         result: r,
@@ -222,13 +231,14 @@ fn rk4_steps(
     match given {
         Some(v) => Ok(v.clone()),
         None if p.period().is_some() => {
+            let clock = Instant::now();
             let h = compare::stable_rk4_step(p, t_end)?;
-            progress.note(
+            progress.finished(
                 &format!(
                     "{}: largest stable RK4 step {h:e} s (1-2-5 series from T/400, ‖Φ‖ < 1e-8)",
                     p.case.name
-                )
-                .into(),
+                ),
+                clock.elapsed().as_secs_f64(),
             );
             Ok((0..=halvings).map(|k| h / f64::from(1u32 << k)).collect())
         }
@@ -267,20 +277,42 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         .out
         .clone()
         .unwrap_or_else(|| default_out("compare", &p.case.name));
-    let reference = Reference::compute(&p, o.t_end)?;
-    progress.note(&format!("{}: reference {}", p.case.name, reference.how).into());
-    let steps = rk4_steps(&p, &o.steps, o.t_end, 2, progress)?;
     let tolerances = o
         .tolerances
         .clone()
         .unwrap_or_else(|| COMPARE_TOLERANCES.to_vec());
+    let derive = o.steps.is_none() && p.period().is_some();
+    let n_steps = o
+        .steps
+        .as_ref()
+        .map_or(if derive { 3 } else { 0 }, Vec::len);
+    let adaptive = Method::ALL.iter().filter(|m| !m.is_fixed_step()).count();
+    progress.started(
+        "runs",
+        1 + usize::from(derive) + n_steps + adaptive * tolerances.len(),
+    );
+    let clock = Instant::now();
+    let reference = Reference::compute(&p, o.t_end)?;
+    progress.finished(
+        &format!("{}: reference {}", p.case.name, reference.how),
+        clock.elapsed().as_secs_f64(),
+    );
+    let steps = rk4_steps(&p, &o.steps, o.t_end, 2, progress)?;
     let mut runs = Vec::new();
+    let mut push = |c: Compared, secs: f64| {
+        progress.finished(&run_line(&c), secs);
+        runs.push(c);
+    };
     for &h in &steps {
-        runs.push(compare::compare_one(&p, &reference, Method::Rk4, None, Some(h), None)?.0);
+        let t = Instant::now();
+        let c = compare::compare_one(&p, &reference, Method::Rk4, None, Some(h), None)?.0;
+        push(c, t.elapsed().as_secs_f64());
     }
     for m in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
         for &r in &tolerances {
-            runs.push(compare::compare_one(&p, &reference, m, Some(r), None, None)?.0);
+            let t = Instant::now();
+            let c = compare::compare_one(&p, &reference, m, Some(r), None, None)?.0;
+            push(c, t.elapsed().as_secs_f64());
         }
     }
     let c = Comparison {
@@ -383,27 +415,43 @@ pub fn work_precision(
                 .text(" to include it)"),
         );
     }
+    let ctl_method = plan.controller_method();
+    let derive = wants_rk4 && plan.steps.is_none() && p.period().is_some();
+    let n_steps = match &plan.steps {
+        Some(v) => v.len(),
+        None if derive => 4,
+        None => 0,
+    };
+    let total_runs: usize = plan
+        .methods
+        .iter()
+        .map(|&m| {
+            if m.is_fixed_step() {
+                n_steps
+            } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
+                plan.controllers.len() * plan.tolerances.len()
+            } else {
+                plan.tolerances.len()
+            }
+        })
+        .sum();
+    progress.started("runs", 1 + usize::from(derive) + total_runs);
+    let clock = Instant::now();
     let reference = Reference::compute(&p, o.t_end)?;
-    progress.note(&format!("{}: reference {}", p.case.name, reference.how).into());
+    progress.finished(
+        &format!("{}: reference {}", p.case.name, reference.how),
+        clock.elapsed().as_secs_f64(),
+    );
     let steps = if wants_rk4 {
         rk4_steps(&p, &plan.steps, o.t_end, 3, progress)?
     } else {
         Vec::new()
     };
-    let ctl_method = plan.controller_method();
     let mut runs = Vec::new();
+    let mut clock = Instant::now();
     let mut push = |c: Compared| {
-        progress.note(
-            &format!(
-                "  {} {}: error {}, {} RHS, {:.3} s",
-                c.label(),
-                c.setting(),
-                c.error.map_or("failed".into(), |e| format!("{e:.3e}")),
-                c.rhs_evals,
-                c.wall_time_s
-            )
-            .into(),
-        );
+        progress.finished(&run_line(&c), clock.elapsed().as_secs_f64());
+        clock = Instant::now();
         runs.push(WpRun {
             method: c.method,
             controller: c.controller,
@@ -432,7 +480,8 @@ pub fn work_precision(
             }
         }
     }
-    let table = WpTable::new(&p.case.name, runs, &DEFAULT_TARGETS)?;
+    let mut table = WpTable::new(&p.case.name, runs, &DEFAULT_TARGETS)?;
+    table.error_measure = reference.measure();
     let files = table.write(&out)?;
     Ok(Written {
         result: WorkPrecisionResult {
@@ -484,7 +533,10 @@ impl Default for StiffnessOptions {
 /// Stiffness diagnostics: checks the case and the options, integrates the reference run
 /// analysing the Jacobian at the sample points, measures the RK4 limit, and writes
 /// stiffness.csv, stiffness.{svg,png}, stiffness.md and stiffness.json.
-pub fn stiffness(o: &StiffnessOptions) -> Result<Written<StiffnessResult>, Error> {
+pub fn stiffness(
+    o: &StiffnessOptions,
+    progress: &dyn Progress,
+) -> Result<Written<StiffnessResult>, Error> {
     let case = Case::load(&o.case, None)?;
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
@@ -500,7 +552,7 @@ pub fn stiffness(o: &StiffnessOptions) -> Result<Written<StiffnessResult>, Error
         measure: o.measure,
         ..Default::default()
     };
-    let r = stiffness_cmd::analyse(&prepared, &opts, &settings)?;
+    let r = stiffness_cmd::analyse(&prepared, &opts, &settings, progress)?;
     let files = r.write(&out)?;
     Ok(Written {
         result: r,
@@ -535,7 +587,10 @@ pub struct PoincareOptions {
 /// Chaos diagnostics: checks the case (a crank driver and a clearance joint role) and the
 /// options, integrates the section run and the two Lyapunov trajectories, and writes
 /// poincare.csv, lyapunov.csv, the figures, poincare.md and poincare.json.
-pub fn poincare(o: &PoincareOptions) -> Result<Written<PoincareResult>, Error> {
+pub fn poincare(
+    o: &PoincareOptions,
+    progress: &dyn Progress,
+) -> Result<Written<PoincareResult>, Error> {
     let case = Case::load(&o.case, None)?;
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
@@ -551,7 +606,7 @@ pub fn poincare(o: &PoincareOptions) -> Result<Written<PoincareResult>, Error> {
         .out
         .clone()
         .unwrap_or_else(|| default_out("poincare", &prepared.case.name));
-    let r = poincare::analyse(&prepared, &opts, &settings)?;
+    let r = poincare::analyse(&prepared, &opts, &settings, progress)?;
     let files = r.write(&out)?;
     Ok(Written {
         result: r,
@@ -571,7 +626,8 @@ pub fn poincare(o: &PoincareOptions) -> Result<Written<PoincareResult>, Error> {
 pub struct ExtremesOptions {
     /// The quick subset (3 scenes × every method × 3 tolerances).
     pub quick: bool,
-    /// Parallel runs (≥ 1); None = 1 (the wall-clock budget is per run).
+    /// Parallel runs (≥ 1, capped at the available parallelism); None = 1 (the wall-clock
+    /// budget is per run).
     pub jobs: Option<usize>,
     /// Step budget of every run (attempts); None = the plan's.
     pub max_steps: Option<usize>,
@@ -582,8 +638,10 @@ pub struct ExtremesOptions {
 }
 
 /// Runs the extremes matrix (or its quick subset) and writes extremes.md and extremes.json
-/// (in that order in `files`); notes each scene and finished run. A run that ended in an
-/// outcome that is not allowed is in the result, not an error: see [`extremes::check`].
+/// (in that order in `files`); each reference and run is an item of `progress`. Finished
+/// references and runs are kept in DIR/cache/ and reused by a rerun ([`extremes::run_cached`]).
+/// A run that ended in an outcome that is not allowed is in the result, not an error: see
+/// [`extremes::check`].
 pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<Matrix>, Error> {
     let mut plan = if o.quick {
         extremes::Plan::quick()
@@ -604,7 +662,9 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
             "extremes"
         })
     });
-    let m = extremes::run(&plan, &|l| progress.note(&l.into()))?;
+    crate::claim::remove_dead_temporaries(&out);
+    let cache = RunCache::new(&out.join(CACHE_DIR));
+    let m = extremes::run_cached(&plan, Some(&cache), progress)?;
     let files = m.write(&out)?;
     Ok(Written {
         result: m,
@@ -624,7 +684,8 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
 pub struct SweepRunOptions {
     /// The sweep file (JSON): a base case and lists of parameter values.
     pub file: PathBuf,
-    /// Parallel jobs (≥ 1); None = the number of cores.
+    /// Parallel jobs (≥ 1, capped at the available parallelism with a note); None = the
+    /// number of cores.
     pub jobs: Option<usize>,
     /// The points to run; None = all.
     pub shard: Option<Shard>,
@@ -763,6 +824,9 @@ pub struct MergeOptions {
     pub dirs: Vec<PathBuf>,
     /// Where merged.csv and merged.md go; None = the first directory.
     pub out: Option<PathBuf>,
+    /// Merge what finished even if some points of the grid are unfinished or corrupt (they
+    /// get rows with status `unfinished` / `corrupt`); else that is an error.
+    pub allow_partial: bool,
 }
 
 /// What [`merge`] wrote.
@@ -779,14 +843,43 @@ pub struct Merged {
 }
 
 /// Joins the finished points of sweep directories into one table: merged.csv and merged.md.
+/// Points of the grids that are unfinished or whose result is corrupt make it an input error
+/// that names them (nothing written), unless `allow_partial`: then they are rows of their own
+/// (status `unfinished`, `corrupt`).
 pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
     let Some(first) = o.dirs.first() else {
         return Err(Error::Usage("merge: no directory to merge".into()));
     };
     let out = o.out.clone().unwrap_or_else(|| first.clone());
     let table = sweep::merge(&o.dirs)?;
+    let complete = table.unfinished.is_empty() && table.corrupt.is_empty();
+    if !complete && !o.allow_partial {
+        return Err(OptionError::new("allow_partial")
+            .text(format!(
+                "merge: the sweep is incomplete ({} finished): {}; rerun the sweep to finish \
+                 them, or give ",
+                table.rows.len(),
+                table.missing_summary(5)
+            ))
+            .name("allow_partial")
+            .text(" to merge what finished")
+            .into());
+    }
+    let table = table.with_missing();
     let (csv, md) = table.write(&out)?;
     Ok(Merged { table, csv, md })
+}
+
+/// One line on a comparison run: label, setting, error, work.
+fn run_line(c: &Compared) -> String {
+    format!(
+        "{} {}: error {}, {} RHS evaluations, {:.3} s",
+        c.label(),
+        c.setting(),
+        c.error.map_or("failed".into(), |e| format!("{e:.3e}")),
+        c.rhs_evals,
+        c.wall_time_s
+    )
 }
 
 /// A few lines on what a run did: method, work, and the headline metrics.

@@ -316,6 +316,21 @@ impl Reference {
         })
     }
 
+    /// What the headline error ([`ErrorNorms::headline`]) measures, in words (axis labels).
+    pub fn measure(&self) -> String {
+        let Some(r) = &self.run else {
+            return "largest relative error of a component at t_end (IVP Test Set solution)".into();
+        };
+        let first = r.extra.first();
+        if first.is_some_and(|s| s.slider_a.is_some()) {
+            "relative RMS error of the slider acceleration".into()
+        } else if first.is_some_and(|s| s.ex_over_c.is_some()) {
+            "largest error of the journal centre, in clearances".into()
+        } else {
+            "relative RMS error of the state".into()
+        }
+    }
+
     /// The error norms of a run made with the same t_end and `extra_times = window.grid()`
     /// (None for test problems: their error is `reference_error`).
     pub fn norms(&self, r: &RunResult) -> Result<Option<ErrorNorms>, Error> {

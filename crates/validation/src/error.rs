@@ -4,6 +4,7 @@
 //! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Io)
 //!        Solver    the solver failed               (Solver)
 //!        Bug       an internal inconsistency       (NotYetAvailable, Internal)
+//!        Interrupted  a stop was requested (SIGINT, SIGTERM)   (Interrupted)
 //! ```
 //!
 //! Options are named by the engine's names (`rtol`, `t_end`, `max_steps`, …): an
@@ -23,7 +24,8 @@ use lash_solver::SolveError;
 ///
 /// ```text
 /// Error → kind:  Usage | Option | Input | Io → BadInput,  Solver → Solver,
-///                NotYetAvailable | Internal → Bug
+///                NotYetAvailable | Internal → Bug,  Interrupted → Interrupted
+/// SolveError::Interrupted → Error::Interrupted (From), every other SolveError → Error::Solver
 /// ```
 ///
 /// Every variant's message is one line that names the problem (the option, the file, the
@@ -53,7 +55,11 @@ pub enum Error {
     },
     /// The solver failed (typed, with time and state).
     #[error("solver failed: {0}")]
-    Solver(#[from] SolveError),
+    Solver(SolveError),
+    /// The work was interrupted (a stop was requested: `lash_solver::interrupt`): the item in
+    /// flight was abandoned, what had finished is kept; the message says what and where.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
     /// The command exists but its engine (the model, a solver) is not wired in yet.
     #[error("{0} is not yet available in this build")]
     NotYetAvailable(String),
@@ -77,6 +83,8 @@ pub enum ErrorKind {
     Solver,
     /// A bug: an internal inconsistency, or an engine not built yet.
     Bug,
+    /// A stop was requested (SIGINT, SIGTERM) and the work abandoned.
+    Interrupted,
 }
 
 impl Error {
@@ -88,7 +96,13 @@ impl Error {
             }
             Error::Solver(_) => ErrorKind::Solver,
             Error::NotYetAvailable(_) | Error::Internal(_) => ErrorKind::Bug,
+            Error::Interrupted(_) => ErrorKind::Interrupted,
         }
+    }
+
+    /// Whether this is an interruption ([`Error::Interrupted`]).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(self, Error::Interrupted(_))
     }
 
     /// Wraps an I/O error with the path it concerns.
@@ -105,6 +119,19 @@ impl Error {
         match self {
             Error::Option(o) => o.render(spell),
             other => other.to_string(),
+        }
+    }
+}
+
+impl From<SolveError> for Error {
+    /// [`SolveError::Interrupted`] becomes [`Error::Interrupted`] (not a failure of the
+    /// solver); every other failure [`Error::Solver`].
+    fn from(e: SolveError) -> Self {
+        match e {
+            SolveError::Interrupted { t, .. } => Error::Interrupted(format!(
+                "stop requested; the run in flight stopped at t = {t:e}"
+            )),
+            other => Error::Solver(other),
         }
     }
 }

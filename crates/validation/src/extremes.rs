@@ -37,6 +37,9 @@
 //!                       reported, not failures)
 //!             failures: any other result that breaks the promise, non-finite numbers in a
 //!                       result, any other error, a panic (caught)
+//! resuming    `lash extremes` keeps every finished reference and run in OUT/cache/ under the
+//!             hash of its inputs (crate::cache): an interrupted matrix goes on where it
+//!             stopped; a run cut short by the stop request is not a result and runs again
 //! ```
 //!
 //! The promise's exponent α is the tolerance proportionality of each method, by the standard
@@ -57,6 +60,7 @@
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use lash_model::cases::{press_scene, PressJoint};
@@ -64,10 +68,12 @@ use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec};
 use lash_model::Scene;
 use lash_solver::{Method, SolveError};
 
+use crate::cache::RunCache;
 use crate::case::{sha256_hex, Case, CaseSource};
 use crate::compare::ErrorWindow;
 use crate::error::Error;
 use crate::io;
+use crate::progress::Progress;
 use crate::simulate::{simulate, Prepared, RunRequest, RunResult};
 use crate::workprecision::fmt_num;
 
@@ -695,7 +701,7 @@ impl FailureKind {
             SolveError::Rk4Unstable { .. } => FailureKind::Rk4Unstable,
             SolveError::NewtonFailure { .. } => FailureKind::NewtonFailure,
             SolveError::BudgetExhausted { .. } => FailureKind::BudgetExhausted,
-            SolveError::InvalidOptions(_) => return None,
+            SolveError::InvalidOptions(_) | SolveError::Interrupted { .. } => return None,
         })
     }
 }
@@ -974,47 +980,100 @@ pub struct Matrix {
     pub wall_time_s: f64,
 }
 
-/// The error of a run against the reference (module doc), on the window samples.
+/// The slider of a reference run on the error window: what the error of a run against it
+/// needs (and what the cache keeps of a reference).
+///
+/// ```text
+/// x*_k, v*_k on the window grid;  s_x = r,  s_v = max(r ω, max_k |v*_k|)
+/// ```
+///
+/// Source: module doc.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ReferenceSlider {
+    /// Slider positions x*_k, m.
+    pub x: Vec<f64>,
+    /// Slider velocities v*_k, m/s.
+    pub v: Vec<f64>,
+    /// Position scale s_x = r, m.
+    pub s_x: f64,
+    /// Velocity scale s_v, m/s.
+    pub s_v: f64,
+}
+
+impl ReferenceSlider {
+    /// The slider of `reference` (a run with samples on the window grid).
+    pub fn of(reference: &RunResult) -> Result<ReferenceSlider, Error> {
+        let ideal = reference.ideal.ok_or_else(|| {
+            Error::Internal("extremes: the scene is not a slider-crank with a closed form".into())
+        })?;
+        let mut x = Vec::with_capacity(reference.extra.len());
+        let mut v = Vec::with_capacity(reference.extra.len());
+        for s in &reference.extra {
+            match (s.slider_x, s.slider_v) {
+                (Some(a), Some(b)) => {
+                    x.push(a);
+                    v.push(b);
+                }
+                _ => {
+                    return Err(Error::Internal(
+                        "extremes: a sample without the slider".into(),
+                    ))
+                }
+            }
+        }
+        let v_max = v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        Ok(ReferenceSlider {
+            s_x: ideal.r,
+            s_v: (ideal.r * ideal.omega.abs()).max(v_max),
+            x,
+            v,
+        })
+    }
+
+    /// The error of `run` against this reference (module doc).
+    ///
+    /// ```text
+    /// e = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v )
+    /// ```
+    pub fn error(&self, run: &RunResult) -> Result<f64, Error> {
+        if run.extra.len() != self.x.len() || run.extra.is_empty() {
+            return Err(Error::Internal(format!(
+                "extremes: {} samples against {} reference samples",
+                run.extra.len(),
+                self.x.len()
+            )));
+        }
+        let mut e = 0.0f64;
+        for (k, a) in run.extra.iter().enumerate() {
+            match (a.slider_x, a.slider_v) {
+                (Some(x), Some(v)) => {
+                    e = e
+                        .max((x - self.x[k]).abs() / self.s_x)
+                        .max((v - self.v[k]).abs() / self.s_v);
+                }
+                _ => {
+                    return Err(Error::Internal(
+                        "extremes: a sample without the slider".into(),
+                    ))
+                }
+            }
+        }
+        if !e.is_finite() {
+            return Err(Error::Internal(format!("extremes: error {e} not finite")));
+        }
+        Ok(e)
+    }
+}
+
+/// The error of a run against the reference (module doc), on the window samples
+/// ([`ReferenceSlider::error`] of [`ReferenceSlider::of`] `reference`).
 ///
 /// ```text
 /// e = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v ),  s_x = r,
 /// s_v = max(r ω, max_k |v*_k|)
 /// ```
 pub fn slider_error(run: &RunResult, reference: &RunResult) -> Result<f64, Error> {
-    let ideal = reference.ideal.ok_or_else(|| {
-        Error::Internal("extremes: the scene is not a slider-crank with a closed form".into())
-    })?;
-    if run.extra.len() != reference.extra.len() || run.extra.is_empty() {
-        return Err(Error::Internal(format!(
-            "extremes: {} samples against {} reference samples",
-            run.extra.len(),
-            reference.extra.len()
-        )));
-    }
-    let v_max = reference
-        .extra
-        .iter()
-        .filter_map(|s| s.slider_v)
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    let s_x = ideal.r;
-    let s_v = (ideal.r * ideal.omega.abs()).max(v_max);
-    let mut e = 0.0f64;
-    for (a, b) in run.extra.iter().zip(&reference.extra) {
-        match (a.slider_x, a.slider_v, b.slider_x, b.slider_v) {
-            (Some(x), Some(v), Some(xr), Some(vr)) => {
-                e = e.max((x - xr).abs() / s_x).max((v - vr).abs() / s_v);
-            }
-            _ => {
-                return Err(Error::Internal(
-                    "extremes: a sample without the slider".into(),
-                ))
-            }
-        }
-    }
-    if !e.is_finite() {
-        return Err(Error::Internal(format!("extremes: error {e} not finite")));
-    }
-    Ok(e)
+    ReferenceSlider::of(reference)?.error(run)
 }
 
 /// Runs one setting on the error window (no trajectory, no energy) with the budget.
@@ -1114,8 +1173,8 @@ pub struct Ready {
     pub prepared: Prepared,
     /// Window, reference and its agreement.
     pub report: SceneReport,
-    /// The reference run (method A) on the window grid.
-    pub reference: RunResult,
+    /// The slider of the reference run (method A) on the window grid.
+    pub reference: ReferenceSlider,
 }
 
 /// Whether a scene has a dry clearance joint (its promise uses [`PROMISE_C_DRY`]).
@@ -1193,7 +1252,7 @@ pub fn prepare(scene: ExtremeScene) -> Result<Ready, Error> {
                     scene,
                     prepared: p,
                     report,
-                    reference: ra,
+                    reference: ReferenceSlider::of(&ra)?,
                 });
             }
             (ra, rb) => {
@@ -1284,7 +1343,7 @@ pub fn run_cell(r: &Ready, setting: Setting, budget: &Budget) -> Cell {
             };
             return Ok(cell);
         }
-        let error = slider_error(&run, &r.reference)?;
+        let error = r.reference.error(&run)?;
         let promise = match (rtol, step) {
             (Some(rtol), _) => {
                 let scale = rtol.powf(alpha(setting.method()));
@@ -1367,10 +1426,29 @@ pub fn settings(scene: &ExtremeScene, tolerances: &[f64]) -> Vec<Setting> {
     v
 }
 
+/// Runs the matrix of `plan` ([`run_cached`] without a cache).
+pub fn run(plan: &Plan, progress: &dyn Progress) -> Result<Matrix, Error> {
+    run_cached(plan, None, progress)
+}
+
+/// What a scene's reference leaves for the cache: its report and its slider.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CachedReference {
+    report: SceneReport,
+    slider: ReferenceSlider,
+}
+
 /// Runs the matrix of `plan`. A reference that cannot be computed at any rtol of the ladder
 /// is the solver's error (exit 3); everything else is recorded in the cells. `progress`
-/// receives one line per scene and per finished run.
-pub fn run(plan: &Plan, progress: &(dyn Fn(&str) + Sync)) -> Result<Matrix, Error> {
+/// receives one item per reference computed and per run done. With a `cache`
+/// ([`crate::cache`]), every finished reference and run is stored there and one found there
+/// is not done again. A stop request (`lash_solver::interrupt`) abandons the work in flight
+/// and starts no other: [`Error::Interrupted`], with what is kept.
+pub fn run_cached(
+    plan: &Plan,
+    cache: Option<&RunCache>,
+    progress: &dyn Progress,
+) -> Result<Matrix, Error> {
     let clock = Instant::now();
     let all = catalogue();
     let mut scenes = Vec::new();
@@ -1382,23 +1460,87 @@ pub fn run(plan: &Plan, progress: &(dyn Fn(&str) + Sync)) -> Result<Matrix, Erro
             .ok_or_else(|| Error::Usage(format!("extremes: no scene named '{stem}'")))?;
         scenes.push(s);
     }
-    let mut ready = Vec::new();
-    for s in scenes {
-        let stem = s.stem;
-        let r = catch_unwind(AssertUnwindSafe(|| prepare(s))).map_err(|p| {
-            Error::Internal(format!(
-                "extremes: the reference of {stem} panicked: {}",
-                panic_message(p.as_ref())
+    let key = |kind: &str, inputs: &serde_json::Value| -> Result<Option<String>, Error> {
+        cache.map(|c| c.key(kind, inputs)).transpose()
+    };
+    let found = |k: &Option<String>| matches!((cache, k), (Some(c), Some(k)) if c.contains(k));
+    let ref_keys: Vec<Option<String>> = scenes
+        .iter()
+        .map(|s| {
+            key(
+                "extremes reference",
+                &serde_json::json!({"scene": s.json()}),
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let kept = AtomicUsize::new(0);
+    let interrupted = |what: &str, total: usize| {
+        Error::Interrupted(format!(
+            "extremes: {} {what} finished and kept{}; rerun the same command to resume",
+            kept.load(Ordering::Relaxed),
+            cache.map_or(String::new(), |c| format!(
+                " in {} (of {total} to do)",
+                c.dir().display()
             ))
-        })??;
-        progress(&format!(
-            "{stem}: reference {} vs {} at rtol {}: E_ref = {}, ε_max = {}",
-            r.report.reference,
-            r.report.check,
-            fmt_num(r.report.reference_rtol),
-            fmt_num(r.report.agreement),
-            r.report.eps_max.map_or("–".into(), fmt_num)
-        ));
+        ))
+    };
+    let reused = ref_keys.iter().filter(|k| found(k)).count();
+    progress.started("references", scenes.len() - reused);
+    let mut ready = Vec::new();
+    for (s, k) in scenes.into_iter().zip(&ref_keys) {
+        let stem = s.stem;
+        let from_cache = match (cache, k) {
+            (Some(c), Some(k)) => c.load::<CachedReference>(k),
+            _ => None,
+        };
+        let r = match from_cache {
+            Some(c) => Ready {
+                prepared: s.prepared()?,
+                scene: s,
+                report: c.report,
+                reference: c.slider,
+            },
+            None => {
+                if lash_solver::interrupt::stop_requested() {
+                    return Err(interrupted("references", ref_keys.len()));
+                }
+                let t = Instant::now();
+                let r = catch_unwind(AssertUnwindSafe(|| prepare(s))).map_err(|p| {
+                    Error::Internal(format!(
+                        "extremes: the reference of {stem} panicked: {}",
+                        panic_message(p.as_ref())
+                    ))
+                })?;
+                let r = match r {
+                    Err(e) if e.is_interrupted() => {
+                        return Err(interrupted("references", ref_keys.len()))
+                    }
+                    other => other?,
+                };
+                if let (Some(c), Some(k)) = (cache, k) {
+                    c.store(
+                        k,
+                        &CachedReference {
+                            report: r.report.clone(),
+                            slider: r.reference.clone(),
+                        },
+                    )?;
+                }
+                kept.fetch_add(1, Ordering::Relaxed);
+                progress.finished(
+                    &format!(
+                        "{stem}: reference {} vs {} at rtol {}: E_ref = {}, ε_max = {}",
+                        r.report.reference,
+                        r.report.check,
+                        fmt_num(r.report.reference_rtol),
+                        fmt_num(r.report.agreement),
+                        r.report.eps_max.map_or("–".into(), fmt_num)
+                    ),
+                    t.elapsed().as_secs_f64(),
+                );
+                r
+            }
+        };
         ready.push(r);
     }
     let jobs: Vec<(usize, Setting)> = ready
@@ -1410,26 +1552,80 @@ pub fn run(plan: &Plan, progress: &(dyn Fn(&str) + Sync)) -> Result<Matrix, Erro
                 .map(move |s| (i, s))
         })
         .collect();
-    let work = |&(i, s): &(usize, Setting)| {
+    let keys: Vec<Option<String>> = jobs
+        .iter()
+        .map(|(i, s)| {
+            key(
+                "extremes run",
+                &serde_json::json!({
+                    "scene": ready[*i].scene.json(),
+                    "setting": s,
+                    "budget": plan.budget,
+                    "reference": ref_keys[*i],
+                }),
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let reused_cells = keys.iter().filter(|k| found(k)).count();
+    if reused + reused_cells > 0 {
+        progress.note(
+            &format!(
+                "extremes: {reused} of {} references and {reused_cells} of {} runs finished \
+                 before, reused from {}",
+                ready.len(),
+                jobs.len(),
+                cache.map_or(String::new(), |c| c.dir().display().to_string())
+            )
+            .into(),
+        );
+    }
+    kept.store(0, Ordering::Relaxed);
+    progress.started("runs", jobs.len() - reused_cells);
+    let work = |(&(i, s), k): (&(usize, Setting), &Option<String>)| -> Result<Cell, Error> {
+        if let (Some(c), Some(k)) = (cache, k) {
+            if let Some(cell) = c.load::<Cell>(k) {
+                return Ok(cell);
+            }
+        }
+        if lash_solver::interrupt::stop_requested() {
+            return Err(Error::Interrupted(String::new()));
+        }
+        let t = Instant::now();
         let c = run_cell(&ready[i], s, &plan.budget);
-        progress(&format!(
-            "  {} {} {}: {}",
-            c.scene,
-            c.setting.label(),
-            setting_value(&c.setting),
-            c.outcome.cell()
-        ));
-        c
+        // A run cut short by the stop request is not a result.
+        if lash_solver::interrupt::stop_requested() {
+            return Err(Error::Interrupted(String::new()));
+        }
+        if let (Some(cache), Some(k)) = (cache, k) {
+            cache.store(k, &c)?;
+        }
+        kept.fetch_add(1, Ordering::Relaxed);
+        progress.finished(
+            &format!(
+                "{} {} {}: {}",
+                c.scene,
+                c.setting.label(),
+                setting_value(&c.setting),
+                c.outcome.cell()
+            ),
+            t.elapsed().as_secs_f64(),
+        );
+        Ok(c)
     };
-    let cells: Vec<Cell> = if plan.jobs > 1 {
+    let threads = crate::progress::jobs_within_parallelism(Some(plan.jobs), progress);
+    let cells: Result<Vec<Cell>, Error> = if threads > 1 {
         use rayon::prelude::*;
         let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(plan.jobs)
+            .num_threads(threads)
             .build()
             .map_err(|e| Error::Internal(format!("extremes: thread pool: {e}")))?;
-        pool.install(|| jobs.par_iter().map(work).collect())
+        pool.install(|| jobs.par_iter().zip(&keys).map(work).collect())
     } else {
-        jobs.iter().map(work).collect()
+        jobs.iter().zip(&keys).map(work).collect()
+    };
+    let cells = match cells {
+        Err(e) if e.is_interrupted() => return Err(interrupted("runs", jobs.len())),
+        other => other?,
     };
     let counts = count_rows(&cells);
     let failures = cells.iter().filter(|c| c.outcome.is_failure()).count();

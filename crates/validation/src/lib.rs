@@ -13,7 +13,9 @@
 //!                                                  └──Progress (notes, sweep progress)
 //! ```
 //!
-//! Modules: [`commands`] (one function per command: options in, results out), [`options`]
+//! Modules: [`commands`] (one function per command: options in, results out), [`cache`]
+//! (finished runs by the hash of their inputs: resuming), [`claim`] (claim files of sweep
+//! points, liveness of processes), [`options`]
 //! (the solver choice of a request), [`progress`] (the progress hook), [`error`] (typed
 //! errors and their kinds), [`compare`] (errors against a reference), [`io`] (atomic writes),
 //! [`headline`] (the default run), [`case`] (case references), [`summary`] (summary.json),
@@ -26,7 +28,9 @@
 
 #![warn(missing_docs)]
 
+pub mod cache;
 pub mod case;
+pub mod claim;
 pub mod commands;
 pub mod compare;
 pub mod error;

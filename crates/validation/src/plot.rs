@@ -6,6 +6,13 @@
 //! orbit_plot(stem, title, ex, ey)   (e_x/c, e_y/c) inside the unit clearance circle ε = 1,
 //!                                   equal aspect: x_span / width_px = y_span / height_px
 //! orbits_plot(stem, title, series)  several orbits in one circle
+//! series i: colour COLORS[i mod 10]; with markers (LinePoints, DashedPoints) marker
+//!          MARKERS[i mod 8], so no two of the first 40 series look alike; Dashed and
+//!          DashedPoints dashed, every other line solid
+//! legend:  outside the data: a column right of the plot (line plots, log–log plots, panels),
+//!          a row under the circle (orbits); each entry shows the series' line and marker
+//! text:    no underscore (the bitmap text renderer leaves a gap before it): names are
+//!          written out in words ([`plain`] turns identifiers such as case names into text)
 //! PNG: 8-bit palette of the 256 most frequent colours of the rendered image, every other
 //!      colour (anti-aliasing shades) mapped to its nearest palette entry (RGB distance);
 //!      deflate at best compression: a quarter of the true-colour file or less
@@ -67,7 +74,7 @@ fn ensure_font() -> Result<(), Error> {
 /// How a series is drawn.
 ///
 /// ```text
-/// Line ──   Dashed - -   Points ·   LinePoints ·─·
+/// Line ──   Dashed - -   Points ·   LinePoints ▪─▲─◆ (its own marker)   DashedPoints ▪ - ▲
 /// ```
 ///
 /// Source: this module.
@@ -79,8 +86,34 @@ pub enum SeriesStyle {
     Dashed,
     /// Markers only.
     Points,
-    /// A line with markers (work–precision curves).
+    /// A line with markers, each series its own marker (work–precision curves).
     LinePoints,
+    /// A dashed line with markers, each series its own marker (work–precision curves of a
+    /// second family, such as the stiff methods).
+    DashedPoints,
+}
+
+impl SeriesStyle {
+    fn dashed(self) -> bool {
+        matches!(self, SeriesStyle::Dashed | SeriesStyle::DashedPoints)
+    }
+
+    fn marked(self) -> bool {
+        matches!(self, SeriesStyle::LinePoints | SeriesStyle::DashedPoints)
+    }
+
+    fn line(self) -> bool {
+        !matches!(self, SeriesStyle::Points)
+    }
+}
+
+/// Number of marker shapes: filled circle, square, triangle, diamond; open circle, square;
+/// cross; downward triangle.
+pub const MARKERS: usize = 8;
+
+/// An identifier (a case name, a file stem) as text for a figure: underscores become spaces.
+pub fn plain(name: &str) -> String {
+    name.replace('_', " ")
 }
 
 /// One named series of a figure.
@@ -322,6 +355,171 @@ struct XyFigure<'a> {
     bounds: (f64, f64, f64, f64),
 }
 
+/// Draws marker `kind` (mod [`MARKERS`]) of colour `c` at `at`, in any coordinates.
+fn draw_marker<DB, CT>(
+    area: &DrawingArea<DB, CT>,
+    at: CT::From,
+    kind: usize,
+    c: RGBColor,
+) -> Result<(), String>
+where
+    DB: DrawingBackend,
+    CT: plotters::coord::CoordTranslate,
+    CT::From: Clone,
+{
+    let r = 5i32;
+    let (fill, open) = (c.filled(), c.stroke_width(2));
+    let res = match kind % MARKERS {
+        0 => area.draw(&(EmptyElement::at(at) + Circle::new((0, 0), r, fill))),
+        1 => area.draw(
+            &(EmptyElement::at(at) + Rectangle::new([(-r + 1, -r + 1), (r - 1, r - 1)], fill)),
+        ),
+        2 => area.draw(
+            &(EmptyElement::at(at)
+                + Polygon::new(vec![(0, -r - 1), (r + 1, r), (-r - 1, r)], fill)),
+        ),
+        3 => area.draw(
+            &(EmptyElement::at(at)
+                + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], fill)),
+        ),
+        4 => area.draw(&(EmptyElement::at(at) + Circle::new((0, 0), r, open))),
+        5 => area.draw(
+            &(EmptyElement::at(at)
+                + PathElement::new(vec![(-r, -r), (r, -r), (r, r), (-r, r), (-r, -r)], open)),
+        ),
+        6 => area.draw(&(EmptyElement::at(at) + Cross::new((0, 0), r, open))),
+        _ => area.draw(
+            &(EmptyElement::at(at)
+                + Polygon::new(vec![(0, r + 1), (r + 1, -r), (-r - 1, -r)], fill)),
+        ),
+    };
+    res.map_err(|e| e.to_string())
+}
+
+/// One entry of a legend: the name and how its series looks.
+struct Entry {
+    name: String,
+    color: RGBColor,
+    dashed: bool,
+    line: bool,
+    /// The marker kind, if the series has markers.
+    marker: Option<usize>,
+    /// Small dots (Points).
+    dots: bool,
+    width: u32,
+}
+
+fn entries(series: &[Series<'_>]) -> Vec<Entry> {
+    series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Entry {
+            name: s.name.to_string(),
+            color: style_of(i),
+            dashed: s.style.dashed(),
+            line: s.style.line(),
+            marker: s.style.marked().then_some(i),
+            dots: s.style == SeriesStyle::Points,
+            width: 2,
+        })
+        .collect()
+}
+
+/// Legend font size, px.
+const LEGEND_FONT: u32 = 15;
+/// Height of one legend entry, px.
+const LEGEND_ROW: i32 = 24;
+/// Length of the line sample of a legend entry, px.
+const LEGEND_SAMPLE: i32 = 40;
+
+/// Width of a legend column for these entries, px (0 without entries).
+fn legend_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, entries: &[Entry]) -> u32 {
+    let font: TextStyle<'_> = (FAMILY, LEGEND_FONT).into_font().into();
+    entries
+        .iter()
+        .map(|e| {
+            area.estimate_text_size(&e.name, &font)
+                .map_or(8 * e.name.len() as u32, |s| s.0)
+        })
+        .max()
+        .map_or(0, |w| w + LEGEND_SAMPLE as u32 + 36)
+}
+
+/// Draws one legend entry with its sample starting at pixel (x, y) (y the line's middle).
+fn draw_entry<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    e: &Entry,
+    x: i32,
+    y: i32,
+) -> Result<(), String> {
+    let style = e.color.stroke_width(e.width);
+    if e.line {
+        if e.dashed {
+            for k in 0..3 {
+                let a = x + k * 15;
+                area.draw(&PathElement::new(
+                    vec![(a, y), ((a + 9).min(x + LEGEND_SAMPLE), y)],
+                    style,
+                ))
+                .map_err(|e| e.to_string())?;
+            }
+        } else {
+            area.draw(&PathElement::new(
+                vec![(x, y), (x + LEGEND_SAMPLE, y)],
+                style,
+            ))
+            .map_err(|e| e.to_string())?;
+        }
+    }
+    if let Some(k) = e.marker {
+        draw_marker(area, (x + LEGEND_SAMPLE / 2, y), k, e.color)?;
+    }
+    if e.dots {
+        area.draw(&Circle::new(
+            (x + LEGEND_SAMPLE / 2, y),
+            3,
+            e.color.filled(),
+        ))
+        .map_err(|e| e.to_string())?;
+    }
+    area.draw(&Text::new(
+        e.name.clone(),
+        (x + LEGEND_SAMPLE + 8, y - LEGEND_FONT as i32 / 2 - 1),
+        (FAMILY, LEGEND_FONT).into_font(),
+    ))
+    .map_err(|e| e.to_string())
+}
+
+/// A legend column in `area` (entries top down, from `top` px).
+fn legend_column<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    top: i32,
+) -> Result<(), String> {
+    for (k, e) in entries.iter().enumerate() {
+        draw_entry(area, e, 10, top + LEGEND_ROW / 2 + k as i32 * LEGEND_ROW)?;
+    }
+    Ok(())
+}
+
+/// Splits `area` into the plot (left) and a legend column (right) wide enough for `series`;
+/// draws the legend, aligned with the plot's top at `top` px; returns the plot's area.
+fn with_legend_column<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    series: &[Series<'_>],
+    top: i32,
+) -> Result<DrawingArea<DB, Shift>, String> {
+    let es = entries(series);
+    let w = legend_width(area, &es);
+    if w == 0 {
+        return Ok(area.clone());
+    }
+    let (total, _) = area.dim_in_pixel();
+    let (plot, legend) = area.split_horizontally(total.saturating_sub(w) as i32);
+    legend_column(&legend, &es, top)?;
+    Ok(plot)
+}
+
 fn draw_series<'a, DB, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     series: &[Series<'_>],
@@ -335,51 +533,42 @@ where
         let c = style_of(i);
         let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
         let line = ShapeStyle::from(&c).stroke_width(2);
-        let ann = match s.style {
-            SeriesStyle::Line => chart
-                .draw_series(LineSeries::new(pts, line))
-                .map_err(|e| e.to_string())?,
-            SeriesStyle::Dashed => chart
-                .draw_series(DashedLineSeries::new(pts, 10, 6, line))
-                .map_err(|e| e.to_string())?,
-            SeriesStyle::Points => chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
-                .map_err(|e| e.to_string())?,
-            SeriesStyle::LinePoints => {
+        if s.style.line() {
+            if s.style.dashed() {
                 chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+                    .draw_series(DashedLineSeries::new(pts.clone(), 10, 6, line))
                     .map_err(|e| e.to_string())?;
+            } else {
                 chart
-                    .draw_series(LineSeries::new(pts, line))
-                    .map_err(|e| e.to_string())?
+                    .draw_series(LineSeries::new(pts.clone(), line))
+                    .map_err(|e| e.to_string())?;
             }
-        };
-        ann.label(s.name).legend(move |(x, y)| {
-            PathElement::new(
-                vec![(x, y), (x + 24, y)],
-                ShapeStyle::from(&c).stroke_width(2),
-            )
-        });
+        } else {
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                .map_err(|e| e.to_string())?;
+        }
+        if s.style.marked() {
+            let area = chart.plotting_area();
+            for &p in &pts {
+                draw_marker(area, p, i, c)?;
+            }
+        }
     }
-    chart
-        .configure_series_labels()
-        .label_font((FAMILY, 15))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())
+    Ok(())
 }
 
 impl Figure for XyFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let titled = root
+            .margin(10, 0, 0, 0)
+            .titled(self.axes.title, (FAMILY, 22))
+            .map_err(|e| e.to_string())?;
+        let plot = with_legend_column(&titled, self.series, 15)?;
         let (x0, x1, y0, y1) = self.bounds;
-        let mut b = ChartBuilder::on(root);
-        b.caption(self.axes.title, (FAMILY, 24))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(85);
+        let mut b = ChartBuilder::on(&plot);
+        b.margin(15).x_label_area_size(50).y_label_area_size(85);
         if self.log {
             let fmt = |v: &f64| tick_log(*v);
             let (xa, xb) = padded_log(x0, x1);
@@ -481,10 +670,20 @@ impl Figure for PanelsFigure<'_> {
             .titled(self.title, (FAMILY, 24))
             .map_err(|e| e.to_string())?;
         let parts = area.split_evenly((self.panels.len(), 1));
+        // One legend width for every panel, so that their x axes line up.
+        let all: Vec<Series<'_>> = self
+            .panels
+            .iter()
+            .flat_map(|p| p.series.iter().copied())
+            .collect();
+        let w = legend_width(root, &entries(&all));
         for ((p, part), &(x0, x1, y0, y1)) in self.panels.iter().zip(&parts).zip(&self.bounds) {
             let (xa, xb) = if x1 > x0 { (x0, x1) } else { padded(x0, x1) };
             let fx = |v: &f64| tick(*v, xb - xa);
-            let mut b = ChartBuilder::on(part);
+            let (total, _) = part.dim_in_pixel();
+            let (plot, legend) = part.split_horizontally(total.saturating_sub(w) as i32);
+            legend_column(&legend, &entries(p.series), 40)?;
+            let mut b = ChartBuilder::on(&plot);
             b.caption(p.axes.title, (FAMILY, 18))
                 .margin(12)
                 .x_label_area_size(45)
@@ -564,6 +763,42 @@ impl Figure for OrbitFigure<'_> {
             .margin(10, 0, 0, 0)
             .titled(self.title, (FAMILY, 24))
             .map_err(|e| e.to_string())?;
+        // The legend: a row under the plot, outside the circle.
+        let mut es = vec![Entry {
+            name: "clearance circle, ε = 1".into(),
+            color: BLACK,
+            dashed: false,
+            line: true,
+            marker: None,
+            dots: false,
+            width: 2,
+        }];
+        for (k, o) in self.orbits.iter().enumerate() {
+            es.push(Entry {
+                name: o.name.to_string(),
+                color: style_of(k),
+                dashed: false,
+                line: o.style != SeriesStyle::Points,
+                marker: None,
+                dots: o.style == SeriesStyle::Points,
+                width: 2,
+            });
+        }
+        let (_, full_h) = area.dim_in_pixel();
+        let rows = es.len().div_ceil(2) as u32;
+        let (area, legend) =
+            area.split_vertically(full_h.saturating_sub(rows * LEGEND_ROW as u32 + 8) as i32);
+        let (lw, _) = legend.dim_in_pixel();
+        for (k, e) in es.iter().enumerate() {
+            let col = (k % 2) as i32;
+            let row = (k / 2) as i32;
+            draw_entry(
+                &legend,
+                e,
+                20 + col * (lw as i32 / 2),
+                LEGEND_ROW / 2 + row * LEGEND_ROW,
+            )?;
+        }
         let (margin, x_area, y_area) = (15u32, 50u32, 80u32);
         let (w, h) = area.dim_in_pixel();
         let pw = w.saturating_sub(2 * margin + y_area);
@@ -578,8 +813,8 @@ impl Figure for OrbitFigure<'_> {
         let (fx, fy) = (|v: &f64| tick(*v, 2.0 * rx), |v: &f64| tick(*v, 2.0 * ry));
         chart
             .configure_mesh()
-            .x_desc("e_x / c")
-            .y_desc("e_y / c")
+            .x_desc("eccentricity e/c, x component")
+            .y_desc("eccentricity e/c, y component")
             .x_label_formatter(&fx)
             .y_label_formatter(&fy)
             .label_style((FAMILY, 15))
@@ -594,13 +829,11 @@ impl Figure for OrbitFigure<'_> {
             .collect();
         chart
             .draw_series(LineSeries::new(circle, BLACK.stroke_width(2)))
-            .map_err(|e| e.to_string())?
-            .label("clearance circle, ε = 1")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2)));
+            .map_err(|e| e.to_string())?;
         for (k, o) in self.orbits.iter().enumerate() {
             let c = style_of(k);
             let orbit: Vec<(f64, f64)> = o.x.iter().copied().zip(o.y.iter().copied()).collect();
-            let ann = match o.style {
+            match o.style {
                 SeriesStyle::Points => chart
                     .draw_series(orbit.iter().map(|&p| Circle::new(p, 3, c.filled())))
                     .map_err(|e| e.to_string())?,
@@ -608,18 +841,8 @@ impl Figure for OrbitFigure<'_> {
                     .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
                     .map_err(|e| e.to_string())?,
             };
-            ann.label(o.name).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
-            });
         }
-        chart
-            .configure_series_labels()
-            .label_font((FAMILY, 15))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| e.to_string())
+        Ok(())
     }
 }
 
@@ -631,7 +854,7 @@ pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Wr
         stem,
         title,
         &[Series {
-            name: "journal centre, e / c",
+            name: "journal centre",
             x: ex,
             y: ey,
             style: SeriesStyle::Line,
@@ -922,7 +1145,8 @@ mod tests {
         )
         .unwrap();
         let svg = std::fs::read_to_string(&w.svg).unwrap();
-        assert_eq!(svg.matches("<circle").count(), 3, "one marker per point");
+        // One marker per point, and one in the legend.
+        assert_eq!(svg.matches("<circle").count(), 4, "one marker per point");
     }
 
     #[test]

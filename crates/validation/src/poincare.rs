@@ -45,6 +45,7 @@ use crate::error::{Error, OptionError};
 use crate::io;
 use crate::options::SolverChoice;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
+use crate::progress::Progress;
 use crate::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
 use crate::stiffness_cmd::analysis_error;
 use crate::summary::RunHeader;
@@ -520,14 +521,29 @@ pub struct PoincareResult {
     pub report: PoincareReport,
 }
 
-/// Both analyses of a case.
+/// Both analyses of a case; `progress` gets each as an item.
 pub fn analyse(
     p: &Prepared,
     opts: &SolverOptions,
     s: &PoincareSettings,
+    progress: &dyn Progress,
 ) -> Result<PoincareResult, Error> {
+    progress.started("phases", 2);
+    let clock = Instant::now();
     let section = section(p, opts, s)?;
+    progress.finished(
+        &format!("Poincaré section: {} revolutions", s.revolutions),
+        clock.elapsed().as_secs_f64(),
+    );
+    let clock = Instant::now();
     let ly = lyapunov(p, opts, s)?;
+    progress.finished(
+        &format!(
+            "Lyapunov exponent: two trajectories, {} renormalisations per revolution",
+            s.renorm_per_rev
+        ),
+        clock.elapsed().as_secs_f64(),
+    );
     let late = &section.points[s.revolutions / 2..];
     let eps_min = late.iter().map(|q| q.eps).fold(f64::INFINITY, f64::min);
     let eps_max = late.iter().map(|q| q.eps).fold(f64::NEG_INFINITY, f64::max);
@@ -714,7 +730,7 @@ impl PoincareResult {
         let ey: Vec<f64> = pts.iter().map(|q| q.ey_over_c).collect();
         let rev: Vec<f64> = pts.iter().map(|q| q.revolution as f64).collect();
         let eps: Vec<f64> = pts.iter().map(|q| q.eps).collect();
-        let case = &self.report.run.case;
+        let case = &plot::plain(&self.report.run.case);
         push(plot::orbits_plot(
             &dir.join("poincare"),
             &format!("Poincaré section (once per revolution): {case}"),
@@ -730,7 +746,7 @@ impl PoincareResult {
             &Axes {
                 title: &format!("|e|/c once per revolution: {case}"),
                 x_label: "revolution j",
-                y_label: "|e|/c",
+                y_label: "eccentricity |e|/c (1 = contact)",
             },
             &[Series {
                 name: "|e|/c at t0 + jT",
@@ -745,7 +761,7 @@ impl PoincareResult {
         let flat = [l.exponent; 2];
         let k0 = est.t.iter().position(|&t| t > l.late_from).unwrap_or(0);
         let all = [Series {
-            name: "running estimate (Σ g_k)/(t_k − t0)",
+            name: "running estimate: log growth / elapsed time",
             x: &est.t,
             y: &est.running,
             style: SeriesStyle::Line,
@@ -772,7 +788,7 @@ impl PoincareResult {
                     axes: Axes {
                         title: "running estimate over the whole run",
                         x_label: "t, s",
-                        y_label: "λ, 1/s",
+                        y_label: "exponent λ, 1/s",
                     },
                     series: &all,
                     log_y: false,
@@ -781,7 +797,7 @@ impl PoincareResult {
                     axes: Axes {
                         title: "late half (the estimate's window)",
                         x_label: "t, s",
-                        y_label: "λ, 1/s",
+                        y_label: "exponent λ, 1/s",
                     },
                     series: &late,
                     log_y: false,

@@ -143,6 +143,9 @@ impl FailureError {
                 f.reason = Some(m.clone());
                 "invalid_options"
             }
+            // `lash run` exits 130 on a stop request and writes nothing; a library caller
+            // that records one anyway gets its own kind.
+            SolveError::Interrupted { .. } => "interrupted",
         }
         .into();
         f
@@ -302,7 +305,7 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
                 style: SeriesStyle::Dashed,
             });
         }
-        let t = format!("{title}, {case}");
+        let t = format!("{title}, {}", plot::plain(case));
         push(plot::line_plot(
             &dir.join(stem),
             &Axes {
@@ -314,12 +317,12 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
         )?);
     }
     if let (Some(ex), Some(ey)) = (col(w, |s| s.ex_over_c), col(w, |s| s.ey_over_c)) {
-        let t = format!("Journal centre orbit, {case}");
+        let t = format!("Journal centre orbit, {}", plot::plain(case));
         push(plot::orbit_plot(&dir.join("orbit"), &t, &ex, &ey)?);
     }
     if let Some(fn_) = col(w, |s| s.contact_force) {
         let mut series = vec![Series {
-            name: "contact force F_N",
+            name: "normal contact force",
             x: &x,
             y: &fn_,
             style: SeriesStyle::Line,
@@ -327,13 +330,13 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
         let film = col(w, |s| s.film_force.map(f64::abs));
         if let Some(f) = &film {
             series.push(Series {
-                name: "film force |F_film|",
+                name: "film force, magnitude",
                 x: &x,
                 y: f,
                 style: SeriesStyle::Line,
             });
         }
-        let t = format!("Clearance joint forces, {case}");
+        let t = format!("Clearance joint forces, {}", plot::plain(case));
         push(plot::line_plot(
             &dir.join("joint_forces"),
             &Axes {

@@ -48,6 +48,7 @@ use lash_solver::{Method, OdeSystem, Problem, SolverOptions, Stats, StepOutcome}
 use crate::error::{Error, OptionError};
 use crate::io;
 use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
+use crate::progress::Progress;
 use crate::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
 use crate::summary::RunHeader;
 use crate::trajectory::fmt_num;
@@ -219,7 +220,7 @@ fn median(v: &[f64]) -> Option<f64> {
 /// is a defect of the model or the analysis (exit 1); bad settings are usage errors (exit 2).
 pub fn analysis_error(e: AnalysisError) -> Error {
     match e {
-        AnalysisError::Solve(s) => Error::Solver(s),
+        AnalysisError::Solve(s) => Error::from(s),
         AnalysisError::InvalidInput(m) => Error::Usage(m),
         AnalysisError::Degenerate { t, reason } => {
             Error::Input(format!("analysis cannot go on at t = {t:e}: {reason}"))
@@ -507,11 +508,14 @@ pub fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
     )
 }
 
-/// Runs the analysis of a prepared case with solver options `opts` (the reference run).
+/// Runs the analysis of a prepared case with solver options `opts` (the reference run);
+/// `progress` gets its phases as items (the eigenvalues along the run, then the measured RK4
+/// limit).
 pub fn analyse(
     p: &Prepared,
     opts: &SolverOptions,
     settings: &StiffnessSettings,
+    progress: &dyn Progress,
 ) -> Result<StiffnessResult, Error> {
     if settings.samples < MIN_SAMPLES {
         return Err(OptionError::leading(
@@ -523,6 +527,23 @@ pub fn analyse(
     let t_span = p.t_span(settings.t_end)?;
     let times = uniform_grid(t_span.0, t_span.1, settings.samples);
     let sopts = StiffnessOptions::default();
+    progress.started("phases", 1 + usize::from(settings.measure));
+    let clock = Instant::now();
+    let sampled_done = |n: usize| {
+        progress.finished(
+            &format!("reference run with the eigenvalues of ∂f/∂y at {n} points"),
+            clock.elapsed().as_secs_f64(),
+        );
+        Instant::now()
+    };
+    let measured_done = |since: Instant| {
+        if settings.measure {
+            progress.finished(
+                "RK4 step limit measured by bisection",
+                since.elapsed().as_secs_f64(),
+            );
+        }
+    };
     // The measured limit must be independent of the prediction: the mechanism defaults turn
     // on RK4's stability check (h·ρ from the stages, `rk4_instability_steps`), which would
     // stop the probe runs exactly where the eigenvalues predict. The probe judges stability
@@ -540,6 +561,7 @@ pub fn analyse(
             let y0 = mech.initial_state();
             let angle = |t: f64, y: &[f64]| sampler.sample(t, y).crank_angle;
             let sampled = sample_along(&mech, t_span, &y0, opts, &times, &sopts, &angle)?;
+            let since = sampled_done(sampled.points.len());
             let analytic = mech.has_jacobian();
             let phi_max = phi_max(p);
             let m = measure(&sampled, settings, |guess| {
@@ -556,6 +578,7 @@ pub fn analyse(
                     &valid,
                 )
             })?;
+            measured_done(since);
             (sampled, m, analytic)
         }
         Model::TestSet(_) => {
@@ -565,6 +588,7 @@ pub fn analyse(
             let sys = &*prob.system;
             let none = |_: f64, _: &[f64]| None;
             let sampled = sample_along(sys, t_span, &prob.y0, opts, &times, &sopts, &none)?;
+            let since = sampled_done(sampled.points.len());
             let m = measure(&sampled, settings, |guess| {
                 measure_limit(
                     sys,
@@ -576,6 +600,7 @@ pub fn analyse(
                     &|_, _| true,
                 )
             })?;
+            measured_done(since);
             (sampled, m, sys.has_jacobian())
         }
     };
@@ -978,7 +1003,7 @@ impl StiffnessResult {
                 "crank angle θ, °",
             )
         } else {
-            (self.points.iter().map(|q| q.t).collect(), "t, s")
+            (self.points.iter().map(|q| q.t).collect(), "time t, s")
         };
         io::create_dir(dir)?;
         let mut written = Vec::new();
@@ -1054,7 +1079,7 @@ impl StiffnessResult {
                 axes: Axes {
                     title: "Largest eigenvalue modulus of ∂f/∂y",
                     x_label,
-                    y_label: "|λ|max, 1/s",
+                    y_label: "largest |λ|, 1/s",
                 },
                 series: &s1,
                 log_y: true,
@@ -1062,14 +1087,14 @@ impl StiffnessResult {
         }
         panels.push(Panel {
             axes: Axes {
-                title: "RK4 step limit",
+                title: "RK4 step limit: predicted along the run, measured over the whole run",
                 x_label,
-                y_label: "h, s",
+                y_label: "step h, s",
             },
             series: &s2,
             log_y: true,
         });
-        let title = format!("Stiffness along the run: {}", r.run.case);
+        let title = format!("Stiffness along the run: {}", plot::plain(&r.run.case));
         plot::panels_plot(&dir.join("stiffness"), &title, &panels)
     }
 }

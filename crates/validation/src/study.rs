@@ -14,6 +14,9 @@
 //! statistics   metrics of the last revolution (docs/outputs.md, "`metrics`") + [`Deviations`]
 //! claims       claims::evaluate on the ensemble means (and per realisation)
 //! files        DIR/figures/figNN[a-d].{svg,png} → DIR/report.md → DIR/study.json (last)
+//! resuming     every finished run is kept in DIR/cache/ under the hash of its inputs
+//!              (crate::cache); a rerun reuses it, so an interrupted study (SIGINT, SIGTERM:
+//!              the runs in flight are abandoned) goes on where it stopped
 //! ```
 //!
 //! The dry cases are chaotic (docs/model.md §9), which is why each case is an ensemble and the
@@ -23,7 +26,8 @@
 //! trajectories rather than copies of one numerical trajectory, and a smooth change of every
 //! case alike (the journal's initial eccentricity is not perturbed: e = 0 is where the film's
 //! attitude angle is undefined, docs/model.md §2, and nanometre offsets there change the
-//! lubricated start discontinuously). Nothing is written if any run fails.
+//! lubricated start discontinuously). Nothing but the cache of finished runs is written if any
+//! run fails.
 //!
 //! Source: the paper's §4 and Figures 5–16; docs/model.md §5, §6, §9; docs/outputs.md (`metrics`).
 
@@ -34,6 +38,7 @@ pub mod markdown;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use lash_model::scene::JointSpec;
@@ -41,10 +46,12 @@ use lash_model::{IdealSliderCrank, Scene};
 use lash_solver::{Atol, Method, SolverOptions, Stats};
 use rayon::prelude::*;
 
+use crate::cache::{RunCache, CACHE_DIR};
 use crate::case::Case;
 use crate::error::Error;
 use crate::io;
 use crate::metrics::{self, Metrics, Sample};
+use crate::progress::{NoProgress, Progress};
 use crate::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
 
 pub use claims::{Claim, Number, Origin, Quantity, Verdict};
@@ -638,7 +645,7 @@ pub fn deviations(
 // ---------------------------------------------------------------------------------------------
 
 /// Curves of the paper's realisation for the figures (last revolution).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Curves {
     /// Crank angle θ, degrees, 0..360 over the last revolution.
     pub deg: Vec<f64>,
@@ -701,6 +708,8 @@ struct Job<'a> {
     member: usize,
 }
 
+/// What one job gives: stored in the cache of finished runs ([`crate::cache`]).
+#[derive(serde::Serialize, serde::Deserialize)]
 struct JobOut {
     stats: CaseStats,
     acc: Vec<f64>,
@@ -759,10 +768,27 @@ fn kind_of(name: &str) -> Kind {
     }
 }
 
+/// The inputs a job's result depends on (its cache key, with the build: [`crate::cache`]).
+#[derive(serde::Serialize)]
+struct JobKey<'a> {
+    case: &'a str,
+    setting: Setting,
+    member: usize,
+    scene: &'a Scene,
+    options: SolverOptions,
+}
+
 /// Runs every case of the study under `plan` (in parallel) and judges the claims. Figures
 /// are not drawn; see [`paper`]. Returns the result and the curves of the paper's
-/// realisations.
-fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Error> {
+/// realisations. Every finished run is stored in `cache` and a run found there is not done
+/// again; `progress` gets one item per run done. A stop request (`lash_solver::interrupt`)
+/// abandons the runs in flight and starts no other: [`Error::Interrupted`], with what is
+/// kept.
+fn run_plan(
+    plan: &Plan,
+    cache: &RunCache,
+    progress: &dyn Progress,
+) -> Result<(StudyResult, BTreeMap<String, Curves>), Error> {
     if plan.realisations == 0 {
         return Err(Error::Usage("study: at least one realisation".into()));
     }
@@ -803,10 +829,68 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
             j.setting != Setting::Reference,
         )
     });
-    let outs: Vec<JobOut> = jobs
-        .par_iter()
-        .map(|j| run_job(j, plan))
+    let keys: Vec<String> = jobs
+        .iter()
+        .map(|j| {
+            let scene = realisation(j.scene, j.member, plan.phase_step_rad);
+            cache.key(
+                "study run",
+                &JobKey {
+                    case: j.name,
+                    setting: j.setting,
+                    member: j.member,
+                    scene: &scene,
+                    options: plan.get(j.setting).options(),
+                },
+            )
+        })
         .collect::<Result<_, _>>()?;
+    let cached = keys.iter().filter(|k| cache.contains(k)).count();
+    if cached > 0 {
+        progress.note(
+            &format!(
+                "study: {cached} of {} runs finished before, reused from {}",
+                jobs.len(),
+                cache.dir().display()
+            )
+            .into(),
+        );
+    }
+    progress.started("runs", jobs.len() - cached);
+    let done = AtomicUsize::new(0);
+    let outs: Result<Vec<JobOut>, Error> = jobs
+        .par_iter()
+        .zip(&keys)
+        .map(|(j, key)| {
+            if let Some(o) = cache.load::<JobOut>(key) {
+                return Ok(o);
+            }
+            if lash_solver::interrupt::stop_requested() {
+                return Err(Error::Interrupted(String::new()));
+            }
+            let clock = Instant::now();
+            let o = run_job(j, plan)?;
+            cache.store(key, &o)?;
+            done.fetch_add(1, Ordering::Relaxed);
+            progress.finished(
+                &format!("{} {:?} realisation {}", j.name, j.setting, j.member).to_lowercase(),
+                clock.elapsed().as_secs_f64(),
+            );
+            Ok(o)
+        })
+        .collect();
+    let outs = match outs {
+        Err(Error::Interrupted(_)) => {
+            let kept = cached + done.load(Ordering::Relaxed);
+            return Err(Error::Interrupted(format!(
+                "study: {kept} of {} runs finished and kept in {}; rerun the same command to \
+                 resume",
+                jobs.len(),
+                cache.dir().display()
+            )));
+        }
+        other => other?,
+    };
 
     let mut cases = Vec::new();
     let mut all_curves = BTreeMap::new();
@@ -887,10 +971,24 @@ fn run_plan(plan: &Plan) -> Result<(StudyResult, BTreeMap<String, Curves>), Erro
 }
 
 /// Runs the study with `plan` and writes `out/figures/*`, `out/report.md` and (last)
-/// `out/study.json`, each atomically. Nothing is written if a run fails.
+/// `out/study.json`, each atomically. Nothing is written if a run fails but the finished runs
+/// in `out/cache/` ([`crate::cache`]), from which a rerun resumes.
 pub fn run_and_write(plan: &Plan, out: &Path) -> Result<StudyResult, Error> {
+    run_and_write_with(plan, out, &NoProgress)
+}
+
+/// [`run_and_write`], reporting each run to `progress`.
+pub fn run_and_write_with(
+    plan: &Plan,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<StudyResult, Error> {
     let clock = Instant::now();
-    let (mut result, curves) = run_plan(plan)?;
+    // Temporary files of a study killed while writing (a second signal, SIGKILL).
+    crate::claim::remove_dead_temporaries(out);
+    crate::claim::remove_dead_temporaries(&out.join(FIGURES_DIR));
+    let cache = RunCache::new(&out.join(CACHE_DIR));
+    let (mut result, curves) = run_plan(plan, &cache, progress)?;
     result.timing.runs_s = clock.elapsed().as_secs_f64();
     let fig_clock = Instant::now();
     io::create_dir(&out.join(FIGURES_DIR))?;
@@ -904,8 +1002,8 @@ pub fn run_and_write(plan: &Plan, out: &Path) -> Result<StudyResult, Error> {
 
 /// `lash study paper [--out DIR]`: runs the paper's §4 (see the module doc) and writes the
 /// figures, the report and study.json into `out` ([`describe_paper`] says it in one line).
-pub fn paper(out: &Path) -> Result<StudyResult, Error> {
-    run_and_write(&Plan::paper(), out)
+pub fn paper(out: &Path, progress: &dyn Progress) -> Result<StudyResult, Error> {
+    run_and_write_with(&Plan::paper(), out, progress)
 }
 
 /// One line of results of the paper's study written to `out`: cases, realisations, times,
@@ -1161,7 +1259,18 @@ mod tests {
         plan.realisations = 1;
         let e = run_and_write(&plan, &out).unwrap_err();
         assert_eq!(e.kind(), crate::ErrorKind::Solver, "{e}");
-        assert!(!out.exists());
+        // Only the cache of the runs that finished (at the other settings) may be there.
+        for f in [JSON_FILE, REPORT_FILE, FIGURES_DIR] {
+            assert!(!out.join(f).exists(), "{f}");
+        }
+        if out.exists() {
+            let names: Vec<_> = std::fs::read_dir(&out)
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            assert_eq!(names, [CACHE_DIR]);
+        }
+        let out = d.path().join("study2");
         plan = Plan::paper();
         plan.realisations = 0;
         assert_eq!(

@@ -13,9 +13,15 @@
 //! id     = first 16 hex digits of sha256(canonical JSON of the point's parameters)
 //!          (keys sorted, absent parameters left out, the base case by name and file sha256)
 //! shard I/N = the points with index mod N = I
+//! OUT/points.json      the whole grid (index, id, parameters), so merge can name what is missing
+//! OUT/id/claim.json    created exclusively by the process that runs the point, removed when it
+//!                      ends (module claim): concurrent processes never run one point twice
 //! OUT/id/result.json   written atomically when the point finishes (ok or solver failure);
 //!                      its presence means "done", so a rerun skips the point
-//! merge(DIR...) = the result.json files found → one table (CSV + markdown)
+//! stop requested       (SIGINT, SIGTERM: lash_solver::interrupt) no new point starts; the
+//!                      point in flight is abandoned and its files removed; finished ones stay
+//! merge(DIR...) = the result.json files found → one table (CSV + markdown); the points of the
+//!                 manifests without a result are unfinished, unreadable results corrupt
 //! ```
 //!
 //! Source: docs/outputs.md ("Sweeps").
@@ -35,9 +41,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::case::{sha256_hex, Case};
+use crate::claim;
 use crate::error::Error;
 use crate::io;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::{self, NoProgress, Progress};
 
 /// Name of the result file of a point.
 pub const RESULT_FILE: &str = "result.json";
@@ -195,7 +202,7 @@ impl PointParams {
 }
 
 /// Serialises a JSON value with object keys sorted at every level.
-fn canonical(v: &Value) -> String {
+pub fn canonical(v: &Value) -> String {
     match v {
         Value::Object(m) => {
             let mut keys: Vec<&String> = m.keys().collect();
@@ -643,7 +650,7 @@ impl Default for SweepOptions {
 /// What [`run_sweep`] did.
 ///
 /// ```text
-/// selected = skipped + ok + solver_failed + |failed|
+/// selected = skipped + ok + solver_failed + |failed| + |busy| + abandoned
 /// ```
 ///
 /// Source: this module.
@@ -651,7 +658,8 @@ impl Default for SweepOptions {
 pub struct SweepReport {
     /// Points in the shard.
     pub selected: usize,
-    /// Points skipped because they had finished before.
+    /// Points skipped because they had finished before (or finished meanwhile in another
+    /// process).
     pub skipped: usize,
     /// Points that ran and finished ok.
     pub ok: usize,
@@ -659,12 +667,28 @@ pub struct SweepReport {
     pub solver_failed: usize,
     /// Points whose runner failed otherwise (not recorded: a rerun tries them again).
     pub failed: Vec<(usize, Error)>,
+    /// Points another live process holds a claim on (index, "host:pid"): left to it.
+    pub busy: Vec<(usize, String)>,
+    /// Points not run or abandoned because a stop was requested (left for a rerun).
+    pub abandoned: usize,
+    /// Points whose result.json was there but corrupt (index, reason): run again.
+    pub corrupt: Vec<(usize, String)>,
 }
 
 impl SweepReport {
-    /// Ok if no point failed unrecorded; else the first failure's error kind with a message
-    /// that counts them.
+    /// Ok if no point failed unrecorded and no stop was requested; else the first failure's
+    /// error kind with a message that counts them, or [`Error::Interrupted`] with the counts.
     pub fn into_result(mut self) -> Result<SweepReport, Error> {
+        if self.abandoned > 0 {
+            let done = self.skipped + self.ok + self.solver_failed;
+            return Err(Error::Interrupted(format!(
+                "sweep: {} point(s) finished in this run and {done} of {} in all are kept; {} \
+                 left (rerun the same command to resume)",
+                self.ok + self.solver_failed,
+                self.selected,
+                self.selected - done
+            )));
+        }
         if self.failed.is_empty() {
             return Ok(self);
         }
@@ -679,17 +703,84 @@ impl SweepReport {
             Error::Input(_) | Error::Io { .. } => Error::Input(msg),
             Error::NotYetAvailable(_) => Error::NotYetAvailable(msg),
             Error::Solver(_) | Error::Internal(_) => Error::Internal(msg),
+            Error::Interrupted(_) => Error::Interrupted(msg),
         })
+    }
+}
+
+/// What a point's directory holds.
+///
+/// ```text
+/// Finished(record) | Missing (no result.json) | Corrupt(reason: unreadable, not a
+/// PointRecord, or a record of another point)
+/// ```
+///
+/// Source: docs/outputs.md ("Sweeps").
+#[derive(Clone, Debug, PartialEq)]
+pub enum PointState {
+    /// result.json names this point.
+    Finished(Box<PointRecord>),
+    /// No result.json.
+    Missing,
+    /// result.json is there but unusable: why.
+    Corrupt(String),
+}
+
+/// The state of the point with id `id` in `dir` (its directory).
+pub fn point_state(dir: &Path, id: &str) -> PointState {
+    let p = dir.join(RESULT_FILE);
+    let bytes = match std::fs::read(&p) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return PointState::Missing,
+        Err(e) => return PointState::Corrupt(format!("{}: {e}", p.display())),
+    };
+    match serde_json::from_slice::<PointRecord>(&bytes) {
+        Ok(r) if r.id == id => PointState::Finished(Box::new(r)),
+        Ok(r) => PointState::Corrupt(format!(
+            "{}: the record of point {}, not {id}",
+            p.display(),
+            r.id
+        )),
+        Err(e) => PointState::Corrupt(format!("{}: {e}", p.display())),
     }
 }
 
 /// Whether the point's result file exists, parses and names this point.
 pub fn is_finished(root: &Path, point: &SweepPoint) -> bool {
-    let p = root.join(&point.id).join(RESULT_FILE);
-    std::fs::read(&p)
-        .ok()
-        .and_then(|b| serde_json::from_slice::<PointRecord>(&b).ok())
-        .is_some_and(|r| r.id == point.id)
+    matches!(
+        point_state(&root.join(&point.id), &point.id),
+        PointState::Finished(_)
+    )
+}
+
+/// Name of the grid's manifest in a sweep's output directory: every point (index, id,
+/// parameters), so that `merge` can name the points that have not finished.
+pub const MANIFEST_FILE: &str = "points.json";
+
+/// The content of OUT/points.json.
+///
+/// ```text
+/// { points: [{ index, id, params }] }   the whole grid, whatever the shard
+/// ```
+///
+/// Source: docs/outputs.md ("Sweeps").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// The grid's points.
+    pub points: Vec<ManifestPoint>,
+}
+
+/// One point of a [`Manifest`].
+///
+/// Source: this module.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ManifestPoint {
+    /// Index in the grid.
+    pub index: usize,
+    /// Id (directory name).
+    pub id: String,
+    /// Parameters.
+    pub params: PointParams,
 }
 
 /// Runs the points of `opts.shard` that have not finished, in parallel, each in its own
@@ -710,7 +801,17 @@ where
 }
 
 /// [`run_sweep`], reporting to `progress`: `started` with the number of points to run, then
-/// `finished` (the point's id and wall time) as each point ends, whatever its outcome.
+/// `finished` (the point and its wall time) as each point ends, whatever its outcome.
+///
+/// ```text
+/// root/points.json  the grid (atomically, every run)
+/// per point:  stop requested → left (abandoned);  finished → skipped;
+///             claim::try_claim(root/id) busy → left to its holder;
+///             claimed → finished meanwhile? skipped : clear temporaries of dead holders,
+///             run, write result.json, release the claim
+/// a stop requested while a point runs: the point's partial files are removed, its claim
+///             released; the report counts it as abandoned
+/// ```
 pub fn run_sweep_with_progress<F>(
     points: &[SweepPoint],
     root: &Path,
@@ -722,55 +823,185 @@ where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
 {
     io::create_dir(root)?;
+    let manifest = Manifest {
+        points: points
+            .iter()
+            .map(|p| ManifestPoint {
+                index: p.index,
+                id: p.id.clone(),
+                params: p.params.clone(),
+            })
+            .collect(),
+    };
+    io::write_json_atomic(&root.join(MANIFEST_FILE), &manifest)?;
+    claim::remove_dead_temporaries(root);
     let selected: Vec<&SweepPoint> = points
         .iter()
         .filter(|p| opts.shard.contains(p.index))
         .collect();
-    let todo: Vec<&SweepPoint> = selected
-        .iter()
-        .copied()
-        .filter(|p| !is_finished(root, p))
-        .collect();
+    let mut corrupt = Vec::new();
+    let mut todo = Vec::new();
+    for p in &selected {
+        match point_state(&root.join(&p.id), &p.id) {
+            PointState::Finished(_) => {}
+            PointState::Missing => todo.push(*p),
+            PointState::Corrupt(why) => {
+                progress
+                    .note(&format!("sweep: point {} ({}) runs again: {why}", p.index, p.id).into());
+                corrupt.push((p.index, why));
+                todo.push(*p);
+            }
+        }
+    }
     let report = Mutex::new(SweepReport {
         selected: selected.len(),
         skipped: selected.len() - todo.len(),
+        corrupt,
         ..Default::default()
     });
-    progress.started(todo.len());
+    if report.lock().map(|r| r.skipped).unwrap_or(0) > 0 {
+        progress.note(
+            &format!(
+                "sweep: {} of {} points already done",
+                selected.len() - todo.len(),
+                selected.len()
+            )
+            .into(),
+        );
+    }
+    progress.started("points", todo.len());
+    let jobs = progress::jobs_within_parallelism(opts.jobs, progress);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.jobs.unwrap_or(0))
+        .num_threads(jobs)
         .build()
         .map_err(|e| Error::Internal(format!("thread pool: {e}")))?;
-    pool.install(|| {
-        todo.par_iter().for_each(|p| {
-            let clock = Instant::now();
-            let outcome = run_point(p, root, &runner);
-            let mut r = report.lock().unwrap_or_else(|e| e.into_inner());
-            match outcome {
-                Ok(PointStatus::Ok) => r.ok += 1,
-                Ok(PointStatus::SolverFailed) => r.solver_failed += 1,
-                Err(e) => r.failed.push((p.index, e)),
+    let held_set: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
+    let held = &held_set;
+    let (stop_beat, beat) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|s| {
+        // Dropped on every way out of this closure (a panic too), which ends the heartbeat.
+        let stop_beat = stop_beat;
+        // The heartbeat: refreshes the claims this process holds (claim::HEARTBEAT).
+        s.spawn(move || {
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+                beat.recv_timeout(claim::HEARTBEAT)
+            {
+                for p in held.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+                    claim::touch(p);
+                }
             }
-            drop(r);
-            progress.finished(&p.id, clock.elapsed().as_secs_f64());
-        })
+        });
+        pool.install(|| {
+            todo.par_iter().for_each(|p| {
+                let clock = Instant::now();
+                let outcome = run_point(p, root, &runner, held);
+                let mut r = report.lock().unwrap_or_else(|e| e.into_inner());
+                let what = match outcome {
+                    Ok(Ran::Status(PointStatus::Ok)) => {
+                        r.ok += 1;
+                        "ok".to_string()
+                    }
+                    Ok(Ran::Status(PointStatus::SolverFailed)) => {
+                        r.solver_failed += 1;
+                        "solver failure (recorded)".to_string()
+                    }
+                    Ok(Ran::AlreadyDone) => {
+                        r.skipped += 1;
+                        "finished meanwhile by another process".to_string()
+                    }
+                    Ok(Ran::Busy(holder)) => {
+                        r.busy.push((p.index, holder.clone()));
+                        format!("claimed by {holder}, left to it")
+                    }
+                    Ok(Ran::Abandoned) => {
+                        r.abandoned += 1;
+                        "abandoned (stop requested)".to_string()
+                    }
+                    Err(e) => {
+                        let s = format!("failed: {e}");
+                        r.failed.push((p.index, e));
+                        s
+                    }
+                };
+                drop(r);
+                progress.finished(
+                    &format!("point {} ({}): {what}", p.index, p.id),
+                    clock.elapsed().as_secs_f64(),
+                );
+            })
+        });
+        let _ = stop_beat.send(());
     });
-    Ok(report.into_inner().unwrap_or_else(|e| e.into_inner()))
+    let r = report.into_inner().unwrap_or_else(|e| e.into_inner());
+    if !r.busy.is_empty() {
+        let mut holders: Vec<&str> = r.busy.iter().map(|(_, h)| h.as_str()).collect();
+        holders.sort();
+        holders.dedup();
+        progress.note(
+            &format!(
+                "sweep: {} point(s) claimed by other processes ({}), left to them",
+                r.busy.len(),
+                holders.join(", ")
+            )
+            .into(),
+        );
+    }
+    Ok(r)
 }
 
-fn run_point<F>(p: &SweepPoint, root: &Path, runner: &F) -> Result<PointStatus, Error>
+/// How one point of a sweep went in this process.
+enum Ran {
+    /// It ran to the end: its status is recorded.
+    Status(PointStatus),
+    /// Another process finished it between the listing and the claim.
+    AlreadyDone,
+    /// Another live process holds its claim ("host:pid").
+    Busy(String),
+    /// A stop was requested before or while it ran; nothing of it is kept.
+    Abandoned,
+}
+
+fn run_point<F>(
+    p: &SweepPoint,
+    root: &Path,
+    runner: &F,
+    held: &Mutex<BTreeSet<PathBuf>>,
+) -> Result<Ran, Error>
 where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error>,
 {
+    if lash_solver::interrupt::stop_requested() {
+        return Ok(Ran::Abandoned);
+    }
     let dir = root.join(&p.id);
     io::create_dir(&dir)?;
-    let (status, error, values) = match runner(p, &dir) {
+    let guard = match claim::try_claim(&dir)? {
+        claim::Claimed::Mine(g) => g,
+        claim::Claimed::Busy(h) => return Ok(Ran::Busy(h.holder())),
+    };
+    if matches!(point_state(&dir, &p.id), PointState::Finished(_)) {
+        return Ok(Ran::AlreadyDone);
+    }
+    // Whatever an earlier holder left half-written is ours to clear now.
+    claim::remove_all_temporaries(&dir);
+    held.lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(guard.path().to_path_buf());
+    let ran = runner(p, &dir);
+    held.lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .remove(guard.path());
+    let (status, error, values) = match ran {
         Ok(r) => (PointStatus::Ok, None, r.values),
         Err(e @ Error::Solver(_)) => (
             PointStatus::SolverFailed,
             Some(e.to_string()),
             BTreeMap::new(),
         ),
+        Err(Error::Interrupted(_)) => {
+            abandon(&dir, guard);
+            return Ok(Ran::Abandoned);
+        }
         Err(e) => return Err(e),
     };
     let record = PointRecord {
@@ -782,14 +1013,51 @@ where
         values,
     };
     io::write_json_atomic(&dir.join(RESULT_FILE), &record)?;
-    Ok(status)
+    drop(guard);
+    Ok(Ran::Status(status))
+}
+
+/// Removes what an abandoned point wrote (every file but its claim, which `guard` releases),
+/// then its directory if nothing else is in it.
+fn abandon(dir: &Path, guard: claim::ClaimGuard) {
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            if e.path() != guard.path() && e.path().is_file() {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+    drop(guard);
+    let _ = std::fs::remove_dir(dir);
+}
+
+/// A point of the grid that has no usable result.
+///
+/// ```text
+/// (index, id, params, why: "unfinished" [held by host:pid] | the corruption)
+/// ```
+///
+/// Source: docs/outputs.md ("Sweeps": `lash merge`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissingPoint {
+    /// Index in the grid (None for a corrupt file outside any manifest).
+    pub index: Option<usize>,
+    /// Id (directory name).
+    pub id: String,
+    /// Its parameters, if known from a manifest.
+    pub params: Option<PointParams>,
+    /// Why it has no result: "unfinished", "unfinished, claimed by host:pid", or what is
+    /// wrong with its result.json.
+    pub why: String,
 }
 
 /// The merged table of finished points.
 ///
 /// ```text
 /// columns = id, index, the parameters some point sets, status, error, every value name (sorted)
-/// rows    = one per distinct point id, sorted by (index, id)
+/// rows    = one per distinct point id, sorted by (index, id); finished points, then (when
+///           asked for: MergedTable::with_missing) the unfinished and corrupt ones with status
+///           `unfinished` / `corrupt` and the reason in `error`
 /// ```
 ///
 /// Source: docs/outputs.md ("Sweeps": `lash merge DIR...`).
@@ -799,21 +1067,36 @@ pub struct MergedTable {
     pub columns: Vec<String>,
     /// Cells, row by row (empty string for a missing value).
     pub rows: Vec<Vec<String>>,
-    /// Point directories found without a result file (unfinished).
-    pub unfinished: usize,
+    /// Points of the grids (manifests) with no result, or with a corrupt one.
+    pub unfinished: Vec<MissingPoint>,
+    /// Points whose result.json is corrupt.
+    pub corrupt: Vec<MissingPoint>,
 }
 
 /// Reads the finished points under each directory (a sweep output directory, whose
-/// subdirectories are points, or one point directory) and joins them.
+/// subdirectories are points, or one point directory) and joins them. The points of the
+/// directories' manifests ([`MANIFEST_FILE`]) that have no result anywhere are listed as
+/// unfinished; result files that do not parse, or name another point, as corrupt.
 pub fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
     let mut records: BTreeMap<String, PointRecord> = BTreeMap::new();
-    let mut unfinished = 0;
+    let mut expected: BTreeMap<String, ManifestPoint> = BTreeMap::new();
+    let mut claims: BTreeMap<String, String> = BTreeMap::new();
+    let mut corrupt_files: BTreeMap<String, String> = BTreeMap::new();
     for dir in dirs {
         if !dir.is_dir() {
             return Err(Error::Input(format!(
                 "merge: {} is not a directory",
                 dir.display()
             )));
+        }
+        let mf = dir.join(MANIFEST_FILE);
+        if mf.is_file() {
+            let bytes = std::fs::read(&mf).map_err(|e| Error::io(&mf, e))?;
+            let m: Manifest = serde_json::from_slice(&bytes)
+                .map_err(|e| Error::Input(format!("merge: {}: {e}", mf.display())))?;
+            for p in m.points {
+                expected.entry(p.id.clone()).or_insert(p);
+            }
         }
         let point_dirs: Vec<PathBuf> = if dir.join(RESULT_FILE).is_file() {
             vec![dir.clone()]
@@ -827,17 +1110,59 @@ pub fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
             v
         };
         for pd in point_dirs {
-            let f = pd.join(RESULT_FILE);
-            if !f.is_file() {
-                unfinished += 1;
-                continue;
+            let id = pd
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            match point_state(&pd, &id) {
+                PointState::Finished(rec) => {
+                    records.entry(rec.id.clone()).or_insert(*rec);
+                }
+                PointState::Missing => {
+                    if let Some((c, age)) = claim::read_claim(&pd.join(claim::CLAIM_FILE)) {
+                        let state = if claim::is_stale(&c, age) {
+                            "stale claim of"
+                        } else {
+                            "claimed by"
+                        };
+                        claims.insert(id, format!("{state} {}", c.holder()));
+                    }
+                }
+                PointState::Corrupt(why) => {
+                    corrupt_files.insert(id, why);
+                }
             }
-            let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
-            let rec: PointRecord = serde_json::from_slice(&bytes)
-                .map_err(|e| Error::Input(format!("merge: {}: {e}", f.display())))?;
-            records.entry(rec.id.clone()).or_insert(rec);
         }
     }
+    let mut corrupt = Vec::new();
+    for (id, why) in corrupt_files {
+        if records.contains_key(&id) {
+            continue; // another directory holds a good copy
+        }
+        let m = expected.get(&id);
+        corrupt.push(MissingPoint {
+            index: m.map(|m| m.index),
+            id,
+            params: m.map(|m| m.params.clone()),
+            why,
+        });
+    }
+    let unfinished: Vec<MissingPoint> = expected
+        .values()
+        .filter(|m| !records.contains_key(&m.id) && !corrupt.iter().any(|c| c.id == m.id))
+        .map(|m| MissingPoint {
+            index: Some(m.index),
+            id: m.id.clone(),
+            params: Some(m.params.clone()),
+            why: match claims.get(&m.id) {
+                Some(c) => format!("unfinished, {c}"),
+                None => "unfinished".into(),
+            },
+        })
+        .collect();
+    let mut unfinished = unfinished;
+    unfinished.sort_by(|a, b| (a.index, &a.id).cmp(&(b.index, &b.id)));
+    corrupt.sort_by(|a, b| (a.index, &a.id).cmp(&(b.index, &b.id)));
     let mut recs: Vec<PointRecord> = records.into_values().collect();
     recs.sort_by(|a, b| (a.index, &a.id).cmp(&(b.index, &b.id)));
     let param_maps: Vec<serde_json::Map<String, Value>> = recs
@@ -879,7 +1204,80 @@ pub fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
         columns,
         rows,
         unfinished,
+        corrupt,
     })
+}
+
+impl MergedTable {
+    /// The table with a row for every unfinished and corrupt point (status `unfinished` or
+    /// `corrupt`, the reason in `error`, the parameters where a manifest knows them, no
+    /// values), after the finished rows.
+    pub fn with_missing(mut self) -> MergedTable {
+        let col = |n: &str| self.columns.iter().position(|c| c == n);
+        let (st, er) = (col("status"), col("error"));
+        let params: Vec<(usize, &str)> = PARAM_COLUMNS
+            .iter()
+            .filter_map(|c| col(c).map(|i| (i, *c)))
+            .collect();
+        let mut extra = Vec::new();
+        for (m, status) in self
+            .unfinished
+            .iter()
+            .map(|m| (m, "unfinished"))
+            .chain(self.corrupt.iter().map(|m| (m, "corrupt")))
+        {
+            let mut row = vec![String::new(); self.columns.len()];
+            row[0] = m.id.clone();
+            row[1] = m.index.map_or(String::new(), |i| i.to_string());
+            if let Some(p) = m.params.as_ref().and_then(|p| serde_json::to_value(p).ok()) {
+                for &(i, c) in &params {
+                    row[i] = cell(p.get(c));
+                }
+            }
+            if let (Some(s), Some(e)) = (st, er) {
+                row[s] = status.into();
+                row[e] = m.why.clone();
+            }
+            extra.push(row);
+        }
+        self.rows.extend(extra);
+        self
+    }
+
+    /// One line naming the points without a usable result: counts, then up to `max` of
+    /// each kind by index and id.
+    pub fn missing_summary(&self, max: usize) -> String {
+        let list = |v: &[MissingPoint]| {
+            let mut parts: Vec<String> = v
+                .iter()
+                .take(max)
+                .map(|m| match m.index {
+                    Some(i) => format!("#{i} {} ({})", m.id, m.why),
+                    None => format!("{} ({})", m.id, m.why),
+                })
+                .collect();
+            if v.len() > max {
+                parts.push(format!("and {} more", v.len() - max));
+            }
+            parts.join("; ")
+        };
+        let mut s = Vec::new();
+        if !self.unfinished.is_empty() {
+            s.push(format!(
+                "{} point(s) unfinished: {}",
+                self.unfinished.len(),
+                list(&self.unfinished)
+            ));
+        }
+        if !self.corrupt.is_empty() {
+            s.push(format!(
+                "{} point(s) with a corrupt result.json: {}",
+                self.corrupt.len(),
+                list(&self.corrupt)
+            ));
+        }
+        s.join("; ")
+    }
 }
 
 fn cell(v: Option<&Value>) -> String {
@@ -1094,7 +1492,7 @@ mod tests {
         assert_eq!(calls.load(Ordering::SeqCst), 16);
         let t = merge(&roots).unwrap();
         assert_eq!(t.rows.len(), 16);
-        assert_eq!(t.unfinished, 0);
+        assert!(t.unfinished.is_empty() && t.corrupt.is_empty());
         let col = |n: &str| t.columns.iter().position(|c| c == n).unwrap();
         for (k, row) in t.rows.iter().enumerate() {
             assert_eq!(row[col("index")], k.to_string());
@@ -1150,7 +1548,7 @@ mod tests {
         .unwrap();
         assert_eq!((r.ok, r.failed.len()), (k, 16 - k));
         let t = merge(std::slice::from_ref(&root)).unwrap();
-        assert_eq!((t.rows.len(), t.unfinished), (k, 16 - k));
+        assert_eq!((t.rows.len(), t.unfinished.len()), (k, 16 - k));
         let e = r.into_result().unwrap_err();
         assert_eq!(e.kind(), crate::ErrorKind::Bug);
         assert!(
@@ -1203,7 +1601,8 @@ mod tests {
         let t = MergedTable {
             columns: vec!["a".into(), "b".into()],
             rows: vec![vec!["x,y".into(), "say \"hi\" | there".into()]],
-            unfinished: 0,
+            unfinished: vec![],
+            corrupt: vec![],
         };
         assert_eq!(t.to_csv(), "a,b\n\"x,y\",\"say \"\"hi\"\" | there\"\n");
         assert_eq!(

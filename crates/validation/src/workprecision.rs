@@ -262,6 +262,9 @@ pub struct WpTable {
     pub runs: Vec<WpRun>,
     /// The cheapest runs per target.
     pub cheapest: Vec<Cheapest>,
+    /// What the error measures, in words (the figures' axis label; empty: "error").
+    #[serde(default)]
+    pub error_measure: String,
 }
 
 impl WpTable {
@@ -298,6 +301,7 @@ impl WpTable {
             })
             .collect();
         Ok(WpTable {
+            error_measure: String::new(),
             case: case.to_string(),
             runs,
             cheapest,
@@ -396,30 +400,48 @@ impl WpTable {
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         io::create_dir(dir)?;
         let mut out = Vec::new();
-        for (stem, cost, x_label) in [
-            ("wp_rhs", Cost::RhsEvals, "RHS evaluations"),
-            ("wp_time", Cost::WallTime, "wall time, s"),
+        let y_label = if self.error_measure.is_empty() {
+            "error".to_string()
+        } else {
+            format!("error: {}", self.error_measure)
+        };
+        for (stem, cost, x_label, what) in [
+            (
+                "wp_rhs",
+                Cost::RhsEvals,
+                "cost: right-hand-side evaluations",
+                "RHS evaluations",
+            ),
+            ("wp_time", Cost::WallTime, "cost: wall time, s", "wall time"),
         ] {
             let curves = self.curves(cost);
             if curves.is_empty() {
                 continue;
             }
+            // Line style by family: explicit methods solid, stiff methods dashed; each series
+            // its own marker (plot module).
             let series: Vec<Series<'_>> = curves
                 .iter()
                 .map(|(l, x, y)| Series {
                     name: l,
                     x,
                     y,
-                    style: SeriesStyle::LinePoints,
+                    style: match Method::from_name(l.split('/').next().unwrap_or(l)) {
+                        Some(m) if m.is_stiff() => SeriesStyle::DashedPoints,
+                        _ => SeriesStyle::LinePoints,
+                    },
                 })
                 .collect();
-            let title = format!("Work–precision, {}", self.case);
+            let title = format!(
+                "Work–precision, {}: error against {what}",
+                plot::plain(&self.case)
+            );
             let w = plot::loglog_plot(
                 &dir.join(stem),
                 &Axes {
                     title: &title,
                     x_label,
-                    y_label: "error",
+                    y_label: &y_label,
                 },
                 &series,
             )?;

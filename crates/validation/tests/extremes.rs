@@ -127,7 +127,7 @@ fn check(m: &Matrix) {
 
 #[test]
 fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::quick(), &|_| {}).unwrap();
+    let m = extremes::run(&Plan::quick(), &lash_validation::NoProgress).unwrap();
     check(&m);
     // The known findings are not in the quick scenes: here every result meets its promise.
     assert!(m.known_lines().is_empty(), "{:?}", m.known_lines());
@@ -144,7 +144,7 @@ fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
 #[ignore = "the full matrix: 15 scenes × 50 runs, several minutes in release; `lash extremes` \
             runs the same and writes its report (BENCHMARKS.md, Extremes)"]
 fn full_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::full(), &|l| eprintln!("{l}")).unwrap();
+    let m = extremes::run(&Plan::full(), &lash_validation::NoProgress).unwrap();
     eprintln!("{}", m.to_markdown());
     check(&m);
 }

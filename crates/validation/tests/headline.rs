@@ -70,7 +70,13 @@ fn readme_shows_the_table_the_run_prints(printed: &str) {
         std::fs::write(&path, text).unwrap();
         return;
     }
-    assert_eq!(shown.len(), run.len(), "README:\n{}\nrun:\n{}", shown.join("\n"), run.join("\n"));
+    assert_eq!(
+        shown.len(),
+        run.len(),
+        "README:\n{}\nrun:\n{}",
+        shown.join("\n"),
+        run.join("\n")
+    );
     assert_eq!(run.len(), 2 + 6);
     for (a, b) in shown.iter().zip(&run) {
         let cells = |l: &str| -> Vec<String> {

@@ -139,7 +139,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
             .map(|(c, l)| line(l.to_string(), c, c.x.clone(), SeriesStyle::Line))
             .collect();
         lines.push(line(
-            "ideal".into(),
+            "ideal mechanism".into(),
             cs[0],
             cs[0].x_ideal.clone(),
             SeriesStyle::Dashed,
@@ -153,7 +153,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
                 ),
                 &set.cases,
             ),
-            y_label: "x, m",
+            y_label: "slider displacement x, m",
             lines,
         });
         // (b) velocity, with the ideal of each speed (one when all run at one speed).
@@ -164,7 +164,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
             .collect();
         if set.one_speed {
             lines.push(line(
-                "ideal".into(),
+                "ideal mechanism".into(),
                 cs[0],
                 cs[0].v_ideal.clone(),
                 SeriesStyle::Dashed,
@@ -172,7 +172,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
         } else {
             for (c, l) in cs.iter().zip(set.labels) {
                 lines.push(line(
-                    format!("ideal, {l}"),
+                    format!("ideal mechanism, {l}"),
                     c,
                     c.v_ideal.clone(),
                     SeriesStyle::Dashed,
@@ -188,7 +188,7 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
                 ),
                 &set.cases,
             ),
-            y_label: "ẋ, m/s",
+            y_label: "slider velocity ẋ, m/s",
             lines,
         });
         // (c) added: the displacement's deviation from the ideal, mm.
@@ -208,12 +208,12 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
             record: record(
                 format!("fig{n:02}c"),
                 format!(
-                    "Fig. {n}(c) [added] x − x_ideal, {}, {}",
+                    "Fig. {n}(c) [added] Slider displacement minus the ideal mechanism's, {}, {}",
                     set.condition, set.varies
                 ),
                 &set.cases,
             ),
-            y_label: "x − x_ideal, mm",
+            y_label: "x − x of the ideal mechanism, mm",
             lines,
         });
         for (k, ((c, l), case)) in cs.iter().zip(set.labels).zip(set.cases).enumerate() {
@@ -229,10 +229,15 @@ fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
                     ),
                     &[case],
                 ),
-                y_label: "ẍ, m/s²",
+                y_label: "slider acceleration ẍ, m/s²",
                 lines: vec![
-                    line(case.to_string(), c, c.a.clone(), SeriesStyle::Line),
-                    line("ideal".into(), c, c.a_ideal.clone(), SeriesStyle::Dashed),
+                    line("lash".into(), c, c.a.clone(), SeriesStyle::Line),
+                    line(
+                        "ideal mechanism".into(),
+                        c,
+                        c.a_ideal.clone(),
+                        SeriesStyle::Dashed,
+                    ),
                 ],
             });
             let (ex, ey) = c.orbit.clone().ok_or_else(|| {
