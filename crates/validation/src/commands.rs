@@ -85,6 +85,9 @@ pub struct RunOptions {
     pub output_every: Option<f64>,
     /// Output directory; None = `out/run/CASE`.
     pub out: Option<PathBuf>,
+    /// Run until the clearance joint's once-per-revolution section settles
+    /// (crate::steady); excludes `t_end`.
+    pub until_periodic: Option<crate::steady::UntilPeriodic>,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -114,8 +117,23 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         .out
         .clone()
         .unwrap_or_else(|| default_out("run", &prepared.case.name));
+    // Until periodic: the settling pass decides the end time (crate::steady).
+    let settled = match &o.until_periodic {
+        Some(u) => {
+            if o.t_end.is_some() {
+                return Err(Error::Usage(
+                    "--until-periodic decides the end time: give it or --t-end, not both".into(),
+                ));
+            }
+            Some(crate::steady::settle(&prepared, &opts, u)?)
+        }
+        None => None,
+    };
     let mut req = RunRequest::new(opts);
-    req.t_end = o.t_end;
+    req.t_end = match (&settled, &prepared.info) {
+        (Some(s), Some(i)) => i.period.map(|t| i.t_start + t * s.revolutions as f64),
+        _ => o.t_end,
+    };
     req.samples_per_revolution = o.samples_per_revolution;
     req.output_every = o.output_every;
     req.keep_events = false;
@@ -137,7 +155,8 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         }
     });
     match outcome {
-        Ok(r) => {
+        Ok(mut r) => {
+            r.summary.until_periodic = settled;
             let mut files = vec![traj];
             files.extend(r.write(dir.path())?);
             let files = files.iter().map(|f| dir.final_path(f)).collect();
@@ -149,7 +168,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
             })
         }
         Err(Error::Solver(e)) => {
-            let (t_span_end, rows) = (prepared.t_span(o.t_end)?.1, sink.rows());
+            let (t_span_end, rows) = (prepared.t_span(req.t_end)?.1, sink.rows());
             let partial = dir.path().join(PARTIAL_TRAJECTORY_FILE);
             if rows > 0 {
                 std::fs::rename(&traj, &partial).map_err(|err| Error::io(&partial, err))?;
@@ -904,6 +923,9 @@ pub fn describe_run(r: &RunResult) -> String {
     );
     if let Some(e) = s.reference_error {
         out.push_str(&format!("  reference error {e:.3e}\n"));
+    }
+    if let Some(u) = &s.until_periodic {
+        out.push_str(&format!("  {}\n", u.describe()));
     }
     out.push_str(&format!("  trajectory: {} rows\n", r.trajectory_rows));
     if let Some(m) = &s.metrics {
