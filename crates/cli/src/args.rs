@@ -288,6 +288,11 @@ pub struct StudyArgs {
     /// Output directory. Default `out/study/NAME`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Instead of the study, its robustness: every case under the modelling choices the paper
+    /// leaves open (eps_cap, film law, contact damping, run length), one at a time;
+    /// robustness.md and robustness.json in DIR (resumable through DIR/cache).
+    #[arg(long)]
+    pub robustness: bool,
 }
 
 impl StudyArgs {
@@ -296,6 +301,7 @@ impl StudyArgs {
         let StudyName::Paper = self.study;
         StudyOptions {
             out: self.out.clone(),
+            robustness: self.robustness,
         }
     }
 }

@@ -216,6 +216,9 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
 pub struct StudyOptions {
     /// Output directory; None = `out/study/paper`.
     pub out: Option<PathBuf>,
+    /// Run the robustness study instead (`study::robustness`): robustness.md and
+    /// robustness.json in the same directory, sharing its cache of runs.
+    pub robustness: bool,
 }
 
 /// Runs the paper's study (module `study`): figures, report.md and study.json in the output
@@ -231,6 +234,28 @@ pub fn study_paper(
         .unwrap_or_else(|| default_out("study", "paper"));
     let r = study::paper(&out, progress)?;
     let files = vec![out.join(study::REPORT_FILE), out.join(study::JSON_FILE)];
+    Ok(Written {
+        result: r,
+        dir: out,
+        files,
+    })
+}
+
+/// `lash study paper --robustness`: the claims under the modelling choices the paper leaves
+/// open (`study::robustness`), written to the study's directory.
+pub fn study_robustness(
+    o: &StudyOptions,
+    progress: &dyn Progress,
+) -> Result<Written<study::robustness::RobustnessResult>, Error> {
+    let out = o
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("study", "paper"));
+    let r = study::robustness::paper(&out, progress)?;
+    let files = vec![
+        out.join(study::robustness::MD_FILE),
+        out.join(study::robustness::JSON_FILE),
+    ];
     Ok(Written {
         result: r,
         dir: out,

@@ -34,6 +34,7 @@
 pub mod claims;
 mod figures;
 pub mod markdown;
+pub mod robustness;
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -860,7 +861,8 @@ struct JobKey<'a> {
     until_periodic: Option<UntilPeriodic>,
 }
 
-/// Runs `jobs` in parallel, each at most once: a run found in `cache` is reused, a finished
+/// Runs `jobs` in parallel (returning their results and the number of distinct runs), each
+/// at most once: a run found in `cache` is reused, a finished
 /// one stored there; `progress` gets one item per run done. A stop request
 /// (`lash_solver::interrupt`) abandons the runs in flight and starts no other:
 /// [`Error::Interrupted`], with what is kept. `what` names the command in notes.
@@ -870,7 +872,7 @@ fn run_jobs(
     cache: &RunCache,
     progress: &dyn Progress,
     what: &str,
-) -> Result<Vec<JobOut>, Error> {
+) -> Result<(Vec<JobOut>, usize), Error> {
     let keys: Vec<String> = jobs
         .iter()
         .map(|j| {
@@ -953,14 +955,16 @@ fn run_jobs(
         .map(|&i| keys[i].as_str())
         .zip(&outs)
         .collect();
-    keys.iter()
+    let all = keys
+        .iter()
         .map(|k| {
             by_key
                 .get(k.as_str())
                 .map(|o| (*o).clone())
                 .ok_or_else(|| Error::Internal(format!("{what}: a run went missing")))
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    Ok((all, unique.len()))
 }
 
 /// Runs every case of the study under `plan` (in parallel) and judges the claims. Figures
@@ -1019,7 +1023,7 @@ fn run_plan(
             j.setting != Setting::Reference,
         )
     });
-    let outs = run_jobs(&jobs, plan, cache, progress, "study")?;
+    let (outs, _) = run_jobs(&jobs, plan, cache, progress, "study")?;
 
     let mut cases = Vec::new();
     let mut all_curves = BTreeMap::new();

@@ -336,8 +336,8 @@ pub struct Claim {
     /// The verdict on the ensemble means.
     pub verdict: Verdict,
     /// Relative margin of the verdict on the means: the smallest (b − a)/max(|a|, |b|) over
-    /// the criterion's comparisons a < b; > 0 when the claim holds, < 0 when it does not
-    /// (the comparison that fails by most).
+    /// the criterion's comparisons a < b (or a ≤ b); ≥ 0 when the claim holds (0: on the
+    /// threshold of an "at least"), ≤ 0 when it does not (the comparison that fails by most).
     #[serde(default)]
     pub margin: f64,
     /// Realisations on which the criterion is true.
