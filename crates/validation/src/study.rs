@@ -1394,6 +1394,7 @@ mod tests {
             "ideal_150rpm",
             &cat["ideal_150rpm"],
             &Plan::paper().settings,
+            None,
         )
         .unwrap();
         assert_eq!((r.last.len(), r.previous.len()), (2001, 2001));
