@@ -217,7 +217,8 @@ pub struct RunArgs {
     /// Run until the clearance joint's once-per-revolution section e/c moves by less than TOL
     /// (units of the clearance c) between revolutions, at least 2 revolutions (scenes with a
     /// crank driver and a clearance joint); replaces the scene's end time. The revolutions
-    /// used go to stdout and summary.json (`until_periodic`).
+    /// used go to stdout and summary.json (`until_periodic`). Default: off (the scene's end
+    /// time).
     #[arg(long = "until-periodic", value_name = "TOL", value_parser = parse_until_periodic,
           conflicts_with = "t_end")]
     pub until_periodic: Option<f64>,
@@ -290,7 +291,7 @@ pub struct StudyArgs {
     pub out: Option<PathBuf>,
     /// Instead of the study, its robustness: every case under the modelling choices the paper
     /// leaves open (eps_cap, film law, contact damping, run length), one at a time;
-    /// robustness.md and robustness.json in DIR (resumable through DIR/cache).
+    /// robustness.md and robustness.json in DIR (resumable through DIR/cache). Default: off.
     #[arg(long)]
     pub robustness: bool,
 }
