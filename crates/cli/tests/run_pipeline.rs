@@ -216,14 +216,21 @@ fn a_rerun_that_fails_to_write_leaves_the_old_run_intact() {
     );
 }
 
-/// io.rs (OutDir): a rerun killed while it writes (SIGINT, as Ctrl-C) leaves the earlier run
-/// exactly as it was; its temporary directory is removed by the next run into the same place,
-/// which replaces the old run whole.
+/// io.rs (OutDir): a rerun stopped while it writes leaves the earlier run exactly as it was.
+/// SIGINT (Ctrl-C) is a stop request: exit 130 and the run's temporary directory removed on
+/// the way out. SIGKILL leaves the temporary behind; the next run into the same place removes
+/// it and replaces the old run whole.
 #[test]
 fn a_rerun_interrupted_while_writing_leaves_the_old_run_intact() {
     if !Path::new("/proc/self").exists() || Command::new("kill").arg("-l").output().is_err() {
         return;
     }
+    for (signal, code, temporaries) in [("-INT", Some(130), 0), ("-KILL", None, 1)] {
+        rerun_stopped_while_writing(signal, code, temporaries);
+    }
+}
+
+fn rerun_stopped_while_writing(signal: &str, code: Option<i32>, temporaries: usize) {
     let d = tempfile::tempdir().unwrap();
     ok(
         &[
@@ -279,13 +286,18 @@ fn a_rerun_interrupted_while_writing_leaves_the_old_run_intact() {
         std::thread::sleep(Duration::from_millis(10));
     };
     let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     let st = child.wait().unwrap();
-    assert!(writing && killed.success() && !st.success(), "{st:?}");
-    assert_eq!(snapshot(&d.path().join("o")), before);
-    assert_eq!(others(d.path(), "o").len(), 1, "the killed run's temporary");
+    assert!(writing && killed.success(), "{signal}: {st:?}");
+    assert_eq!(st.code(), code, "{signal}: {st:?}");
+    assert_eq!(snapshot(&d.path().join("o")), before, "{signal}");
+    assert_eq!(
+        others(d.path(), "o").len(),
+        temporaries,
+        "{signal}: the stopped run's temporary"
+    );
     // The next run cleans it and replaces the old run.
     ok(
         &[

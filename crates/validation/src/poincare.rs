@@ -405,19 +405,26 @@ pub struct Section {
     pub wall_time_s: f64,
 }
 
-/// The stroboscopic section of the clearance-joint role's e/c (one run with `opts`).
-pub fn section(p: &Prepared, opts: &SolverOptions, s: &PoincareSettings) -> Result<Section, Error> {
+/// The settings and the case's roles checked (usage errors naming what is missing); the crank
+/// period.
+fn check(p: &Prepared, s: &PoincareSettings) -> Result<f64, Error> {
     s.validate()?;
     let period = period_of(p)?;
-    let Some(scene) = p.scene() else {
-        return Err(Error::Internal("poincare: no scene".into()));
-    };
     if p.info.as_ref().and_then(|i| i.joint.as_ref()).is_none() {
         return Err(Error::Usage(format!(
             "poincare needs a clearance joint role (roles.clearance_joint); {} has none",
             p.case.name
         )));
     }
+    Ok(period)
+}
+
+/// The stroboscopic section of the clearance-joint role's e/c (one run with `opts`).
+pub fn section(p: &Prepared, opts: &SolverOptions, s: &PoincareSettings) -> Result<Section, Error> {
+    let period = check(p, s)?;
+    let Some(scene) = p.scene() else {
+        return Err(Error::Internal("poincare: no scene".into()));
+    };
     let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
     let sampler = Sampler::new(&mech, scene);
     let y0 = mech.initial_state();
@@ -528,6 +535,8 @@ pub fn analyse(
     s: &PoincareSettings,
     progress: &dyn Progress,
 ) -> Result<PoincareResult, Error> {
+    // Usage errors come before any progress line: a bad call prints one line.
+    check(p, s)?;
     progress.started("phases", 2);
     let clock = Instant::now();
     let section = section(p, opts, s)?;
