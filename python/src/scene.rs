@@ -183,6 +183,7 @@ pub fn run_core<'py>(
         samples_per_revolution,
         output_every,
         out: None,
+        until_periodic: None,
     };
     let name = name.to_string();
     let outcome: Result<Ran, Error> = py.detach(move || {

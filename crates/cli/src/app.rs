@@ -89,6 +89,14 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
     };
     match command {
         Command::Run(a) => run_command(&a).map(|_| ()),
+        Command::Study(a) if a.robustness => {
+            let progress = StderrProgress::new();
+            let w = commands::study_robustness(&a.options(), &progress);
+            progress.clear();
+            let w = w?;
+            outln(&study::robustness::describe(&w.result, &w.dir));
+            Ok(())
+        }
         Command::Study(a) => {
             let progress = StderrProgress::new();
             let w = commands::study_paper(&a.options(), &progress);

@@ -39,6 +39,7 @@ use lash_validation::commands::{
     StudyOptions, SweepRunOptions, WorkPrecisionOptions,
 };
 use lash_validation::options::RTOL_MIN;
+use lash_validation::steady::{self, UntilPeriodic};
 use lash_validation::sweep::Shard;
 use lash_validation::workprecision::WorkPrecisionPlan;
 use lash_validation::{Error, SolverChoice};
@@ -213,6 +214,18 @@ pub struct RunArgs {
     /// earlier run's). Default `out/run/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Run until the clearance joint's once-per-revolution section e/c moves by less than TOL
+    /// (units of the clearance c) between revolutions, at least 2 revolutions (scenes with a
+    /// crank driver and a clearance joint); replaces the scene's end time. The revolutions
+    /// used go to stdout and summary.json (`until_periodic`). Default: off (the scene's end
+    /// time).
+    #[arg(long = "until-periodic", value_name = "TOL", value_parser = parse_until_periodic,
+          conflicts_with = "t_end")]
+    pub until_periodic: Option<f64>,
+    /// Cap on the revolutions of --until-periodic, a whole number >= 2. Default 100.
+    #[arg(long = "max-revolutions", value_name = "N", value_parser = parse_max_revolutions,
+          requires = "until_periodic")]
+    pub max_revolutions: Option<usize>,
 }
 
 impl RunArgs {
@@ -225,8 +238,27 @@ impl RunArgs {
             samples_per_revolution: self.samples_per_revolution,
             output_every: self.output_every,
             out: self.out.clone(),
+            until_periodic: self.until_periodic.map(|tol| UntilPeriodic {
+                tol,
+                max_revolutions: self
+                    .max_revolutions
+                    .unwrap_or(steady::DEFAULT_MAX_REVOLUTIONS),
+            }),
         }
     }
+}
+
+/// Parses the tolerance of --until-periodic: finite and > 0 (units of c).
+fn parse_until_periodic(s: &str) -> Result<f64, String> {
+    let v = parse_number(s, "until-periodic")?;
+    if !(v > 0.0) {
+        return Err(format!("until-periodic must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
+fn parse_max_revolutions(s: &str) -> Result<usize, String> {
+    parse_whole(s, "max-revolutions", steady::MIN_REVOLUTIONS)
 }
 
 /// The studies `lash study` knows.
@@ -257,6 +289,11 @@ pub struct StudyArgs {
     /// Output directory. Default `out/study/NAME`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Instead of the study, its robustness: every case under the modelling choices the paper
+    /// leaves open (eps_cap, film law, contact damping, run length), one at a time;
+    /// robustness.md and robustness.json in DIR (resumable through DIR/cache). Default: off.
+    #[arg(long)]
+    pub robustness: bool,
 }
 
 impl StudyArgs {
@@ -265,6 +302,7 @@ impl StudyArgs {
         let StudyName::Paper = self.study;
         StudyOptions {
             out: self.out.clone(),
+            robustness: self.robustness,
         }
     }
 }

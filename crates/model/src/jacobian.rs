@@ -12,7 +12,9 @@
 //!   ∂g/∂y = ∂g/∂u · ∂u/∂y + ∂g/∂φ |_u,  u = (e, ė, φ̇_J, φ̇_B) of each clearance joint,
 //!           ∂u/∂y closed form (e = r_J + A_J s_J − r_B − A_B s_B, ė its time derivative),
 //!           ∂(F, T)/∂u by central differences in u, with steps scaled to the joint:
-//!           h_e = 1e-6 · min(|e|, |δ|) (floor 1e-10 c), h_ė = 1e-6 · max(|ė|, |v_T|, 1e-9)
+//!           h_e = 1e-6 · min(|e|, |δ|) (floor 1e-10 c), h_ė = 1e-6 · max(|ė|, |v_T|, 1e-9);
+//!           a mirrored film caps them so that Ω moves by at most 1e-3 Ω₀ (h_φ̇ ≤ 1e-3 Ω₀,
+//!           h_ė ≤ 1e-3 Ω₀ |e|/2, h_e ≤ 1e-3 Ω₀ |e|²/(2|ė|))
 //! ```
 //! The force elements and prismatic clearance joints of docs/model.md §10–§11 (when the scene
 //! has any) add ∂g/∂y by central differences of their generalized forces alone, with steps
@@ -43,6 +45,10 @@ pub const FD_STEP: f64 = 1e-8;
 
 /// Relative step of the differences in the clearance variables u = (e, ė, φ̇_J, φ̇_B).
 const LOCAL_STEP: f64 = 1e-6;
+
+/// Largest change of the film's Ω in one difference of a mirrored film, in units of its
+/// sign width Ω₀ (central differences of tanh(Ω/Ω₀) then err by about 3e-7 relative).
+const OMEGA_STEP: f64 = 1e-3;
 
 /// Fills `jac` (n × n) with ∂f/∂y at (t, y).
 pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, f64>) {
@@ -255,10 +261,26 @@ fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, 
     let edot = ed(mech, k, sc);
     let u0 = [st.e[0], st.e[1], edot[0], edot[1], w_j, w_b];
     // Steps scaled to the joint (see the module documentation).
-    let he = (LOCAL_STEP * st.e_norm.min(st.delta.abs())).max(1e-10 * c.c);
+    let mut he = (LOCAL_STEP * st.e_norm.min(st.delta.abs())).max(1e-10 * c.c);
     let vscale = u0[2].abs().max(u0[3].abs()).max(st.v_t.abs()).max(1e-9);
-    let hv = LOCAL_STEP * vscale;
-    let hw = hv / c.rj.max(c.rb);
+    let mut hv = LOCAL_STEP * vscale;
+    let mut hw = hv / c.rj.max(c.rb);
+    // A mirrored film turns its sign over the width Ω₀ of tanh(Ω/Ω₀) (docs/model.md §4): each
+    // difference may move Ω = φ̇_J + φ̇_B − 2 (n × ė)/|e| by at most OMEGA_STEP · Ω₀, so that
+    // it resolves the turn. Floors keep every step representable against u0 (1e-12 relative).
+    if let Some(film) = c.film.filter(|f| f.is_mirrored()) {
+        let dom = OMEGA_STEP * film.mirror_width;
+        hw = hw.min(dom).max(1e-12 * u0[4].abs().max(u0[5].abs()));
+        if st.e_norm > 0.0 {
+            hv = hv.min(0.5 * dom * st.e_norm).max(1e-12 * vscale);
+            let edot = u0[2].hypot(u0[3]);
+            if edot > 0.0 {
+                he = he
+                    .min(0.5 * dom * st.e_norm * st.e_norm / edot)
+                    .max(1e-12 * st.e_norm);
+            }
+        }
+    }
     let steps = [he, he, hv, hv, hw, hw];
     // ∂(F_x, F_y, T)/∂u, 3 × 6.
     let mut lu = [[0.0; 6]; 3];

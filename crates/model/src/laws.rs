@@ -286,7 +286,8 @@ impl FrictionLaw {
 ///
 /// ```text
 /// long_gumbel             infinitely long bearing, Gümbel (half-Sommerfeld), as printed
-/// long_gumbel_mirrored    (F_r, F_t)(ε, ε̇, Ω) = (F_r, sign(Ω) F_t)(ε, ε̇, |Ω|) of long_gumbel
+/// long_gumbel_mirrored    (F_r, F_t)(ε, ε̇, Ω) = (F_r, sign(Ω) F_t)(ε, ε̇, |Ω|) of long_gumbel,
+///                         sign smoothed: tanh(Ω/Ω₀) (formulas on [`Film`])
 /// long_sommerfeld         infinitely long bearing, full Sommerfeld
 /// short_ocvirk            short (Ocvirk) bearing, Gümbel conditions
 /// short_ocvirk_mirrored   the same mirroring applied to short_ocvirk
@@ -307,6 +308,16 @@ pub enum FilmModel {
     ShortOcvirkMirrored,
 }
 
+/// Width Ω₀ of the smooth sign of the mirrored film models when the scene gives none, rad/s
+/// (docs/model.md §4, "The mirrored models").
+pub const DEFAULT_MIRROR_WIDTH: f64 = 0.01;
+
+/// The guard of a film without a cap: the law is evaluated at min(ε, 1 − η) with η = 1e-12
+/// (docs/model.md §4, "A film without a cap"). Not a model parameter: the exact motion under a
+/// bounded load never reaches it, and positions in f64 resolve ε only to about
+/// 2.2e-16 · |r|/c, 1e-13 for the press.
+pub const UNCAPPED_GUARD: f64 = 1e-12;
+
 /// A hydrodynamic film: model and bearing data.
 ///
 /// ```text
@@ -318,8 +329,11 @@ pub enum FilmModel {
 /// short Ocvirk (S = μ R L³ / (2c²)):
 ///   F_r = −S [ 2ε²Ω/(1−ε²)² + π(1+2ε²)ε̇/(1−ε²)^{5/2} ]
 ///   F_t =  S [ πεΩ/(2(1−ε²)^{3/2}) + 4εε̇/(1−ε²)² ]
-/// mirrored: F_r(ε, ε̇, |Ω|), F_t = sign(Ω)·F_t(ε, ε̇, |Ω|)  (sign(0) = +1)
-/// ε is capped: ε_eff = min(ε, ε_cap); (1−ε²)^{−k} is never evaluated at ε ≥ 1.
+/// each law is F_r = −S (a_r(ε) Ω + b_r(ε) ε̇),  F_t = S (a_t(ε) Ω + b_t(ε) ε̇);
+/// mirrored:  F_r = −S (a_r |Ω|_s + b_r ε̇),  F_t = S (a_t Ω + s(Ω) b_t ε̇),
+///            s(Ω) = tanh(Ω/Ω₀),  |Ω|_s = Ω s(Ω)   (s = sign(Ω) in f64 for |Ω| ≥ 19.1 Ω₀)
+/// ε is replaced by ε_eff = min(ε, ε_cap), or by min(ε, 1 − η) without a cap (η = 1e-12);
+/// (1−ε²)^{−k} is never evaluated at ε ≥ 1.
 /// ```
 /// f_J = F_r n + F_t t on the journal, −f_J on the bearing. Long bearing with Gümbel
 /// conditions: Peng et al. 2025 §2.3 (printed with R² for R³); full Sommerfeld and short
@@ -337,68 +351,95 @@ pub struct Film {
     pub radius: f64,
     /// Radial clearance c (m).
     pub clearance: f64,
-    /// Eccentricity cap ε_cap in (0, 1).
-    pub eps_cap: f64,
+    /// Eccentricity cap ε_cap in (0, 1), or `None`: no cap, the law at the true ε up to the
+    /// guard 1 − [`UNCAPPED_GUARD`].
+    pub eps_cap: Option<f64>,
+    /// Width Ω₀ > 0 of the smooth sign of the mirrored models (rad/s); unused by the others.
+    pub mirror_width: f64,
 }
 
 impl Film {
-    /// Checks the parameters: μ, L, R, c > 0 and 0 < ε_cap < 1, all finite. With them,
-    /// [`Film::force`] is finite for every finite (ε, ε̇, Ω).
+    /// Checks the parameters: μ, L, R, c, Ω₀ > 0 and 0 < ε_cap < 1 (when capped), all finite.
+    /// With them, [`Film::force`] is finite for every finite (ε, ε̇, Ω) unless S·ε̇ or S·Ω
+    /// exceeds about 1e270 (without a cap the factors at the guard reach 1e36).
     pub fn validate(&self) -> Result<(), LawError> {
         let pos = |p: &'static str, v: f64| check("film", p, v, v > 0.0, "(0, ∞)");
         pos("mu", self.viscosity)?;
         pos("L", self.length)?;
         pos("R", self.radius)?;
         pos("c", self.clearance)?;
-        check(
-            "film",
-            "eps_cap",
-            self.eps_cap,
-            self.eps_cap > 0.0 && self.eps_cap < 1.0,
-            "(0, 1)",
+        pos("omega0", self.mirror_width)?;
+        match self.eps_cap {
+            Some(cap) => check("film", "eps_cap", cap, cap > 0.0 && cap < 1.0, "(0, 1)"),
+            None => Ok(()),
+        }
+    }
+
+    /// The largest ε the law is evaluated at: ε_cap, or 1 − η without a cap.
+    pub fn eps_limit(&self) -> f64 {
+        self.eps_cap.unwrap_or(1.0 - UNCAPPED_GUARD)
+    }
+
+    /// Whether the model is one of the mirrored ones.
+    pub fn is_mirrored(&self) -> bool {
+        matches!(
+            self.model,
+            FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored
         )
     }
 
     /// Film force (F_r, F_t) on the journal, radial along n and tangential along t (N).
     ///
-    /// ε is replaced by ε_eff = min(ε, ε_cap) (and by 0 if negative); ε̇ and Ω are used as
-    /// given. A NaN ε gives NaN forces (it is not hidden).
+    /// ε is replaced by ε_eff = min(ε, ε_cap), or min(ε, 1 − η) without a cap (and by 0 if
+    /// negative); ε̇ and Ω are used as given. A NaN ε gives NaN forces (it is not hidden).
     #[inline]
     pub fn force(&self, eps: f64, eps_dot: f64, omega: f64) -> (f64, f64) {
-        // ε_eff = min(ε, ε_cap), and ε ≥ 0. Written with comparisons rather than
+        // ε_eff = min(ε, limit), and ε ≥ 0. Written with comparisons rather than
         // `f64::min/max` so that a NaN ε propagates (the solver reports it) instead of being
-        // silently replaced by ε_cap.
-        let e = if eps > self.eps_cap {
-            self.eps_cap
+        // silently replaced by the limit.
+        let limit = self.eps_limit();
+        let e = if eps > limit {
+            limit
         } else if eps < 0.0 {
             0.0
         } else {
             eps
         };
-        let (mirrored, om) = match self.model {
-            FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored => (true, omega.abs()),
-            _ => (false, omega),
+        // Mirrored: |Ω| → Ω s(Ω) in the radial wedge term, sign(Ω) → s(Ω) on the tangential
+        // squeeze term; s = tanh(Ω/Ω₀) is exactly ±1 in f64 for |Ω| ≥ 19.1 Ω₀. The printed
+        // laws take s = 1 (multiplications by 1 are exact: their arithmetic is unchanged).
+        let (sgn, om) = if self.is_mirrored() {
+            let s = (omega / self.mirror_width).tanh();
+            (s, omega * s)
+        } else {
+            (1.0, omega)
         };
         let (mu, l, r, c) = (self.viscosity, self.length, self.radius, self.clearance);
         let e2 = e * e;
-        let one = 1.0 - e2;
+        // Without a cap ε comes arbitrarily close to 1, where 1 − ε² loses digits; (1 − ε)(1 + ε)
+        // keeps them (1 − ε is exact for ε ≥ 1/2). The capped laws keep their arithmetic.
+        let one = if self.eps_cap.is_some() {
+            1.0 - e2
+        } else {
+            (1.0 - e) * (1.0 + e)
+        };
         let pi = std::f64::consts::PI;
-        let (fr, ft) = match self.model {
+        match self.model {
             FilmModel::LongGumbel | FilmModel::LongGumbelMirrored => {
                 let s = 12.0 * mu * l * r * r * r / (c * c);
                 let fr = -s
                     * (e2 * om / ((2.0 + e2) * one)
                         + eps_dot * (pi / 2.0 - 8.0 / (pi * (2.0 + e2))) / (one * one.sqrt()));
                 let ft = s
-                    * (pi * e * om / (2.0 * (2.0 + e2) * one.sqrt())
-                        + 2.0 * e * eps_dot / ((2.0 + e2) * one));
+                    * (pi * e * omega / (2.0 * (2.0 + e2) * one.sqrt())
+                        + sgn * (2.0 * e * eps_dot / ((2.0 + e2) * one)));
                 (fr, ft)
             }
             FilmModel::LongSommerfeld => {
                 let s = 12.0 * pi * mu * l * r * r * r / (c * c);
                 (
                     -s * eps_dot / (one * one.sqrt()),
-                    s * e * om / ((2.0 + e2) * one.sqrt()),
+                    s * e * omega / ((2.0 + e2) * one.sqrt()),
                 )
             }
             FilmModel::ShortOcvirk | FilmModel::ShortOcvirkMirrored => {
@@ -406,15 +447,11 @@ impl Film {
                 let fr = -s
                     * (2.0 * e2 * om / (one * one)
                         + pi * (1.0 + 2.0 * e2) * eps_dot / (one * one * one.sqrt()));
-                let ft =
-                    s * (pi * e * om / (2.0 * one * one.sqrt()) + 4.0 * e * eps_dot / (one * one));
+                let ft = s
+                    * (pi * e * omega / (2.0 * one * one.sqrt())
+                        + sgn * (4.0 * e * eps_dot / (one * one)));
                 (fr, ft)
             }
-        };
-        if mirrored && omega < 0.0 {
-            (fr, -ft)
-        } else {
-            (fr, ft)
         }
     }
 }

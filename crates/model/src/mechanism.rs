@@ -29,7 +29,7 @@ use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
 use crate::elements::{Element, ElementEval, Prismatic, PrismaticEval};
 use crate::geometry::{ClearanceInput, ClearanceState};
-use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw};
+use crate::laws::{hertz_stiffness, Film, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH};
 use crate::outputs::Roles;
 use crate::scene::{
     Attachment, ClearanceEnd, FrictionSpec, JointSpec, NormalSpec, Scene, SceneError, GROUND,
@@ -439,8 +439,10 @@ impl Mechanism {
         for k in 0..clr.len() {
             events.push(EventKind::Contact(k));
         }
+        // A capped film changes form at ε = ε_cap; a film without a cap has no such point
+        // below contact (docs/model.md §7).
         for (k, c) in clr.iter().enumerate() {
-            if c.film.is_some() {
+            if c.film.is_some_and(|f| f.eps_cap.is_some()) {
                 events.push(EventKind::EpsCap(k));
             }
         }
@@ -1003,7 +1005,7 @@ impl Mechanism {
             g[i] = match *ev {
                 EventKind::Contact(k) => self.clearance_state(k, sc).delta,
                 EventKind::EpsCap(k) => {
-                    let cap = self.clr[k].film.as_ref().map_or(1.0, |f| f.eps_cap);
+                    let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
                     self.clearance_state(k, sc).eps - cap
                 }
                 EventKind::Corner(k, c) => {
@@ -1193,6 +1195,7 @@ fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::ClearanceSpec) ->
         radius: rj,
         clearance: rb - rj,
         eps_cap: f.eps_cap,
+        mirror_width: f.omega0.unwrap_or(DEFAULT_MIRROR_WIDTH),
     });
     Clr {
         joint: ji,

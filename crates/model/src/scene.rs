@@ -534,7 +534,10 @@ pub enum FrictionSpec {
 /// Hydrodynamic film of a lubricated clearance joint (docs/model.md §4).
 ///
 /// ```text
-/// F_r, F_t = film model(ε_eff = min(ε, ε_cap), ε̇, Ω);  R = R_J, c = R_B − R_J
+/// F_r, F_t = film model(ε_eff, ε̇, Ω);  R = R_J, c = R_B − R_J
+/// ε_eff = min(ε, ε_cap)  ("eps_cap": number, default 0.99)
+///       = min(ε, 1 − 1e-12)  ("eps_cap": null: no cap, the law at the true ε)
+/// mirrored models: sign(Ω) → tanh(Ω/Ω₀)  ("omega0": Ω₀ > 0, rad/s, default 0.01)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -546,16 +549,25 @@ pub struct FilmSpec {
     pub viscosity: f64,
     /// Bearing length L (m), > 0.
     pub length: f64,
-    /// Eccentricity cap ε_cap in (0, 1). Default 0.99.
-    #[serde(default = "default_eps_cap")]
-    pub eps_cap: f64,
+    /// Eccentricity cap ε_cap in (0, 1), or `None` (JSON `null`): no cap. An absent field is
+    /// the default cap 0.99, not `None`.
+    #[serde(default = "default_eps_cap", deserialize_with = "nullable")]
+    pub eps_cap: Option<f64>,
+    /// Width Ω₀ of the smooth sign of the mirrored models (rad/s), > 0; only with a mirrored
+    /// model. Default [`crate::laws::DEFAULT_MIRROR_WIDTH`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega0: Option<f64>,
 }
 
 fn default_film_model() -> FilmModel {
     FilmModel::LongGumbel
 }
-fn default_eps_cap() -> f64 {
-    0.99
+fn default_eps_cap() -> Option<f64> {
+    Some(0.99)
+}
+/// A number or `null` (`None`); the field's absence is handled by its `default`.
+fn nullable<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Option::<f64>::deserialize(d)
 }
 
 /// Baumgarte stabilisation parameters (docs/model.md §1).
@@ -1503,12 +1515,28 @@ impl Scene {
             let fp = format!("{p}.film");
             C::non_negative(&format!("{fp}.viscosity"), film.viscosity, "viscosity")?;
             C::positive(&format!("{fp}.length"), film.length, "bearing length")?;
-            C::finite(&format!("{fp}.eps_cap"), film.eps_cap)?;
-            if !(film.eps_cap > 0.0 && film.eps_cap < 1.0) {
-                return Err(invalid(
-                    format!("{fp}.eps_cap"),
-                    format!("eps_cap must lie in (0, 1), got {}", film.eps_cap),
-                ));
+            if let Some(cap) = film.eps_cap {
+                C::finite(&format!("{fp}.eps_cap"), cap)?;
+                if !(cap > 0.0 && cap < 1.0) {
+                    return Err(invalid(
+                        format!("{fp}.eps_cap"),
+                        format!("eps_cap must lie in (0, 1) or be null (no cap), got {cap}"),
+                    ));
+                }
+            }
+            if let Some(w) = film.omega0 {
+                C::positive(&format!("{fp}.omega0"), w, "omega0")?;
+                if !matches!(
+                    film.model,
+                    FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored
+                ) {
+                    return Err(invalid(
+                        format!("{fp}.omega0"),
+                        "omega0 (the width of the smooth sign of the mirrored models) applies \
+                         only to long_gumbel_mirrored and short_ocvirk_mirrored"
+                            .to_string(),
+                    ));
+                }
             }
         }
         C::finite2(&format!("{p}.initial_eccentricity"), c.initial_eccentricity)?;

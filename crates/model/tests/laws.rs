@@ -5,7 +5,8 @@
 use std::cell::Cell;
 
 use lash_model::laws::{
-    hertz_stiffness, step_damping, Film, FilmModel, FrictionLaw, NormalLaw, MIN_IMPACT_VELOCITY,
+    hertz_stiffness, step_damping, Film, FilmModel, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH,
+    MIN_IMPACT_VELOCITY, UNCAPPED_GUARD,
 };
 use lash_solver::{
     EventAction, EventHit, EventSpec, Method, OdeSystem, Problem, SolverOptions, StepOutcome,
@@ -16,7 +17,8 @@ use lash_solver::{
 // ---------------------------------------------------------------------------------------------
 
 /// The film of the docs/model.md §4 test vectors: μ = 0.4 Pa·s, L = 0.04 m, R = 0.0095 m,
-/// c = 0.0005 m (ε_cap at its default 0.99; every row has ε < 0.99).
+/// c = 0.0005 m (ε_cap at its default 0.99; every row has ε < 0.99; the mirrored models' sign
+/// width at its default Ω₀ = 0.01 rad/s).
 fn film(model: FilmModel) -> Film {
     Film {
         model,
@@ -24,7 +26,8 @@ fn film(model: FilmModel) -> Film {
         length: 0.04,
         radius: 0.0095,
         clearance: 0.0005,
-        eps_cap: 0.99,
+        eps_cap: Some(0.99),
+        mirror_width: DEFAULT_MIRROR_WIDTH,
     }
 }
 
@@ -120,14 +123,18 @@ fn short_ocvirk_matches_model_md_table_every_row() {
     check_rows(FilmModel::ShortOcvirk, &column(2));
 }
 
-/// Mirrored long Gümbel: F_r(ε, ε̇, |Ω|), sign(Ω)·F_t(ε, ε̇, |Ω|).
-/// - rows 1–4 have Ω ≥ 0, so the mirrored law equals the printed one: the table's values;
+/// Mirrored long Gümbel: F_r(ε, ε̇, |Ω|), sign(Ω)·F_t(ε, ε̇, |Ω|) for |Ω| ≥ 19.1 Ω₀, where
+/// tanh(Ω/Ω₀) is ±1 in f64 (docs/model.md §4):
+/// - rows 1, 2, 4 (Ω = 100, 100, 50): the table's values;
+/// - row 3 (Ω = 0): the printed F_r (no wedge term at Ω = 0) and F_t = 0 (s(0) = 0: the
+///   tangential squeeze term vanishes with the sign);
 /// - row 5 (Ω = −40): docs/model.md §4 gives F_r = −50.52682947, F_t = −34.83975427;
 /// - rows 1 and 4 with Ω negated: by the definition, (F_r, −F_t) of the table's own row.
 #[test]
 fn long_gumbel_mirrored_follows_its_definition() {
     let t = column(0);
-    let mut rows = t[..4].to_vec();
+    let mut rows = vec![t[0], t[1], t[3]];
+    rows.push(((0.6, 5.0, 0.0), (-3.16229756, 0.0)));
     rows.push(((0.9, 2.0, -40.0), (-50.52682947, -34.83975427)));
     for k in [0, 3] {
         let ((eps, eps_dot, omega), (fr, ft)) = t[k];
@@ -137,15 +144,16 @@ fn long_gumbel_mirrored_follows_its_definition() {
 }
 
 /// Mirrored short bearing, the same rule.
-/// - rows 1–4 (Ω ≥ 0): the table's short Gümbel values; rows 1 and 4 with Ω negated:
-///   (F_r, −F_t) of the table's own row;
+/// - rows 1, 2, 4: the table's short Gümbel values; row 3 (Ω = 0): the printed F_r, F_t = 0;
+///   rows 1 and 4 with Ω negated: (F_r, −F_t) of the table's own row;
 /// - row 5 (Ω = −40) needs F(0.9, 2, +40), which the table does not contain: −1381.945844 and
 ///   −429.1232717 N are the short-bearing formula of docs/model.md §4 evaluated independently of
 ///   this crate (double precision, outside Rust), then F_t negated.
 #[test]
 fn short_ocvirk_mirrored_follows_its_definition() {
     let t = column(2);
-    let mut rows = t[..4].to_vec();
+    let mut rows = vec![t[0], t[1], t[3]];
+    rows.push(((0.6, 5.0, 0.0), (-40.10439372, 0.0)));
     rows.push(((0.9, 2.0, -40.0), (-1381.945844, -429.1232717)));
     for k in [0, 3] {
         let ((eps, eps_dot, omega), (fr, ft)) = t[k];
@@ -154,11 +162,14 @@ fn short_ocvirk_mirrored_follows_its_definition() {
     check_rows(FilmModel::ShortOcvirkMirrored, &rows);
 }
 
-/// The mirrored laws agree with the printed ones for every Ω ≥ 0 (including Ω = +0 and the
-/// sign(0) = +1 convention with Ω = −0), and differ from them only by the wedge term's sign
-/// flip when Ω < 0: F(ε, ε̇, Ω) − F(ε, ε̇, −Ω) is odd in Ω for the printed law.
+/// The mirrored laws equal the printed ones bit for bit for Ω ≥ 19.1 Ω₀ (tanh = 1 in f64), and
+/// the printed ones mirrored, (F_r, −F_t)(ε, ε̇, |Ω|), for Ω ≤ −19.1 Ω₀; the smooth sign acts
+/// only inside |Ω| < 19.1 Ω₀.
 #[test]
-fn mirrored_films_differ_from_printed_only_for_negative_omega() {
+fn mirrored_films_equal_the_sign_rule_outside_the_width() {
+    let w = DEFAULT_MIRROR_WIDTH;
+    assert_eq!((19.1f64).tanh(), 1.0);
+    assert!((18.0f64).tanh() < 1.0);
     for (plain, mirrored) in [
         (FilmModel::LongGumbel, FilmModel::LongGumbelMirrored),
         (FilmModel::ShortOcvirk, FilmModel::ShortOcvirkMirrored),
@@ -166,16 +177,77 @@ fn mirrored_films_differ_from_printed_only_for_negative_omega() {
         let (p, m) = (film(plain), film(mirrored));
         for &eps in &[0.0, 0.2, 0.5, 0.95] {
             for &eps_dot in &[-4.0, 0.0, 3.0] {
-                for &omega in &[0.0, -0.0, 1.0, 250.0] {
+                for &omega in &[19.1 * w, 1.0, 60.0, 250.0] {
                     assert_eq!(p.force(eps, eps_dot, omega), m.force(eps, eps_dot, omega));
+                    let (fr, ft) = m.force(eps, eps_dot, -omega);
+                    let (pr, pt) = p.force(eps, eps_dot, omega);
+                    assert_eq!(
+                        (fr, ft),
+                        (pr, -pt),
+                        "{mirrored:?} at ε = {eps}, ε̇ = {eps_dot}, Ω = −{omega}"
+                    );
                 }
-                let (fr, ft) = m.force(eps, eps_dot, -60.0);
-                let (pr, pt) = p.force(eps, eps_dot, 60.0);
-                assert_eq!(
-                    (fr, ft),
-                    (pr, -pt),
-                    "{mirrored:?} at ε = {eps}, ε̇ = {eps_dot}"
-                );
+                // Inside the width the tangential squeeze term is scaled by tanh(Ω/Ω₀) < 1.
+                if eps > 0.0 && eps_dot != 0.0 {
+                    assert_ne!(p.force(eps, eps_dot, w).1, m.force(eps, eps_dot, w).1);
+                }
+            }
+        }
+    }
+}
+
+/// The smooth sign (docs/model.md §4): with s = tanh(Ω/Ω₀), the mirrored laws are
+///   F_r = −S (a_r Ω s + b_r ε̇),  F_t = S (a_t Ω + s b_t ε̇),
+/// where a, b are the printed law's wedge and squeeze coefficients, read off the printed law
+/// itself: S b ε̇ = F(ε, ε̇, 0) and S a Ω = F(ε, 0, Ω). Checked at Ω inside the width, together
+/// with the symmetry of a mirror image (F_r even, F_t odd in Ω, exactly) and the slope at
+/// Ω = 0, ∂F_t/∂Ω = S (a_t + b_t ε̇/Ω₀), which is finite: the law is continuous and smooth in Ω.
+#[test]
+fn mirrored_films_follow_the_smooth_sign() {
+    for (plain, mirrored) in [
+        (FilmModel::LongGumbel, FilmModel::LongGumbelMirrored),
+        (FilmModel::ShortOcvirk, FilmModel::ShortOcvirkMirrored),
+    ] {
+        for w in [DEFAULT_MIRROR_WIDTH, 0.5] {
+            let p = film(plain);
+            let m = Film {
+                mirror_width: w,
+                ..film(mirrored)
+            };
+            for &eps in &[0.2, 0.6, 0.95] {
+                for &eps_dot in &[-4.0, 3.0] {
+                    let squeeze = p.force(eps, eps_dot, 0.0);
+                    for &x in &[0.0, 0.1, 0.7, 2.0, 5.0] {
+                        let omega = x * w;
+                        let s = x.tanh();
+                        let wedge = p.force(eps, 0.0, omega);
+                        let (fr, ft) = m.force(eps, eps_dot, omega);
+                        let at =
+                            format!("{mirrored:?} Ω₀ = {w}, ε = {eps}, ε̇ = {eps_dot}, Ω = {omega}");
+                        let close = |a: f64, b: f64, what: &str| {
+                            assert!(
+                                (a - b).abs() <= 1e-13 * (a.abs() + b.abs()),
+                                "{at} {what}: {a} vs {b}"
+                            );
+                        };
+                        close(fr, wedge.0 * s + squeeze.0, "F_r");
+                        close(ft, wedge.1 + s * squeeze.1, "F_t");
+                        let (gr, gt) = m.force(eps, eps_dot, -omega);
+                        assert_eq!((gr, gt), (fr, -ft), "{at}: mirror symmetry");
+                    }
+                    // Slope at Ω = 0 by central differences (h = 1e-4 Ω₀: truncation error
+                    // (h/Ω₀)²·2/3 relative ≈ 7e-9 on the squeeze part).
+                    let h = 1e-4 * w;
+                    let slope =
+                        (m.force(eps, eps_dot, h).1 - m.force(eps, eps_dot, -h).1) / (2.0 * h);
+                    let want = p.force(eps, 0.0, 1.0).1 + squeeze.1 / w;
+                    assert!(
+                        (slope - want).abs() <= 1e-7 * want.abs(),
+                        "{mirrored:?}: slope {slope} vs {want}"
+                    );
+                    // At Ω = 0 the squeeze force is purely radial.
+                    assert_eq!(m.force(eps, eps_dot, 0.0), (squeeze.0, 0.0));
+                }
             }
         }
     }
@@ -196,7 +268,7 @@ fn eps_cap_rule_gives_the_value_at_the_cap() {
     for model in ALL_FILMS {
         for cap in [0.99, 0.9] {
             let f = Film {
-                eps_cap: cap,
+                eps_cap: Some(cap),
                 ..film(model)
             };
             for &(eps_dot, omega) in &[(2.0, -40.0), (-3.0, 50.0), (0.0, 100.0), (5.0, 0.0)] {
@@ -220,11 +292,105 @@ fn eps_cap_rule_gives_the_value_at_the_cap() {
     }
 }
 
+/// The film of the test vectors without a cap (`"eps_cap": null`).
+fn uncapped(model: FilmModel) -> Film {
+    Film {
+        eps_cap: None,
+        ..film(model)
+    }
+}
+
+/// Below the cap, the uncapped law is the capped one: they differ only in how 1 − ε² is
+/// formed ((1 − ε)(1 + ε) without a cap), by a few ulps.
+#[test]
+fn uncapped_film_equals_capped_film_below_the_cap() {
+    for model in ALL_FILMS {
+        let (a, b) = (film(model), uncapped(model));
+        for i in 0..=99 {
+            let eps = i as f64 * 0.01;
+            for &(eps_dot, omega) in &[(2.0, -40.0), (-3.0, 50.0), (0.0, 100.0), (5.0, 0.0)] {
+                let (x, y) = (a.force(eps, eps_dot, omega), b.force(eps, eps_dot, omega));
+                for (p, q) in [(x.0, y.0), (x.1, y.1)] {
+                    assert!(
+                        (p - q).abs() <= 1e-13 * p.abs().max(1e-300),
+                        "{model:?} at ε = {eps}: {p} vs {q}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The squeeze coefficient of each law near ε → 1 with ε = 1 − x exactly (docs/model.md §4):
+/// F_r(ε, ε̇, 0) = −S h(ε) ε̇ / (x (2 − x))^k, the law evaluated at the true ε (a cap at 0.99
+/// would give a force smaller by orders of magnitude) and accurately: formed as 1 − ε·ε, 1 − ε²
+/// loses the x² of (1 − x)² = 1 − 2x + x² to rounding, a relative error x/2 ≈ 9e-13 at
+/// x = 2^-39 (and up to 1.1e-16/(2x) for a general ε), above the 1e-13 asserted here.
+#[test]
+fn uncapped_squeeze_term_is_evaluated_at_the_true_eccentricity() {
+    use std::f64::consts::PI;
+    let (mu, l, r, c) = (0.4f64, 0.04f64, 0.0095f64, 0.0005f64);
+    let s_long = 12.0 * mu * l * r.powi(3) / (c * c);
+    let s_short = mu * r * l.powi(3) / (2.0 * c * c);
+    let eps_dot = 2.0;
+    for p in [10, 20, 30, 39] {
+        let x = 2f64.powi(-p);
+        let eps = 1.0 - x;
+        let one = x * (2.0 - x);
+        let want = [
+            (
+                FilmModel::LongGumbel,
+                -s_long * (PI / 2.0 - 8.0 / (PI * (2.0 + eps * eps))) * eps_dot / one.powf(1.5),
+            ),
+            (
+                FilmModel::LongSommerfeld,
+                -s_long * PI * eps_dot / one.powf(1.5),
+            ),
+            (
+                FilmModel::ShortOcvirk,
+                -s_short * PI * (1.0 + 2.0 * eps * eps) * eps_dot / one.powf(2.5),
+            ),
+        ];
+        for (model, fr) in want {
+            let got = uncapped(model).force(eps, eps_dot, 0.0).0;
+            assert!(
+                ((got - fr) / fr).abs() < 1e-13,
+                "{model:?} at 1 − ε = 2^-{p}: {got:e} vs {fr:e}"
+            );
+            let capped = film(model).force(eps, eps_dot, 0.0).0;
+            assert!(got.abs() > 10.0 * capped.abs());
+        }
+    }
+}
+
+/// Past the guard ε = 1 − η (η = 1e-12) the uncapped law is frozen at its value there: finite
+/// for ε = 1 and beyond, continuous at the guard, and NaN still propagates.
+#[test]
+fn uncapped_film_is_frozen_at_the_guard() {
+    let guard = 1.0 - UNCAPPED_GUARD;
+    for model in ALL_FILMS {
+        let f = uncapped(model);
+        assert_eq!(f.eps_limit(), guard);
+        for &(eps_dot, omega) in &[(2.0, -40.0), (-3.0, 50.0), (0.0, 100.0), (5.0, 0.0)] {
+            let at = f.force(guard, eps_dot, omega);
+            assert!(at.0.is_finite() && at.1.is_finite(), "{model:?}: {at:?}");
+            for eps in [guard + 1e-16, 1.0, 1.0 + 1e-15, 1.5, 1e300] {
+                assert_eq!(f.force(eps, eps_dot, omega), at, "{model:?} ε = {eps}");
+            }
+            let below = f.force(guard - 1e-16, eps_dot, omega);
+            let rel = |a: f64, b: f64| ((a - b) / b).abs();
+            assert!(rel(below.0, at.0) < 1e-3 || at.0 == 0.0);
+        }
+        let (fr, ft) = f.force(f64::NAN, 1.0, 10.0);
+        assert!(fr.is_nan() && ft.is_nan(), "{model:?}");
+    }
+}
+
 /// Never NaN or infinite for ε in [0, 10] (dense sweep including exactly 1 and the cap).
 #[test]
 fn film_force_is_finite_for_eps_up_to_ten() {
-    for model in ALL_FILMS {
-        let f = film(model);
+    for f in ALL_FILMS.iter().flat_map(|&m| [film(m), uncapped(m)]) {
+        let model = f.model;
         let mut eps_values: Vec<f64> = (0..=20_000).map(|i| i as f64 * 5e-4).collect();
         eps_values.extend([0.99, 0.999_999, 1.0, 1.0 + f64::EPSILON, -0.0]);
         for eps in eps_values {
@@ -275,18 +441,27 @@ fn centred_journal_has_only_squeeze_force() {
 #[test]
 fn film_validation_rejects_bad_parameters() {
     assert!(film(FilmModel::LongGumbel).validate().is_ok());
+    assert!(uncapped(FilmModel::ShortOcvirk).validate().is_ok());
     for bad in [
         Film {
-            eps_cap: 1.0,
+            eps_cap: Some(1.0),
             ..film(FilmModel::LongGumbel)
         },
         Film {
-            eps_cap: 0.0,
+            eps_cap: Some(0.0),
             ..film(FilmModel::LongGumbel)
         },
         Film {
-            eps_cap: f64::NAN,
+            eps_cap: Some(f64::NAN),
             ..film(FilmModel::LongGumbel)
+        },
+        Film {
+            mirror_width: 0.0,
+            ..film(FilmModel::LongGumbelMirrored)
+        },
+        Film {
+            mirror_width: f64::NAN,
+            ..film(FilmModel::ShortOcvirkMirrored)
         },
         Film {
             clearance: 0.0,

@@ -191,8 +191,21 @@ fn viscosity_must_not_be_negative() {
     v["joints"][4]["film"] = json!({"viscosity": 0.4, "length": 0.1, "eps_cap": 1.0});
     assert_eq!(
         err(&v).to_string(),
-        "joints[4].film.eps_cap: eps_cap must lie in (0, 1), got 1"
+        "joints[4].film.eps_cap: eps_cap must lie in (0, 1) or be null (no cap), got 1"
     );
+    // null is no cap (docs/model.md §4); Ω₀ belongs to the mirrored models only.
+    let mut v = dry_press_value();
+    v["joints"][4]["film"] = json!({"viscosity": 0.4, "length": 0.1, "eps_cap": null});
+    assert!(lash_model::Scene::from_json_str(&v.to_string()).is_ok());
+    let mut v = dry_press_value();
+    v["joints"][4]["film"] = json!({"viscosity": 0.4, "length": 0.1, "omega0": 0.01});
+    assert!(err(&v)
+        .to_string()
+        .starts_with("joints[4].film.omega0: omega0 (the width of the smooth sign"));
+    let mut v = dry_press_value();
+    v["joints"][4]["film"] =
+        json!({"model": "long_gumbel_mirrored", "viscosity": 0.4, "length": 0.1, "omega0": 0.0});
+    assert!(err(&v).to_string().starts_with("joints[4].film.omega0:"));
 }
 
 #[test]

@@ -285,6 +285,7 @@ const FIELDS: &[&str] = &[
     "viscosity",
     "length",
     "eps_cap",
+    "omega0",
     "alpha",
     "beta",
     "slider",
@@ -607,7 +608,8 @@ fn joint_value(i: usize) -> BoxedStrategy<Value> {
                     ("model", optional(any_of(FILM_MODELS))),
                     ("viscosity", field(fraction())),
                     ("length", field(fraction())),
-                    ("eps_cap", optional(fraction())),
+                    ("eps_cap", optional(prop_oneof![3 => fraction(), 1 => Just(Value::Null)])),
+                    ("omega0", optional(fraction())),
                 ])),
             ),
             ("initial_eccentricity", optional(pair())),
@@ -935,7 +937,8 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     ]
 }
 
-/// Whether two JSON types differ (no field of the format accepts two types but null).
+/// Whether two JSON types differ (no field of the format accepts two types but null; `eps_cap`
+/// accepts a number or null).
 fn type_differs(old: &Value, new: &Value) -> bool {
     let kind = |v: &Value| match v {
         Value::Null => 0,
@@ -1508,7 +1511,9 @@ fn number_fields(s: &mut Scene) -> Vec<(String, &mut f64)> {
                 if let Some(film) = &mut c.film {
                     out.push((format!("{p}.film.viscosity"), &mut film.viscosity));
                     out.push((format!("{p}.film.length"), &mut film.length));
-                    out.push((format!("{p}.film.eps_cap"), &mut film.eps_cap));
+                    if let Some(cap) = &mut film.eps_cap {
+                        out.push((format!("{p}.film.eps_cap"), cap));
+                    }
                 }
                 two(
                     &mut out,

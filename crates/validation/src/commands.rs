@@ -85,6 +85,9 @@ pub struct RunOptions {
     pub output_every: Option<f64>,
     /// Output directory; None = `out/run/CASE`.
     pub out: Option<PathBuf>,
+    /// Run until the clearance joint's once-per-revolution section settles
+    /// (crate::steady); excludes `t_end`.
+    pub until_periodic: Option<crate::steady::UntilPeriodic>,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -107,7 +110,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         .max_wall_time
         .map(|w| start + Duration::from_secs_f64(w));
     let case = Case::load(&o.case, None)?;
-    let (prepared, mut req) = run_request(case, o, deadline)?;
+    let (prepared, mut req, settled) = run_request(case, o, deadline)?;
     let out = o
         .out
         .clone()
@@ -118,7 +121,8 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
     let mut sink = CsvFile::create(&traj)?;
     let outcome = simulate_into(&prepared, &req, &mut sink).and_then(|r| within(r, o, deadline));
     match outcome {
-        Ok(r) => {
+        Ok(mut r) => {
+            r.summary.until_periodic = settled;
             let mut files = vec![traj];
             files.extend(r.write(dir.path())?);
             let files = files.iter().map(|f| dir.final_path(f)).collect();
@@ -130,7 +134,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
             })
         }
         Err(Error::Solver(e)) => {
-            let (t_span_end, rows) = (prepared.t_span(o.t_end)?.1, sink.rows());
+            let (t_span_end, rows) = (prepared.t_span(req.t_end)?.1, sink.rows());
             let partial = dir.path().join(PARTIAL_TRAJECTORY_FILE);
             if rows > 0 {
                 std::fs::rename(&traj, &partial).map_err(|err| Error::io(&partial, err))?;
@@ -169,21 +173,36 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
 
 /// The checked case and the request of a run (the same for [`run`] and [`run_in_memory`]):
 /// the solver choice checked against the defaults before the scene is read, then laid over
-/// the case's own options.
+/// the case's own options; with `until_periodic`, the settling pass (crate::steady) that
+/// decides the end time, and its report.
 fn run_request(
     case: Case,
     o: &RunOptions,
     deadline: Option<Instant>,
-) -> Result<(Prepared, RunRequest), Error> {
+) -> Result<(Prepared, RunRequest, Option<crate::steady::Settled>), Error> {
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
     let opts = prepared.options(&o.solver)?;
+    let settled = match &o.until_periodic {
+        Some(u) => {
+            if o.t_end.is_some() {
+                return Err(Error::Usage(
+                    "--until-periodic decides the end time: give it or --t-end, not both".into(),
+                ));
+            }
+            Some(crate::steady::settle(&prepared, &opts, u)?)
+        }
+        None => None,
+    };
     let mut req = RunRequest::new(opts);
-    req.t_end = o.t_end;
+    req.t_end = match (&settled, &prepared.info) {
+        (Some(s), Some(i)) => i.period.map(|t| i.t_start + t * s.revolutions as f64),
+        _ => o.t_end,
+    };
     req.samples_per_revolution = o.samples_per_revolution;
     req.output_every = o.output_every;
     req.deadline = deadline;
-    Ok((prepared, req))
+    Ok((prepared, req, settled))
 }
 
 /// A finished run, or `BudgetExhausted` when the wall-clock budget ran out meanwhile.
@@ -218,8 +237,9 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult)
         .solver
         .max_wall_time
         .map(|w| Instant::now() + Duration::from_secs_f64(w));
-    let (prepared, req) = run_request(case, o, deadline)?;
-    let r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
+    let (prepared, req, settled) = run_request(case, o, deadline)?;
+    let mut r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
+    r.summary.until_periodic = settled;
     Ok((prepared, r))
 }
 
@@ -234,6 +254,9 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult)
 pub struct StudyOptions {
     /// Output directory; None = `out/study/paper`.
     pub out: Option<PathBuf>,
+    /// Run the robustness study instead (`study::robustness`): robustness.md and
+    /// robustness.json in the same directory, sharing its cache of runs.
+    pub robustness: bool,
 }
 
 /// Runs the paper's study (module `study`): figures, report.md and study.json in the output
@@ -249,6 +272,28 @@ pub fn study_paper(
         .unwrap_or_else(|| default_out("study", "paper"));
     let r = study::paper(&out, progress)?;
     let files = vec![out.join(study::REPORT_FILE), out.join(study::JSON_FILE)];
+    Ok(Written {
+        result: r,
+        dir: out,
+        files,
+    })
+}
+
+/// `lash study paper --robustness`: the claims under the modelling choices the paper leaves
+/// open (`study::robustness`), written to the study's directory.
+pub fn study_robustness(
+    o: &StudyOptions,
+    progress: &dyn Progress,
+) -> Result<Written<study::robustness::RobustnessResult>, Error> {
+    let out = o
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("study", "paper"));
+    let r = study::robustness::paper(&out, progress)?;
+    let files = vec![
+        out.join(study::robustness::MD_FILE),
+        out.join(study::robustness::JSON_FILE),
+    ];
     Ok(Written {
         result: r,
         dir: out,
@@ -941,6 +986,9 @@ pub fn describe_run(r: &RunResult) -> String {
     );
     if let Some(e) = s.reference_error {
         out.push_str(&format!("  reference error {e:.3e}\n"));
+    }
+    if let Some(u) = &s.until_periodic {
+        out.push_str(&format!("  {}\n", u.describe()));
     }
     out.push_str(&format!("  trajectory: {} rows\n", r.trajectory_rows));
     if let Some(m) = &s.metrics {

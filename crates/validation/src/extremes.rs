@@ -262,7 +262,7 @@ fn corner_scene(stem: &str, stresses: &str, c: Corner, notes: &[&str]) -> Scene 
                     f.viscosity = v;
                 }
                 if let Some(e) = c.eps_cap {
-                    f.eps_cap = e;
+                    f.eps_cap = Some(e);
                 }
             }
         }

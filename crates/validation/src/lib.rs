@@ -21,10 +21,11 @@
 //! [`headline`] (the default run), [`case`] (case references), [`summary`] (summary.json),
 //! [`trajectory`] (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG
 //! figures), [`report`] (the files of one run), [`simulate`] (running a case: the core of
-//! every command), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against
+//! every command), [`steady`] (running until the orbit is periodic), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against
 //! cost, cheapest runs), [`stiffness_cmd`] (stiffness diagnostics: eigenvalues, RK4 limits,
 //! verdict), [`poincare`] (Poincaré section, Lyapunov exponent), [`study`] (the paper's §4
-//! and its claims), [`extremes`] (the matrix of extreme scenes × methods × tolerances).
+//! and its claims; `study::robustness`, the claims under the modelling choices the paper
+//! leaves open), [`extremes`] (the matrix of extreme scenes × methods × tolerances).
 
 #![warn(missing_docs)]
 
@@ -44,6 +45,7 @@ pub mod poincare;
 pub mod progress;
 pub mod report;
 pub mod simulate;
+pub mod steady;
 pub mod stiffness_cmd;
 pub mod study;
 pub mod summary;

@@ -34,6 +34,7 @@
 pub mod claims;
 mod figures;
 pub mod markdown;
+pub mod robustness;
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -53,6 +54,7 @@ use crate::io;
 use crate::metrics::{self, Metrics, Sample};
 use crate::progress::{NoProgress, Progress};
 use crate::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
+use crate::steady::UntilPeriodic;
 
 pub use claims::{Claim, Number, Origin, Quantity, Verdict};
 
@@ -62,6 +64,12 @@ pub const REPORT_FILE: &str = "report.md";
 pub const JSON_FILE: &str = "study.json";
 /// Folder of the figures inside the output directory.
 pub const FIGURES_DIR: &str = "figures";
+
+/// Tolerance of the study's runs until periodic, units of c: 5 × tighter than the claim's
+/// "periodic" threshold [`claims::PERIODIC`].
+pub const STEADY_TOL: f64 = 1e-2;
+/// Cap on the revolutions of the study's runs until periodic.
+pub const STEADY_MAX_REVOLUTIONS: usize = 40;
 
 /// Half-width of the windows around the dead centres, degrees of crank angle.
 pub const DEAD_CENTRE_WINDOW_DEG: f64 = 15.0;
@@ -140,6 +148,8 @@ pub struct Plan {
     pub realisations: usize,
     /// Step Δθ of the crank's initial angle between realisations, rad.
     pub phase_step_rad: f64,
+    /// Steady state of the periodicity claim: runs until the section settles.
+    pub steady: UntilPeriodic,
 }
 
 impl Plan {
@@ -159,6 +169,10 @@ impl Plan {
             loose: s(1e-8),
             realisations: 8,
             phase_step_rad: 1e-6,
+            steady: UntilPeriodic {
+                tol: STEADY_TOL,
+                max_revolutions: STEADY_MAX_REVOLUTIONS,
+            },
         }
     }
 }
@@ -352,6 +366,33 @@ pub struct CaseResult {
     pub acc_tolerance_diff: f64,
     /// Solver counters and times.
     pub solver: SolverRecord,
+    /// The same realisations run until the orbit settles (the cases of the periodicity claim;
+    /// null for the others).
+    pub steady: Option<SteadyRuns>,
+}
+
+/// A case's realisations run until periodic ([`crate::steady`]) at the three settings.
+///
+/// ```text
+/// run until |s_k − s_{k−1}| < tol·c (section once per revolution), at most max_revolutions;
+/// statistics of the last revolution, as for the two-revolution runs
+/// ```
+///
+/// Source: [`crate::steady`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SteadyRuns {
+    /// The request.
+    pub until: UntilPeriodic,
+    /// Revolutions run by each realisation at the study's settings.
+    pub revolutions: Vec<usize>,
+    /// Whether each realisation settled within the cap (study's settings).
+    pub settled: Vec<bool>,
+    /// Realisations at the study's settings.
+    pub study: Ensemble,
+    /// At the reference settings.
+    pub reference: Ensemble,
+    /// At the loose settings.
+    pub loose: Ensemble,
 }
 
 /// A written figure.
@@ -427,12 +468,25 @@ impl StudyResult {
         self.cases.iter().find(|c| c.name == name)
     }
 
-    /// The ensembles at one of the settings, by case name.
+    /// The ensembles at one of the settings, by case name; the steady-state runs under
+    /// [`claims::at_steady_state`] of the name.
     pub fn ensembles(&self, which: Setting) -> claims::Cases {
-        self.cases
+        let mut m: claims::Cases = self
+            .cases
             .iter()
             .map(|c| (c.name.clone(), c.ensemble(which).clone()))
-            .collect()
+            .collect();
+        for c in &self.cases {
+            if let Some(st) = &c.steady {
+                let e = match which {
+                    Setting::Study => &st.study,
+                    Setting::Reference => &st.reference,
+                    Setting::Loose => &st.loose,
+                };
+                m.insert(claims::at_steady_state(&c.name), e.clone());
+            }
+        }
+        m
     }
 }
 
@@ -458,11 +512,21 @@ struct Run {
     rpm: f64,
     /// Radial clearance of the clearance-joint role, m.
     clearance: Option<f64>,
+    /// Revolutions run.
+    revolutions: usize,
+    /// Whether the orbit settled (runs until periodic).
+    settled: Option<bool>,
 }
 
 /// Runs the press scene `scene` (the catalogue case `name`, or one of its realisations) over
-/// its span through [`simulate`]; samples its last two revolutions.
-fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error> {
+/// its span through [`simulate`], or with `until` until its orbit settles
+/// ([`crate::steady`]); samples its last two revolutions.
+fn run_case(
+    name: &str,
+    scene: &Scene,
+    settings: &Settings,
+    until: Option<&UntilPeriodic>,
+) -> Result<Run, Error> {
     let p = Prepared::with_scene(Case::catalogue(name)?, scene.clone())?;
     let info = p
         .info
@@ -472,7 +536,14 @@ fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error
         .period
         .zip(info.crank_speed)
         .ok_or_else(|| Error::Input(format!("case {name}: no crank_driver role")))?;
-    let (t0, t_end) = (info.t_start, info.t_end);
+    let settled = until
+        .map(|u| crate::steady::settle(&p, &settings.options(), u))
+        .transpose()?;
+    let t0 = info.t_start;
+    let t_end = match &settled {
+        Some(s) => t0 + period * s.revolutions as f64,
+        None => info.t_end,
+    };
     if !(t_end - 2.0 * period >= t0 - 1e-9 * period) {
         return Err(Error::Input(format!(
             "case {name}: the study needs two crank revolutions, the scene runs {:.3}",
@@ -480,6 +551,7 @@ fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error
         )));
     }
     let mut req = RunRequest::new(settings.options());
+    req.t_end = Some(t_end);
     req.trajectory_points = Some(0);
     req.energy = false;
     // The grid may start a few ulps before t0 (t_end = 2T): clamp into the run.
@@ -510,6 +582,8 @@ fn run_case(name: &str, scene: &Scene, settings: &Settings) -> Result<Run, Error
         ideal: r.ideal,
         rpm: omega * 30.0 / PI,
         clearance: info.joint.map(|j| j.clearance),
+        revolutions: ((t_end - t0) / period).round() as usize,
+        settled: settled.map(|s| s.settled),
     })
 }
 
@@ -703,25 +777,31 @@ fn realisation(scene: &Scene, k: usize, step_rad: f64) -> Scene {
 struct Job<'a> {
     case: usize,
     name: &'a str,
-    scene: &'a Scene,
+    /// The case's scene (before the realisation's crank phase).
+    scene: Scene,
     setting: Setting,
     member: usize,
+    /// Run until the orbit settles instead of the scene's two revolutions.
+    until: Option<UntilPeriodic>,
 }
 
 /// What one job gives: stored in the cache of finished runs ([`crate::cache`]).
-#[derive(serde::Serialize, serde::Deserialize)]
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
 struct JobOut {
     stats: CaseStats,
     acc: Vec<f64>,
     curves: Option<Curves>,
     solver: (Stats, usize, f64),
     meta: (f64, Option<f64>),
+    /// Revolutions run and, until periodic, whether the orbit settled.
+    #[serde(default)]
+    length: (usize, Option<bool>),
 }
 
 fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
     let settings = plan.get(job.setting);
-    let scene = realisation(job.scene, job.member, plan.phase_step_rad);
-    let r = run_case(job.name, &scene, &settings)?;
+    let scene = realisation(&job.scene, job.member, plan.phase_step_rad);
+    let r = run_case(job.name, &scene, &settings, job.until.as_ref())?;
     let ideal = r.ideal.ok_or_else(|| {
         Error::Input(format!(
             "case {}: not an in-line slider-crank with slider and crank_driver roles",
@@ -741,6 +821,7 @@ fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
         curves,
         solver: (r.stats, r.events, r.wall_time_s),
         meta: (r.rpm, r.clearance),
+        length: (r.revolutions, r.settled),
     })
 }
 
@@ -776,6 +857,114 @@ struct JobKey<'a> {
     member: usize,
     scene: &'a Scene,
     options: SolverOptions,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    until_periodic: Option<UntilPeriodic>,
+}
+
+/// Runs `jobs` in parallel (returning their results and the number of distinct runs), each
+/// at most once: a run found in `cache` is reused, a finished
+/// one stored there; `progress` gets one item per run done. A stop request
+/// (`lash_solver::interrupt`) abandons the runs in flight and starts no other:
+/// [`Error::Interrupted`], with what is kept. `what` names the command in notes.
+fn run_jobs(
+    jobs: &[Job<'_>],
+    plan: &Plan,
+    cache: &RunCache,
+    progress: &dyn Progress,
+    what: &str,
+) -> Result<(Vec<JobOut>, usize), Error> {
+    let keys: Vec<String> = jobs
+        .iter()
+        .map(|j| {
+            let scene = realisation(&j.scene, j.member, plan.phase_step_rad);
+            cache.key(
+                "study run",
+                &JobKey {
+                    case: j.name,
+                    setting: j.setting,
+                    member: j.member,
+                    scene: &scene,
+                    options: plan.get(j.setting).options(),
+                    until_periodic: j.until,
+                },
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    // Identical runs (a variant that leaves a case as it is) are done once.
+    let mut first: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, k) in keys.iter().enumerate() {
+        first.entry(k.as_str()).or_insert(i);
+    }
+    let unique: Vec<usize> = first.values().copied().collect();
+    let cached = unique.iter().filter(|&&i| cache.contains(&keys[i])).count();
+    if cached > 0 {
+        progress.note(
+            &format!(
+                "{what}: {cached} of {} runs finished before, reused from {}",
+                unique.len(),
+                cache.dir().display()
+            )
+            .into(),
+        );
+    }
+    progress.started("runs", unique.len() - cached);
+    let done = AtomicUsize::new(0);
+    let outs: Result<Vec<JobOut>, Error> = unique
+        .par_iter()
+        .map(|&i| {
+            let (j, key) = (&jobs[i], &keys[i]);
+            if let Some(o) = cache.load::<JobOut>(key) {
+                return Ok(o);
+            }
+            if lash_solver::interrupt::stop_requested() {
+                return Err(Error::Interrupted(String::new()));
+            }
+            let clock = Instant::now();
+            let o = run_job(j, plan)?;
+            cache.store(key, &o)?;
+            done.fetch_add(1, Ordering::Relaxed);
+            let length = match j.until {
+                Some(_) => format!(" until periodic ({} revolutions)", o.length.0),
+                None => String::new(),
+            };
+            progress.finished(
+                &format!(
+                    "{} {:?} realisation {}{length}",
+                    j.name, j.setting, j.member
+                )
+                .to_lowercase(),
+                clock.elapsed().as_secs_f64(),
+            );
+            Ok(o)
+        })
+        .collect();
+    let outs = match outs {
+        Err(Error::Interrupted(_)) => {
+            let kept = cached + done.load(Ordering::Relaxed);
+            return Err(Error::Interrupted(format!(
+                "{what}: {kept} of {} runs finished and kept in {}; rerun the same command to \
+                 resume",
+                unique.len(),
+                cache.dir().display()
+            )));
+        }
+        other => other?,
+    };
+    let by_key: BTreeMap<&str, &JobOut> = unique
+        .iter()
+        .map(|&i| keys[i].as_str())
+        .zip(&outs)
+        .collect();
+    let all = keys
+        .iter()
+        .map(|k| {
+            by_key
+                .get(k.as_str())
+                .map(|o| (*o).clone())
+                .ok_or_else(|| Error::Internal(format!("{what}: a run went missing")))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok((all, unique.len()))
 }
 
 /// Runs every case of the study under `plan` (in parallel) and judges the claims. Figures
@@ -810,15 +999,20 @@ fn run_plan(
         } else {
             plan.realisations
         };
+        // The periodicity claims are judged at steady state (claims::LUB_CLEARANCES).
+        let steady = claims::LUB_CLEARANCES.contains(name);
         for setting in Setting::ALL {
-            for member in 0..members {
-                jobs.push(Job {
-                    case: i,
-                    name,
-                    scene: scenes[i],
-                    setting,
-                    member,
-                });
+            for until in std::iter::once(None).chain(steady.then_some(Some(plan.steady))) {
+                for member in 0..members {
+                    jobs.push(Job {
+                        case: i,
+                        name,
+                        scene: scenes[i].clone(),
+                        setting,
+                        member,
+                        until,
+                    });
+                }
             }
         }
     }
@@ -829,68 +1023,7 @@ fn run_plan(
             j.setting != Setting::Reference,
         )
     });
-    let keys: Vec<String> = jobs
-        .iter()
-        .map(|j| {
-            let scene = realisation(j.scene, j.member, plan.phase_step_rad);
-            cache.key(
-                "study run",
-                &JobKey {
-                    case: j.name,
-                    setting: j.setting,
-                    member: j.member,
-                    scene: &scene,
-                    options: plan.get(j.setting).options(),
-                },
-            )
-        })
-        .collect::<Result<_, _>>()?;
-    let cached = keys.iter().filter(|k| cache.contains(k)).count();
-    if cached > 0 {
-        progress.note(
-            &format!(
-                "study: {cached} of {} runs finished before, reused from {}",
-                jobs.len(),
-                cache.dir().display()
-            )
-            .into(),
-        );
-    }
-    progress.started("runs", jobs.len() - cached);
-    let done = AtomicUsize::new(0);
-    let outs: Result<Vec<JobOut>, Error> = jobs
-        .par_iter()
-        .zip(&keys)
-        .map(|(j, key)| {
-            if let Some(o) = cache.load::<JobOut>(key) {
-                return Ok(o);
-            }
-            if lash_solver::interrupt::stop_requested() {
-                return Err(Error::Interrupted(String::new()));
-            }
-            let clock = Instant::now();
-            let o = run_job(j, plan)?;
-            cache.store(key, &o)?;
-            done.fetch_add(1, Ordering::Relaxed);
-            progress.finished(
-                &format!("{} {:?} realisation {}", j.name, j.setting, j.member).to_lowercase(),
-                clock.elapsed().as_secs_f64(),
-            );
-            Ok(o)
-        })
-        .collect();
-    let outs = match outs {
-        Err(Error::Interrupted(_)) => {
-            let kept = cached + done.load(Ordering::Relaxed);
-            return Err(Error::Interrupted(format!(
-                "study: {kept} of {} runs finished and kept in {}; rerun the same command to \
-                 resume",
-                jobs.len(),
-                cache.dir().display()
-            )));
-        }
-        other => other?,
-    };
+    let (outs, _) = run_jobs(&jobs, plan, cache, progress, "study")?;
 
     let mut cases = Vec::new();
     let mut all_curves = BTreeMap::new();
@@ -899,7 +1032,7 @@ fn run_plan(
             let mut v: Vec<(usize, &JobOut)> = jobs
                 .iter()
                 .zip(&outs)
-                .filter(|(j, _)| j.case == i && j.setting == setting)
+                .filter(|(j, _)| j.case == i && j.setting == setting && j.until.is_none())
                 .map(|(j, o)| (j.member, o))
                 .collect();
             v.sort_by_key(|x| x.0);
@@ -926,7 +1059,30 @@ fn run_plan(
         }
         let acc_tolerance_diff =
             max_abs(nominal.acc.iter().zip(&refr[0].1.acc).map(|(a, b)| a - b));
+        let steady_group = |setting: Setting| {
+            let mut v: Vec<(usize, &JobOut)> = jobs
+                .iter()
+                .zip(&outs)
+                .filter(|(j, _)| j.case == i && j.setting == setting && j.until.is_some())
+                .map(|(j, o)| (j.member, o))
+                .collect();
+            v.sort_by_key(|x| x.0);
+            v
+        };
+        let steady_study = steady_group(Setting::Study);
+        let steady = (!steady_study.is_empty()).then(|| SteadyRuns {
+            until: plan.steady,
+            revolutions: steady_study.iter().map(|(_, o)| o.length.0).collect(),
+            settled: steady_study
+                .iter()
+                .map(|(_, o)| o.length.1.unwrap_or(false))
+                .collect(),
+            study: ensemble(&steady_study),
+            reference: ensemble(&steady_group(Setting::Reference)),
+            loose: ensemble(&steady_group(Setting::Loose)),
+        });
         cases.push(CaseResult {
+            steady,
             acc_tolerance_diff,
             name: name.to_string(),
             kind: kind_of(name),
@@ -1238,6 +1394,7 @@ mod tests {
             "ideal_150rpm",
             &cat["ideal_150rpm"],
             &Plan::paper().settings,
+            None,
         )
         .unwrap();
         assert_eq!((r.last.len(), r.previous.len()), (2001, 2001));

@@ -133,6 +133,10 @@ pub struct Summary {
     pub final_state: Option<Vec<f64>>,
     /// Error against the reference solution (built-in test problems).
     pub reference_error: Option<f64>,
+    /// How a run until periodic ended (`--until-periodic`; absent otherwise): revolutions,
+    /// whether the section settled, its change per revolution (crate::steady).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until_periodic: Option<crate::steady::Settled>,
 }
 
 impl Summary {
@@ -163,6 +167,7 @@ impl Summary {
             metrics: None,
             final_state: None,
             reference_error: None,
+            until_periodic: None,
         }
     }
 

@@ -103,8 +103,9 @@ fn solver_stops_at_a_step_boundary() {
 fn study_resumes_without_redoing_finished_runs(dir: &Path) {
     let mut plan = StudyPlan::paper();
     plan.realisations = 1;
-    // 14 clearance cases and 4 ideal ones, one realisation each, at three settings.
-    let all = 18 * 3;
+    // 14 clearance cases and 4 ideal ones, one realisation each, at three settings, and the
+    // four lubricated 150 rpm cases again until periodic (the periodicity claim).
+    let all = 18 * 3 + 4 * 3;
     let out = dir.join("study");
     let first = Recorder::stopping_after(10);
     let e = study::run_and_write_with(&plan, &out, &first).unwrap_err();

@@ -81,6 +81,62 @@ pub const NEAR_BOUNDARY: f64 = 0.9;
 pub const NOT_CHAOTIC: f64 = 1e-3;
 /// "Periodic": max |e_k − e_{k−1}| / c between the last two revolutions below this.
 pub const PERIODIC: f64 = 0.05;
+/// "Grows markedly" (P16): the RMS deviation at 0.5 mm at least this multiple of that at
+/// 0.3 mm.
+pub const MARKED_GROWTH: f64 = 1.25;
+
+/// The thresholds the claims are judged with (the module doc says what each means).
+///
+/// ```text
+/// little 0.01 of the stroke, scarcely 0.01 and obvious 0.05 of the ideal peak, near the
+/// boundary ε ≥ 0.9, not chaotic spread < 1e-3 of the peak, periodic closure < 0.05 c,
+/// marked growth × 1.25
+/// ```
+///
+/// The 10 % of a "fluctuating" sector ([`SECTOR_FLUCTUATION`]) is applied when the runs'
+/// statistics are made, not here.
+///
+/// Source: this module (the constants above).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Thresholds {
+    /// [`LITTLE`].
+    pub little: f64,
+    /// [`SCARCELY`].
+    pub scarcely: f64,
+    /// [`OBVIOUS`].
+    pub obvious: f64,
+    /// [`NEAR_BOUNDARY`].
+    pub near_boundary: f64,
+    /// [`NOT_CHAOTIC`].
+    pub not_chaotic: f64,
+    /// [`PERIODIC`].
+    pub periodic: f64,
+    /// [`MARKED_GROWTH`].
+    pub marked_growth: f64,
+}
+
+impl Thresholds {
+    /// The study's thresholds (the constants of this module).
+    pub fn paper() -> Thresholds {
+        Thresholds {
+            little: LITTLE,
+            scarcely: SCARCELY,
+            obvious: OBVIOUS,
+            near_boundary: NEAR_BOUNDARY,
+            not_chaotic: NOT_CHAOTIC,
+            periodic: PERIODIC,
+            marked_growth: MARKED_GROWTH,
+        }
+    }
+}
+
+/// Suffix of a case name under which [`Cases`] holds the case's runs until periodic.
+pub const STEADY_SUFFIX: &str = "@steady_state";
+
+/// The name of a case's runs until periodic in [`Cases`].
+pub fn at_steady_state(case: &str) -> String {
+    format!("{case}{STEADY_SUFFIX}")
+}
 
 /// A statistic of one realisation of one case that a claim reads.
 ///
@@ -279,6 +335,11 @@ pub struct Claim {
     pub numbers: Vec<Number>,
     /// The verdict on the ensemble means.
     pub verdict: Verdict,
+    /// Relative margin of the verdict on the means: the smallest (b − a)/max(|a|, |b|) over
+    /// the criterion's comparisons a < b (or a ≤ b); ≥ 0 when the claim holds (0: on the
+    /// threshold of an "at least"), ≤ 0 when it does not (the comparison that fails by most).
+    #[serde(default)]
+    pub margin: f64,
     /// Realisations on which the criterion is true.
     pub realisations_holding: usize,
     /// Number of realisations.
@@ -306,9 +367,62 @@ struct View<'a> {
     cases: &'a Cases,
     pick: Pick,
     log: RefCell<Vec<Number>>,
+    th: &'a Thresholds,
+    /// Relative margins of the comparisons made (see [`Claim::margin`]).
+    margins: RefCell<Vec<f64>>,
+}
+
+/// Relative margin of a < b (or a ≤ b): (b − a)/max(|a|, |b|); 0 when both are 0.
+fn relative_margin(a: f64, b: f64) -> f64 {
+    let scale = a.abs().max(b.abs());
+    if scale > 0.0 {
+        (b - a) / scale
+    } else {
+        0.0
+    }
 }
 
 impl View<'_> {
+    /// a < b, its margin recorded.
+    fn less(&self, a: f64, b: f64) -> bool {
+        self.margins.borrow_mut().push(relative_margin(a, b));
+        a < b
+    }
+
+    /// a ≥ b, its margin recorded.
+    fn at_least(&self, a: f64, b: f64) -> bool {
+        self.margins.borrow_mut().push(relative_margin(b, a));
+        a >= b
+    }
+
+    /// Every element above the one before it, margins recorded.
+    fn increasing(&self, v: &[f64]) -> bool {
+        let mut ok = true;
+        for w in v.windows(2) {
+            ok &= self.less(w[0], w[1]);
+        }
+        ok
+    }
+
+    /// a[i] < b[i] for every i, margins recorded.
+    fn below(&self, a: &[f64], b: &[f64]) -> bool {
+        let mut ok = true;
+        for (x, y) in a.iter().zip(b) {
+            ok &= self.less(*x, *y);
+        }
+        ok
+    }
+
+    /// The case's runs until periodic when there are any, else its own runs.
+    fn periodic_case(&self, case: &str) -> String {
+        let s = at_steady_state(case);
+        if self.cases.contains_key(&s) {
+            s
+        } else {
+            case.to_string()
+        }
+    }
+
     fn get(&self, case: &str, q: Quantity) -> Result<f64, Error> {
         let e = self
             .cases
@@ -379,11 +493,6 @@ pub fn strictly_increasing(v: &[f64]) -> bool {
     v.windows(2).all(|w| w[1] > w[0])
 }
 
-/// True when a[i] < b[i] for every i.
-fn all_below(a: &[f64], b: &[f64]) -> bool {
-    a.iter().zip(b).all(|(x, y)| x < y)
-}
-
 fn span(v: &[f64]) -> f64 {
     let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
@@ -416,7 +525,10 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let mut ok = true;
             for c in DRY_SPEEDS {
-                ok &= v.get(c, Quantity::XDevMax)? < LITTLE * v.get(c, Quantity::Stroke)?;
+                ok &= v.less(
+                    v.get(c, Quantity::XDevMax)?,
+                    v.th.little * v.get(c, Quantity::Stroke)?,
+                );
             }
             Ok(ok)
         },
@@ -429,7 +541,7 @@ const DEFS: &[Def] = &[
         source: "However, the inertial force of the slider due to rotation speed changes the motion contour of the slider in the extreme position, and the drift phenomenon of the bottom dead point can occur.",
         criterion: "max |x − x_ideal| within ±15° of the bottom dead centre (θ ≡ 0, slider farthest from the crank) strictly increases with speed (dry, 0.1 mm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_SPEEDS, Quantity::XDevBdc)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_SPEEDS, Quantity::XDevBdc)?)),
     },
     Def {
         id: "P3",
@@ -443,7 +555,7 @@ const DEFS: &[Def] = &[
             let mut ok = true;
             for c in DRY_SPEEDS {
                 let a = v.get(c, Quantity::ADevRel)?;
-                ok &= a > v.get(c, Quantity::XDevRel)? && a > v.get(c, Quantity::VDevRel)?;
+                ok &= v.less(v.get(c, Quantity::XDevRel)?, a) & v.less(v.get(c, Quantity::VDevRel)?, a);
             }
             Ok(ok)
         },
@@ -459,7 +571,7 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let mut ok = true;
             for c in DRY_SPEEDS {
-                ok &= v.get(c, Quantity::FluctuationSectors)? >= 8.0;
+                ok &= v.at_least(v.get(c, Quantity::FluctuationSectors)?, 8.0);
             }
             Ok(ok)
         },
@@ -472,7 +584,7 @@ const DEFS: &[Def] = &[
         source: "With the increase in rotation speed, the vibration characteristics become more complex and the peak value of fluctuation in the extreme position is improved.",
         criterion: "slider_acc_rms_dev_ideal strictly increases from 120 to 150 to 180 to 200 rpm (dry, 0.1 mm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_SPEEDS, Quantity::RmsDev)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_SPEEDS, Quantity::RmsDev)?)),
     },
     Def {
         id: "P6",
@@ -482,7 +594,7 @@ const DEFS: &[Def] = &[
         source: "With the increase in rotation speed, the vibration characteristics become more complex and the peak value of fluctuation in the extreme position is improved.",
         criterion: "max |ẍ − ẍ_ideal| within ±15° of the dead centres (θ ≡ 0 or π) strictly increases with speed (dry, 0.1 mm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_SPEEDS, Quantity::ADevDeadCentres)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_SPEEDS, Quantity::ADevDeadCentres)?)),
     },
     Def {
         id: "P7",
@@ -492,7 +604,7 @@ const DEFS: &[Def] = &[
         source: "The free movement of the revolute joint is observed at a lower rotation speed. In the condition where n = 180 rpm, the rate of the contact phenomenon in the motion trajectory becomes active.",
         criterion: "The fraction of the revolution in contact (δ > 0) strictly increases with speed (dry, 0.1 mm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_SPEEDS, Quantity::ContactFraction)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_SPEEDS, Quantity::ContactFraction)?)),
     },
     Def {
         id: "P8",
@@ -502,7 +614,7 @@ const DEFS: &[Def] = &[
         source: "However, the penetration characteristics are obvious when the rotation speed reaches 200 rpm, and the transmission time of the motion state (contact and impact) is also clear.",
         criterion: "penetration_max strictly increases with speed (dry, 0.1 mm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_SPEEDS, Quantity::PenetrationMax)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_SPEEDS, Quantity::PenetrationMax)?)),
     },
     Def {
         id: "P9",
@@ -513,7 +625,7 @@ const DEFS: &[Def] = &[
         criterion: "slider_acc_rms_dev_ideal lubricated < dry at 120, 150, 180 and 200 rpm (0.1 mm).",
         note: "",
         eval: |v| {
-            Ok(all_below(
+            Ok(v.below(
                 &v.all(&LUB_SPEEDS, Quantity::RmsDev)?,
                 &v.all(&DRY_SPEEDS, Quantity::RmsDev)?,
             ))
@@ -528,7 +640,7 @@ const DEFS: &[Def] = &[
         criterion: "max |x − x_ideal| within ±15° of the bottom dead centre, lubricated < dry at every speed (0.1 mm).",
         note: "",
         eval: |v| {
-            Ok(all_below(
+            Ok(v.below(
                 &v.all(&LUB_SPEEDS, Quantity::XDevBdc)?,
                 &v.all(&DRY_SPEEDS, Quantity::XDevBdc)?,
             ))
@@ -543,7 +655,7 @@ const DEFS: &[Def] = &[
         criterion: "max |ẋ − ẋ_ideal|, lubricated < dry at every speed (0.1 mm).",
         note: "",
         eval: |v| {
-            Ok(all_below(
+            Ok(v.below(
                 &v.all(&LUB_SPEEDS, Quantity::VDevMax)?,
                 &v.all(&DRY_SPEEDS, Quantity::VDevMax)?,
             ))
@@ -560,7 +672,10 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let mut ok = true;
             for c in LUB_SPEEDS {
-                ok &= v.get(c, Quantity::ADevMax)? < SCARCELY * v.get(c, Quantity::AIdealPeak)?;
+                ok &= v.less(
+                    v.get(c, Quantity::ADevMax)?,
+                    v.th.scarcely * v.get(c, Quantity::AIdealPeak)?,
+                );
             }
             Ok(ok)
         },
@@ -573,7 +688,13 @@ const DEFS: &[Def] = &[
         source: "The squeeze force of the oil film compensates for the clearance size, and the deviation value between the journal center and the bearing center is controlled. Free movement is the main motion state of slider crank mechanism during the whole period",
         criterion: "eps_max < 1 at every speed (lubricated, 0.1 mm).",
         note: "",
-        eval: |v| Ok(v.all(&LUB_SPEEDS, Quantity::EpsMax)?.iter().all(|&e| e < 1.0)),
+        eval: |v| {
+            let mut ok = true;
+            for e in v.all(&LUB_SPEEDS, Quantity::EpsMax)? {
+                ok &= v.less(e, 1.0);
+            }
+            Ok(ok)
+        },
     },
     Def {
         id: "P14",
@@ -588,7 +709,7 @@ const DEFS: &[Def] = &[
             let s = v.all(&DRY_SPEEDS, Quantity::XDevMax)?;
             v.note("range of x_dev_max over the clearances, m", span(&c));
             v.note("range of x_dev_max over the speeds, m", span(&s));
-            Ok(strictly_increasing(&c) && span(&c) > span(&s))
+            Ok(v.increasing(&c) & v.less(span(&s), span(&c)))
         },
     },
     Def {
@@ -599,7 +720,7 @@ const DEFS: &[Def] = &[
         source: "The slider velocity could reflect this phenomenon clearly, as well as the intense vibration in the bottom point of the slider velocity.",
         criterion: "max |ẋ − ẋ_ideal| strictly increases with the clearance (dry, 150 rpm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_CLEARANCES, Quantity::VDevMax)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_CLEARANCES, Quantity::VDevMax)?)),
     },
     Def {
         id: "P16",
@@ -617,7 +738,7 @@ const DEFS: &[Def] = &[
             v.note("RMS(0.5 mm) / RMS(0.3 mm)", ratio);
             v.note("growth 0.3→0.5 mm, m/s² per mm", slope_hi);
             v.note("growth 0.1→0.3 mm, m/s² per mm", slope_lo);
-            Ok(ratio >= 1.25 && slope_hi > slope_lo)
+            Ok(v.at_least(ratio, v.th.marked_growth) & v.less(slope_lo, slope_hi))
         },
     },
     Def {
@@ -630,7 +751,7 @@ const DEFS: &[Def] = &[
         note: "",
         eval: |v| {
             let f = v.all(&DRY_CLEARANCES, Quantity::ContactFraction)?;
-            Ok(f[2].max(f[3]) < f[0].min(f[1]))
+            Ok(v.less(f[2].max(f[3]), f[0].min(f[1])))
         },
     },
     Def {
@@ -641,7 +762,7 @@ const DEFS: &[Def] = &[
         source: "Additionally, the penetration value of the contact impact is also enlarged.",
         criterion: "penetration_max strictly increases with the clearance (dry, 150 rpm).",
         note: "",
-        eval: |v| Ok(strictly_increasing(&v.all(&DRY_CLEARANCES, Quantity::PenetrationMax)?)),
+        eval: |v| Ok(v.increasing(&v.all(&DRY_CLEARANCES, Quantity::PenetrationMax)?)),
     },
     Def {
         id: "P19",
@@ -652,7 +773,7 @@ const DEFS: &[Def] = &[
         criterion: "max |x − x_ideal|, lubricated < dry at 0.1, 0.2, 0.3 and 0.5 mm.",
         note: "",
         eval: |v| {
-            Ok(all_below(
+            Ok(v.below(
                 &v.all(&LUB_CLEARANCES, Quantity::XDevMax)?,
                 &v.all(&DRY_CLEARANCES, Quantity::XDevMax)?,
             ))
@@ -667,10 +788,10 @@ const DEFS: &[Def] = &[
         criterion: "max |ẋ − ẋ_ideal| and slider_acc_rms_dev_ideal, lubricated < dry at every clearance.",
         note: "",
         eval: |v| {
-            Ok(all_below(
+            Ok(v.below(
                 &v.all(&LUB_CLEARANCES, Quantity::VDevMax)?,
                 &v.all(&DRY_CLEARANCES, Quantity::VDevMax)?,
-            ) && all_below(
+            ) & v.below(
                 &v.all(&LUB_CLEARANCES, Quantity::RmsDev)?,
                 &v.all(&DRY_CLEARANCES, Quantity::RmsDev)?,
             ))
@@ -687,7 +808,11 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let d = v.all(&LUB_CLEARANCES, Quantity::ADevMax)?;
             let peak = v.get(LUB_CLEARANCES[3], Quantity::AIdealPeak)?;
-            Ok(d[3] >= OBVIOUS * peak && d[..3].iter().all(|&x| x < d[3]))
+            let mut ok = v.at_least(d[3], v.th.obvious * peak);
+            for &x in &d[..3] {
+                ok &= v.less(x, d[3]);
+            }
+            Ok(ok)
         },
     },
     Def {
@@ -700,7 +825,8 @@ const DEFS: &[Def] = &[
         note: "",
         eval: |v| {
             let e = v.all(&LUB_CLEARANCES, Quantity::EpsMax)?;
-            Ok(e[3] >= NEAR_BOUNDARY && e[0] < NEAR_BOUNDARY && e[1] < NEAR_BOUNDARY)
+            let near = v.th.near_boundary;
+            Ok(v.at_least(e[3], near) & v.less(e[0], near) & v.less(e[1], near))
         },
     },
     Def {
@@ -711,7 +837,13 @@ const DEFS: &[Def] = &[
         source: "The liquid medium is filled with the movement space of the clearance joint, and the eccentricity of the joint element centers extrudes the oil film, which is the reason why the supporting force of the lubricant medium appears.",
         criterion: "eps_max < 1 at 0.1, 0.2, 0.3 and 0.5 mm (lubricated, 150 rpm).",
         note: "",
-        eval: |v| Ok(v.all(&LUB_CLEARANCES, Quantity::EpsMax)?.iter().all(|&e| e < 1.0)),
+        eval: |v| {
+            let mut ok = true;
+            for e in v.all(&LUB_CLEARANCES, Quantity::EpsMax)? {
+                ok &= v.less(e, 1.0);
+            }
+            Ok(ok)
+        },
     },
     Def {
         id: "P24",
@@ -724,7 +856,10 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let mut ok = true;
             for c in LUB_CLEARANCES {
-                ok &= v.get(c, Quantity::AccSpread)? < NOT_CHAOTIC * v.get(c, Quantity::AIdealPeak)?;
+                ok &= v.less(
+                    v.get(c, Quantity::AccSpread)?,
+                    v.th.not_chaotic * v.get(c, Quantity::AIdealPeak)?,
+                );
             }
             Ok(ok)
         },
@@ -735,13 +870,15 @@ const DEFS: &[Def] = &[
         figure: "Fig. 16",
         statement: "Lubricated, 150 rpm: the orbit is periodic at every clearance.",
         source: "Then, the regularity and periodicity of motion are presented.",
-        criterion: "max |e(t) − e(t − T)| / c over the last revolution < 0.05 at every clearance (lubricated, 150 rpm).",
-        note: "The journal starts centred (docs/model.md §6) and sinks into the film over several revolutions, so a large gap after two revolutions can be a transient that has not settled rather than an aperiodic orbit.",
+        criterion: "max |e(t) − e(t − T)| / c over the last revolution < 0.05 at every clearance (lubricated, 150 rpm), judged at steady state: each realisation runs until its once-per-revolution section moves by less than 0.01 c (at most 40 revolutions).",
+        note: "The journal starts centred (docs/model.md §6) and sinks into the film over many revolutions; after two revolutions the gap is a transient that has not settled, which is why the claim is judged at steady state.",
         eval: |v| {
-            Ok(v
-                .all(&LUB_CLEARANCES, Quantity::OrbitClosure)?
-                .iter()
-                .all(|&g| g < PERIODIC))
+            let cases: Vec<String> = LUB_CLEARANCES.iter().map(|c| v.periodic_case(c)).collect();
+            let mut ok = true;
+            for c in &cases {
+                ok &= v.less(v.get(c, Quantity::OrbitClosure)?, v.th.periodic);
+            }
+            Ok(ok)
         },
     },
     Def {
@@ -755,7 +892,10 @@ const DEFS: &[Def] = &[
         eval: |v| {
             let mut ok = true;
             for c in IDEALS {
-                ok &= v.get(c, Quantity::RmsDev)? < 1e-6 * v.get(c, Quantity::AIdealPeak)?;
+                ok &= v.less(
+                    v.get(c, Quantity::RmsDev)?,
+                    1e-6 * v.get(c, Quantity::AIdealPeak)?,
+                );
             }
             Ok(ok)
         },
@@ -769,8 +909,8 @@ const DEFS: &[Def] = &[
         criterion: "eps_max > 2 and contact_force_max > 3e4 N (dry_150rpm_c0.1).",
         note: "",
         eval: |v| {
-            Ok(v.get(DRY_SPEEDS[1], Quantity::EpsMax)? > 2.0
-                && v.get(DRY_SPEEDS[1], Quantity::ContactForceMax)? > 3e4)
+            Ok(v.less(2.0, v.get(DRY_SPEEDS[1], Quantity::EpsMax)?)
+                & v.less(3e4, v.get(DRY_SPEEDS[1], Quantity::ContactForceMax)?))
         },
     },
     Def {
@@ -782,8 +922,8 @@ const DEFS: &[Def] = &[
         criterion: "eps_max < 1 and slider_acc_rms_dev_ideal < 2e-3 m/s² (lubricated_150rpm_c0.1).",
         note: "",
         eval: |v| {
-            Ok(v.get(LUB_SPEEDS[1], Quantity::EpsMax)? < 1.0
-                && v.get(LUB_SPEEDS[1], Quantity::RmsDev)? < 2e-3)
+            Ok(v.less(v.get(LUB_SPEEDS[1], Quantity::EpsMax)?, 1.0)
+                & v.less(v.get(LUB_SPEEDS[1], Quantity::RmsDev)?, 2e-3))
         },
     },
     Def {
@@ -794,7 +934,7 @@ const DEFS: &[Def] = &[
         source: "The dry cases are chaotic. At 150 rpm with 0.1 mm clearance, moving the slider's initial position by 1e-15 m changes the slider acceleration by about 1e-5 m/s² within the first revolution and by about 4e-2 m/s² by the end of the second. (docs/model.md §9)",
         criterion: "The realisations' pointwise spread of ẍ over the last revolution exceeds 1e-2 m/s² (dry_150rpm_c0.1).",
         note: "",
-        eval: |v| Ok(v.get(DRY_SPEEDS[1], Quantity::AccSpread)? > 1e-2),
+        eval: |v| Ok(v.less(1e-2, v.get(DRY_SPEEDS[1], Quantity::AccSpread)?)),
     },
 ];
 
@@ -807,6 +947,11 @@ pub fn count() -> usize {
 /// realisations on which the criterion holds. Errors ([`Error::Internal`]): a case missing, a
 /// statistic missing or non-finite.
 pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
+    evaluate_with(cases, &Thresholds::paper())
+}
+
+/// [`evaluate`] with other thresholds.
+pub fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error> {
     let n = cases.values().map(|e| e.members.len()).max().unwrap_or(0);
     if n == 0 {
         return Err(Error::Internal(
@@ -819,14 +964,24 @@ pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
                 cases,
                 pick: Pick::Mean,
                 log: RefCell::new(Vec::new()),
+                th,
+                margins: RefCell::new(Vec::new()),
             };
             let holds = (d.eval)(&mean)?;
+            let margin = mean
+                .margins
+                .borrow()
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
             let mut holding = 0;
             for k in 0..n {
                 let one = View {
                     cases,
                     pick: Pick::Member(k),
                     log: RefCell::new(Vec::new()),
+                    th,
+                    margins: RefCell::new(Vec::new()),
                 };
                 holding += usize::from((d.eval)(&one)?);
             }
@@ -838,6 +993,7 @@ pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
                 source: d.source.into(),
                 criterion: d.criterion.into(),
                 note: d.note.into(),
+                margin,
                 numbers: mean.log.into_inner(),
                 verdict: Verdict::of(holds),
                 realisations_holding: holding,
