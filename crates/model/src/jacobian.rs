@@ -66,6 +66,7 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
         }
         return;
     }
+    mech.dense_constraint_jacobian(&mut sc);
     // ∂g/∂y (nq × n, column-major) through the clearance joints.
     let mut dg = vec![0.0; nq * n];
     for k in 0..mech.clr.len() {
