@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [--reps N]
-//! (a) one RHS evaluation of the dry press (150 rpm, c = 0.1 mm), ns, against 1 µs
+//! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
+//!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
 //!     second revolution (2001 points); the cheapest run of each method with error ≤ 1e-6 m/s²
 //!     against RK4 at the largest step h = Δ/k (Δ the grid spacing) that reaches it
@@ -291,31 +292,68 @@ fn cheapest_adaptive(
     best
 }
 
+/// Minimum over `reps` rounds of the mean time of `n` calls of `f` (s).
+fn time_per_call(reps: usize, n: usize, mut f: impl FnMut()) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..reps {
+        let start = Instant::now();
+        for _ in 0..n {
+            f();
+        }
+        best = best.min(start.elapsed().as_secs_f64() / n as f64);
+    }
+    best
+}
+
 fn section_a(ctx: &Ctx) {
-    println!("\n(a) one right-hand side of the press, 150 rpm, c = 0.1 mm");
+    use lash_benches::handwritten::HandPress;
+    println!(
+        "\n(a) one right-hand side and one Jacobian of the press, 150 rpm, c = 0.1 mm, against \
+         the hand-written minimal-coordinate right-hand side (rounds alternate, minimum of each)"
+    );
     for stem in ["dry_150rpm_c0.1", "lubricated_150rpm_c0.1"] {
         let m = press(stem, 2.0);
+        let hand = HandPress::paper(150.0, 1e-4, stem.starts_with("lubricated"));
         let (contact, free) = contact_and_free_states(&m);
         for (label, s) in [("contact", contact), ("free", free)] {
-            let mut dy = vec![0.0; m.dim()];
-            let n = 200_000;
-            let mut best = f64::INFINITY;
+            let n = m.dim();
+            let mut dy = vec![0.0; n];
+            let mut jac = faer::Mat::<f64>::zeros(n, n);
+            let ym = HandPress::minimal_state(&s.y);
+            let mut dh = [0.0; 4];
+            let (mut rhs, mut hand_rhs, mut jac_t) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
             for _ in 0..ctx.reps.max(5) {
-                let start = Instant::now();
-                for _ in 0..n {
+                rhs = rhs.min(time_per_call(1, 200_000, || {
                     m.rhs(
                         std::hint::black_box(s.t),
                         std::hint::black_box(&s.y),
                         std::hint::black_box(&mut dy),
-                    );
-                }
-                best = best.min(start.elapsed().as_secs_f64() / n as f64);
+                    )
+                }));
+                hand_rhs = hand_rhs.min(time_per_call(1, 200_000, || {
+                    hand.rhs(
+                        std::hint::black_box(s.t),
+                        std::hint::black_box(&ym),
+                        std::hint::black_box(&mut dh),
+                    )
+                }));
+                jac_t = jac_t.min(time_per_call(1, 10_000, || {
+                    m.jacobian(
+                        std::hint::black_box(s.t),
+                        std::hint::black_box(&s.y),
+                        jac.as_mut(),
+                    )
+                }));
             }
             println!(
-                "  {stem:24} {label:8} δ = {:+.2e} m   rhs {:7.1} ns   (1 µs / rhs = {:.2})",
+                "  {stem:24} {label:8} δ = {:+.2e} m   rhs {:6.1} ns, hand-written {:5.1} ns: \
+                 {:.2}× (goal ≤ 2);   jacobian {:7.0} ns = {:.1} rhs (goal ≤ 6)",
                 s.delta,
-                best * 1e9,
-                1e-6 / best
+                rhs * 1e9,
+                hand_rhs * 1e9,
+                rhs / hand_rhs,
+                jac_t * 1e9,
+                jac_t / rhs
             );
         }
     }

@@ -225,7 +225,7 @@ fn check_evaluation(
             ));
         }
     }
-    mech.constraint_rows(t, sc, false);
+    mech.constraint_rows(t, sc, true);
     let nq = mech.nq();
     for (r, row) in mech.rows.iter().enumerate() {
         let jr = &sc.jac[r * nq..(r + 1) * nq];
@@ -338,7 +338,7 @@ mod tests {
             let mech = pendulum(m, inertia, phi);
             let mut sc = mech.scratch.borrow_mut();
             mech.kinematics(0.0, &mech.y0, &mut sc);
-            mech.constraint_rows(0.0, &mut sc, false);
+            mech.constraint_rows(0.0, &mut sc, true);
             let r = pivot_ratios(&mech, &sc);
             let (s, c) = phi.sin_cos();
             let (s11, s22) = (1.0 / m + s * s / inertia, 1.0 / m + c * c / inertia);
@@ -352,7 +352,7 @@ mod tests {
         let mech = pendulum(1.0, 1e-6, 0.0);
         let mut sc = mech.scratch.borrow_mut();
         mech.kinematics(0.0, &mech.y0, &mut sc);
-        mech.constraint_rows(0.0, &mut sc, false);
+        mech.constraint_rows(0.0, &mut sc, true);
         let r = pivot_ratios(&mech, &sc);
         assert!(
             r.len() == 2 && r.iter().all(|x| (x - 1.0).abs() <= 2.0 * f64::EPSILON),

@@ -6,7 +6,8 @@
 //! q̈ = K(t, q, q̇; g),  g = g(q, q̇) the applied forces (gravity and clearance joints),
 //!   K the KKT solution, linear in g:  ∂K/∂g = A = M⁻¹ − M⁻¹Φ_qᵀ S⁻¹ Φ_q M⁻¹
 //! ∂q̈/∂y = ∂K/∂y |_{g fixed} + A ∂g/∂y
-//!   ∂K/∂q  |_g : central differences, h_j = 1e-8 · max(|q_j|, 1)
+//!   ∂K/∂q  |_g : closed form (the derivatives of Φ_q, γ and Φ̇ in the angles; see
+//!                `constraint_position_jacobian`)
 //!   ∂K/∂q̇  |_g = M⁻¹Φ_qᵀ S⁻¹ ∂r/∂q̇,  r = γ − 2αΦ̇ − β²Φ,
 //!                ∂r/∂q̇ = ∂γ/∂q̇ − 2α Φ_q   (closed form; γ ∋ ω² (w·A s))
 //!   ∂g/∂y = ∂g/∂u · ∂u/∂y + ∂g/∂φ |_u,  u = (e, ė, φ̇_J, φ̇_B) of each clearance joint,
@@ -30,18 +31,14 @@
 //! body coordinates straddles that and gives a Jacobian with O(1) errors, which costs a
 //! Rosenbrock method (it needs the exact Jacobian for its order) thousands of tiny steps.
 //! Differencing in e, ė directly with increments relative to |e| and |δ| has no such limit and
-//! no cancellation (e is not recomputed from positions of size 0.35 m). The constraint part
-//! varies on the scale of the links (≥ 1.5 cm), where 10⁻⁸ is accurate to ~1e-8 relative.
-//! docs/model.md §1 (1.7) allows finite differences for the constraint part; the closed forms
-//! above are exact.
+//! no cancellation (e is not recomputed from positions of size 0.35 m). docs/model.md §1 (1.7)
+//! allows finite differences for the constraint part; the closed forms above are exact, and
+//! cost no KKT solve beyond one back substitution per column.
 
 use faer::MatMut;
 
 use crate::geometry::{ClearanceInput, ClearanceState};
 use crate::mechanism::{cholesky_solve, perp, rot, Mechanism, Owner, Scratch, TermKind};
-
-/// Relative finite-difference step of the position columns (constraint geometry).
-pub const FD_STEP: f64 = 1e-8;
 
 /// Relative step of the differences in the clearance variables u = (e, ė, φ̇_J, φ̇_B).
 const LOCAL_STEP: f64 = 1e-6;
@@ -72,6 +69,7 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
         }
         return;
     }
+    mech.dense_constraint_jacobian(&mut sc);
     // ∂g/∂y (nq × n, column-major) through the clearance joints.
     let mut dg = vec![0.0; nq * n];
     for k in 0..mech.clr.len() {
@@ -80,57 +78,130 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
     if !(mech.elements.is_empty() && mech.prismatic.is_empty()) {
         element_force_jacobian(mech, t, y, &sc, &mut dg);
     }
-    // Lower-left and lower-right blocks: A ∂g/∂y (A applied column by column, with the
-    // Cholesky factor of S from the evaluation at y).
+    // P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, row-major), from m solves with the factor of S: every later
+    // product with S⁻¹ is a product with P.
+    let pmat = kkt_projector(mech, &sc);
+    // Lower-left and lower-right blocks: A ∂g/∂y, A = M⁻¹ − P Φ_q M⁻¹, column by column.
     let mut col = vec![0.0; nq];
-    let mut lam = vec![0.0; m];
+    let mut w = vec![0.0; m];
     for j in 0..n {
         let dgj = &dg[j * nq..(j + 1) * nq];
         if dgj.iter().all(|&v| v == 0.0) {
             continue;
         }
-        project(mech, &sc, dgj, &mut lam, &mut col);
+        project(mech, &sc, &pmat, dgj, &mut w, &mut col);
         for i in 0..nq {
             jac[(nq + i, j)] = col[i];
         }
     }
-    // ∂K/∂q̇ at fixed g: M⁻¹ Φ_qᵀ S⁻¹ ∂r/∂q̇, column by column.
+    // ∂K/∂q̇ at fixed g: P ∂r/∂q̇, column by column.
     let drdv = constraint_rhs_velocity_jacobian(mech, &sc);
     for j in 0..nq {
-        for a in 0..m {
-            lam[a] = drdv[a * nq + j];
-        }
-        if lam.iter().all(|&v| v == 0.0) {
-            continue;
-        }
-        cholesky_solve(&sc.smat, m, &mut lam);
         for i in 0..nq {
             let mut s = 0.0;
             for a in 0..m {
-                s += sc.jac[a * nq + i] * lam[a];
+                s += pmat[i * m + a] * drdv[a * nq + j];
             }
-            jac[(nq + i, nq + j)] += mech.minv[i] * s;
+            jac[(nq + i, nq + j)] += s;
         }
     }
-    // ∂K/∂q at fixed g: central differences of the KKT solution with g held at g(y).
-    let g0 = sc.g.clone();
-    let mut yp = y.to_vec();
-    let mut fp = vec![0.0; nq];
+    // ∂K/∂q at fixed g, in closed form (module doc).
+    constraint_position_jacobian(mech, &sc, &pmat, &mut jac);
+}
+
+/// P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, row-major) after an evaluation (Φ_q in `sc.jac`, the factor of
+/// S in `sc.smat`): S⁻¹ column by column from the factor, then the product.
+fn kkt_projector(mech: &Mechanism, sc: &Scratch) -> Vec<f64> {
+    let nq = mech.nq();
+    let m = mech.rows.len();
+    let mut sinv = vec![0.0; m * m];
+    let mut e = vec![0.0; m];
+    for a in 0..m {
+        e.iter_mut().for_each(|v| *v = 0.0);
+        e[a] = 1.0;
+        cholesky_solve(&sc.smat, m, &mut e);
+        sinv[a * m..(a + 1) * m].copy_from_slice(&e); // S⁻¹ is symmetric: row a = column a
+    }
+    let mut p = vec![0.0; nq * m];
+    for i in 0..nq {
+        for a in 0..m {
+            let mut s = 0.0;
+            for b in 0..m {
+                s += sc.jac[b * nq + i] * sinv[b * m + a];
+            }
+            p[i * m + a] = mech.minv[i] * s;
+        }
+    }
+    p
+}
+
+/// Adds ∂K/∂q at fixed g to the lower-left block of `jac` (after an evaluation: q̈, λ, Φ_q,
+/// the factor of S in the scratch).
+///
+/// ```text
+/// S λ = Φ_q M⁻¹ g − r,  q̈ = M⁻¹ (g − Φ_qᵀ λ)  ⇒  for each coordinate q_j:
+///   u = (∂Φ_q/∂q_j)ᵀ λ,   S ∂λ = (∂Φ_q/∂q_j) q̈ − Φ_q M⁻¹ u − ∂r/∂q_j,
+///   ∂q̈/∂q_j = −M⁻¹ (u + Φ_qᵀ ∂λ)
+/// Φ_q depends on q only through the angles: a point term (w · r^P, r^P = r + A(φ) s) has
+/// the row (w_x, w_y, w · b), b = ∂(A s)/∂φ, and ∂(w · b)/∂φ = −w · A s; so ∂Φ_q/∂q_j is
+/// zero for x and y and has one nonzero column (j itself) for φ.
+/// r = γ − 2αΦ̇ − β²Φ:  ∂Φ/∂q_j = Φ_q[:, j];  for a point term on body i,
+///   ∂Φ̇/∂φ_i = −(w · A s) φ̇_i,   ∂γ/∂φ_i = φ̇_i² (w · b)   (γ ∋ φ̇_i² (w · A s))
+/// ```
+/// Before, central differences of 12 KKT solves (BENCHMARKS.md, "What was optimised").
+fn constraint_position_jacobian(
+    mech: &Mechanism,
+    sc: &Scratch,
+    pmat: &[f64],
+    jac: &mut MatMut<'_, f64>,
+) {
+    let nq = mech.nq();
+    let m = mech.rows.len();
+    if m == 0 {
+        return;
+    }
+    let (a2, b2) = (2.0 * mech.alpha, mech.beta * mech.beta);
+    let mut dphiq = vec![0.0; m]; // ∂Φ_q[:, j]/∂q_j (the only nonzero column)
+    let mut rhs = vec![0.0; m];
     for j in 0..nq {
-        let h = FD_STEP * y[j].abs().max(1.0);
-        yp[j] = y[j] + h;
-        let okp = frozen_kkt(mech, t, &yp, &g0, &mut sc);
-        fp.copy_from_slice(&sc.qdd);
-        yp[j] = y[j] - h;
-        let okm = frozen_kkt(mech, t, &yp, &g0, &mut sc);
-        yp[j] = y[j];
-        let inv = 0.5 / h;
+        let (body_i, comp) = (j / 3, j % 3);
+        dphiq.iter_mut().for_each(|v| *v = 0.0);
+        // ∂r/∂q_j, with the sign of −∂r in `rhs`.
+        for a in 0..m {
+            rhs[a] = b2 * sc.jac[a * nq + j];
+        }
+        if comp == 2 {
+            for (a, (row, ints)) in mech.rows.iter().zip(&mech.row_int).enumerate() {
+                for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                    if ints[ti] != Some(body_i) {
+                        continue;
+                    }
+                    if let TermKind::Point { s, w: wv } = term.kind {
+                        let av = rot(sc.cs[term.body], s);
+                        let bv = perp(av);
+                        let wa = wv[0] * av[0] + wv[1] * av[1];
+                        let wb = wv[0] * bv[0] + wv[1] * bv[1];
+                        let om = sc.vel[term.body][2];
+                        dphiq[a] -= wa;
+                        // −∂γ/∂φ + 2α ∂Φ̇/∂φ = −φ̇² (w · b) − 2α (w · A s) φ̇.
+                        rhs[a] -= om * om * wb + a2 * wa * om;
+                    }
+                }
+            }
+        }
+        // u = (∂Φ_q/∂q_j)ᵀ λ has the single entry u_j.
+        let u: f64 = (0..m).map(|a| dphiq[a] * sc.lam[a]).sum();
+        let mj = mech.minv[j];
+        for a in 0..m {
+            rhs[a] += dphiq[a] * sc.qdd[j] - sc.jac[a * nq + j] * mj * u;
+        }
+        // ∂q̈/∂q_j = −M⁻¹ u e_j − P (S ∂λ).
         for i in 0..nq {
-            jac[(nq + i, j)] += if okp && okm {
-                (fp[i] - sc.qdd[i]) * inv
-            } else {
-                f64::NAN
-            };
+            let mut v = if i == j { mech.minv[i] * u } else { 0.0 };
+            for a in 0..m {
+                v += pmat[i * m + a] * rhs[a];
+            }
+            jac[(nq + i, j)] -= v;
         }
     }
 }
@@ -167,19 +238,18 @@ fn element_force_jacobian(mech: &Mechanism, t: f64, y: &[f64], sc: &Scratch, dg:
     }
 }
 
-/// The KKT solution at (t, y) with the applied forces fixed at `g`; false if S is singular.
-fn frozen_kkt(mech: &Mechanism, t: f64, y: &[f64], g: &[f64], sc: &mut Scratch) -> bool {
-    mech.kinematics(t, y, sc);
-    sc.g.copy_from_slice(g);
-    mech.constraint_rows(t, sc, false);
-    mech.solve_kkt(sc)
-}
-
-/// out = A v = M⁻¹ (v − Φ_qᵀ S⁻¹ Φ_q M⁻¹ v) (after an evaluation: Φ_q in `sc.jac`, the
-/// Cholesky factor of S in `sc.smat`).
-fn project(mech: &Mechanism, sc: &Scratch, v: &[f64], lam: &mut [f64], out: &mut [f64]) {
+/// out = A v = M⁻¹ v − P Φ_q M⁻¹ v (after an evaluation: Φ_q in `sc.jac`; P from
+/// [`kkt_projector`]); `w` is scratch of length m.
+fn project(
+    mech: &Mechanism,
+    sc: &Scratch,
+    pmat: &[f64],
+    v: &[f64],
+    w: &mut [f64],
+    out: &mut [f64],
+) {
     let nq = v.len();
-    let m = lam.len();
+    let m = w.len();
     let minv = &mech.minv;
     for a in 0..m {
         let ja = &sc.jac[a * nq..(a + 1) * nq];
@@ -187,15 +257,14 @@ fn project(mech: &Mechanism, sc: &Scratch, v: &[f64], lam: &mut [f64], out: &mut
         for j in 0..nq {
             s += ja[j] * minv[j] * v[j];
         }
-        lam[a] = s;
+        w[a] = s;
     }
-    cholesky_solve(&sc.smat, m, lam);
-    for j in 0..nq {
-        let mut s = v[j];
+    for i in 0..nq {
+        let mut s = minv[i] * v[i];
         for a in 0..m {
-            s -= sc.jac[a * nq + j] * lam[a];
+            s -= pmat[i * m + a] * w[a];
         }
-        out[j] = minv[j] * s;
+        out[i] = s;
     }
 }
 

@@ -158,6 +158,19 @@ pub(crate) struct RowEval {
     pub jrows: [[f64; 3]; 2],
 }
 
+/// One block product of the Schur complement S = Φ_q M⁻¹ Φ_qᵀ: term `ta` of row `a` and term
+/// `tb` of row `b` (a ≥ b) act on the same integrated body `i`, and add
+/// J_{a,ta} M_i⁻¹ J_{b,tb}ᵀ (3-vectors, M_i⁻¹ = diag(1/m, 1/m, 1/I)) to S_ab. Built once per
+/// scene: the rows of bodies that share no term give S_ab = 0 and cost nothing.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SchurTerm {
+    pub a: usize,
+    pub b: usize,
+    pub ta: usize,
+    pub tb: usize,
+    pub i: usize,
+}
+
 /// What the event functions are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum EventKind {
@@ -247,6 +260,13 @@ pub struct Mechanism {
     pub(crate) int_bodies: Vec<usize>,
     pub(crate) pres: Vec<Prescription>,
     pub(crate) rows: Vec<Row>,
+    /// Integrated body index of each term of each row (None: a prescribed body).
+    pub(crate) row_int: Vec<[Option<usize>; 2]>,
+    /// The nonzero block products of S (fixed structure, built once).
+    pub(crate) schur: Vec<SchurTerm>,
+    /// The rows of each diagonal block of S (rows that share no body, directly or through
+    /// other rows, are in different blocks), each in increasing order.
+    pub(crate) kkt_blocks: Vec<Vec<usize>>,
     pub(crate) clr: Vec<Clr>,
     pub(crate) elements: Vec<Element>,
     pub(crate) prismatic: Vec<Prismatic>,
@@ -486,12 +506,64 @@ impl Mechanism {
             term_jac: vec![[[0.0; 3]; 2]; m],
         };
         let roles = Roles::resolve(scene, &clr);
+        let row_int: Vec<[Option<usize>; 2]> = rows
+            .iter()
+            .map(|row| {
+                let mut o = [None; 2];
+                for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                    if let Owner::Int(i) = bodies[term.body].owner {
+                        o[ti] = Some(i);
+                    }
+                }
+                o
+            })
+            .collect();
+        let mut schur = Vec::new();
+        for a in 0..rows.len() {
+            for b in 0..=a {
+                for ta in 0..2 {
+                    for tb in 0..2 {
+                        if let (Some(i), Some(j)) = (row_int[a][ta], row_int[b][tb]) {
+                            if i == j {
+                                schur.push(SchurTerm { a, b, ta, tb, i });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Diagonal blocks of S: connected components of the rows under "share a body".
+        let mut comp: Vec<usize> = (0..rows.len()).collect();
+        fn root(c: &mut [usize], mut a: usize) -> usize {
+            while c[a] != a {
+                c[a] = c[c[a]];
+                a = c[a];
+            }
+            a
+        }
+        for p in &schur {
+            let (ra, rb) = (root(&mut comp, p.a), root(&mut comp, p.b));
+            comp[ra.max(rb)] = ra.min(rb);
+        }
+        let mut kkt_blocks: Vec<Vec<usize>> = Vec::new();
+        let mut block_of = vec![usize::MAX; rows.len()];
+        for r in 0..rows.len() {
+            let c = root(&mut comp, r);
+            if block_of[c] == usize::MAX {
+                block_of[c] = kkt_blocks.len();
+                kkt_blocks.push(Vec::new());
+            }
+            kkt_blocks[block_of[c]].push(r);
+        }
         let mut mech = Mechanism {
             scene: scene.clone(),
             bodies,
             int_bodies,
             pres,
             rows,
+            row_int,
+            schur,
+            kkt_blocks,
             clr,
             elements,
             prismatic,
@@ -905,37 +977,51 @@ impl Mechanism {
         out
     }
 
-    /// Constraint values, Jacobian (integrated columns), Φ̇ and the Baumgarte right-hand side.
-    /// In full mode also the Jacobian blocks of every term (for reactions on any body).
+    /// Constraint values, Φ̇, the Baumgarte right-hand side and the Jacobian blocks of every
+    /// term (for the Schur complement and, in full mode, the reactions on any body); in full
+    /// mode also the dense Φ_q of the integrated columns (`sc.jac`).
     pub(crate) fn constraint_rows(&self, t: f64, sc: &mut Scratch, full: bool) {
-        let nq = self.nq();
-        sc.jac.iter_mut().for_each(|v| *v = 0.0);
         let (a2, b2) = (2.0 * self.alpha, self.beta * self.beta);
         for (r, row) in self.rows.iter().enumerate() {
             let ev = self.eval_row(row, t, sc);
-            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-                if let Owner::Int(i) = self.bodies[term.body].owner {
-                    let base = r * nq + 3 * i;
-                    sc.jac[base] += ev.jrows[ti][0];
-                    sc.jac[base + 1] += ev.jrows[ti][1];
-                    sc.jac[base + 2] += ev.jrows[ti][2];
-                }
-            }
-            if full {
-                sc.term_jac[r] = ev.jrows;
-            }
+            sc.term_jac[r] = ev.jrows;
             sc.phi[r] = ev.phi;
             sc.phid[r] = ev.phid;
             sc.rc[r] = ev.gamma - a2 * ev.phid - b2 * ev.phi;
         }
+        if full {
+            self.dense_constraint_jacobian(sc);
+        }
+    }
+
+    /// Φ_q (m × n_q, row-major) into `sc.jac` from the term blocks (after `constraint_rows`).
+    pub(crate) fn dense_constraint_jacobian(&self, sc: &mut Scratch) {
+        let nq = self.nq();
+        sc.jac.iter_mut().for_each(|v| *v = 0.0);
+        for (r, (row, jr)) in self.row_int.iter().zip(&sc.term_jac).enumerate() {
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let base = r * nq + 3 * i;
+                    sc.jac[base] += jr[ti][0];
+                    sc.jac[base + 1] += jr[ti][1];
+                    sc.jac[base + 2] += jr[ti][2];
+                }
+            }
+        }
     }
 
     /// Solves the KKT system by its Schur complement; false if S is not positive definite.
+    ///
+    /// ```text
+    /// S = Φ_q M⁻¹ Φ_qᵀ,  S λ = Φ_q M⁻¹ g − r,  q̈ = M⁻¹ (g − Φ_qᵀ λ)
+    /// ```
+    /// Φ_q is used through its term blocks (`term_jac`, three columns of one body each) and S
+    /// through its fixed structure (`schur`): no product with a zero block is formed.
     pub(crate) fn solve_kkt(&self, sc: &mut Scratch) -> bool {
         let nq = self.nq();
         let m = self.rows.len();
         let Scratch {
-            jac,
+            term_jac,
             smat,
             lam,
             qdd,
@@ -943,45 +1029,61 @@ impl Mechanism {
             rc,
             ..
         } = sc;
-        let minv = &self.minv;
+        let minv = &self.minv[..nq];
+        let g = &g[..nq];
+        let qdd = &mut qdd[..nq];
         if m == 0 {
             for j in 0..nq {
                 qdd[j] = minv[j] * g[j];
             }
             return true;
         }
-        // S = J M⁻¹ Jᵀ (lower triangle), b = J M⁻¹ g − rc. Slices of exact length let the
-        // compiler drop the bounds checks; the products keep the order (J_aj M⁻¹_j) x_j.
-        let minv = &minv[..nq];
-        let g = &g[..nq];
-        for a in 0..m {
-            let ja = &jac[a * nq..(a + 1) * nq];
-            let mut ba = 0.0;
-            for ((&x, &w), &gj) in ja.iter().zip(minv).zip(g) {
-                ba += x * w * gj;
-            }
-            lam[a] = ba - rc[a];
-            let row = &mut smat[a * m..a * m + a + 1];
-            for (b, sab) in row.iter_mut().enumerate() {
-                let jb = &jac[b * nq..(b + 1) * nq];
-                let mut s = 0.0;
-                for ((&x, &w), &y) in ja.iter().zip(minv).zip(jb) {
-                    s += x * w * y;
-                }
-                *sab = s;
-            }
-        }
-        if cholesky_in_place(smat, m).is_err() {
-            return false;
-        }
-        cholesky_solve(smat, m, lam);
-        // q̈ = M⁻¹ (g − Jᵀ λ).
+        // q̈ first holds M⁻¹ g, the right-hand side Φ_q M⁻¹ g − r of λ is read from it.
         for j in 0..nq {
-            let mut s = g[j];
-            for a in 0..m {
-                s -= jac[a * nq + j] * lam[a];
+            qdd[j] = minv[j] * g[j];
+        }
+        let term_jac = &term_jac[..m];
+        let smat = &mut smat[..m * m];
+        for (a, (row, jr)) in self.row_int.iter().zip(term_jac).enumerate() {
+            let mut ba = -rc[a];
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let x = &qdd[3 * i..3 * i + 3];
+                    let j = &jr[ti];
+                    ba += j[0] * x[0] + j[1] * x[1] + j[2] * x[2];
+                }
             }
-            qdd[j] = minv[j] * s;
+            lam[a] = ba;
+            smat[a * m..a * m + a + 1].fill(0.0);
+        }
+        for p in &self.schur {
+            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
+            let w = &minv[3 * p.i..3 * p.i + 3];
+            smat[p.a * m + p.b] +=
+                ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
+        }
+        // S is block diagonal (up to the order of the rows): each block is factored and solved
+        // on its own, so the square roots and divisions of different blocks do not wait for
+        // each other. The factor, stored in place, is the dense factor of S.
+        for blk in &self.kkt_blocks {
+            if block_cholesky_inv(smat, m, blk).is_err() {
+                return false;
+            }
+            block_cholesky_solve(smat, m, blk, lam);
+        }
+        // q̈ = M⁻¹ g − M⁻¹ Φ_qᵀ λ.
+        for (a, (row, jr)) in self.row_int.iter().zip(term_jac).enumerate() {
+            let la = lam[a];
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let j = &jr[ti];
+                    let w = &minv[3 * i..3 * i + 3];
+                    let x = &mut qdd[3 * i..3 * i + 3];
+                    x[0] -= w[0] * j[0] * la;
+                    x[1] -= w[1] * j[1] * la;
+                    x[2] -= w[2] * j[2] * la;
+                }
+            }
         }
         true
     }
@@ -999,19 +1101,29 @@ impl Mechanism {
         ok
     }
 
-    /// Event functions at (t, y) (after `kinematics`).
-    fn event_values(&self, sc: &Scratch, g: &mut [f64]) {
+    /// Event functions at (t, y) and, when `g_dot` is given, their rates (after
+    /// `kinematics`): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i (docs/model.md §2,
+    /// §7, §11), all from positions and velocities.
+    fn event_values(&self, sc: &Scratch, g: &mut [f64], mut g_dot: Option<&mut [f64]>) {
         for (i, ev) in self.events.iter().enumerate() {
-            g[i] = match *ev {
-                EventKind::Contact(k) => self.clearance_state(k, sc).delta,
+            let (v, d) = match *ev {
+                EventKind::Contact(k) => {
+                    let st = self.clearance_state(k, sc);
+                    (st.delta, st.delta_dot)
+                }
                 EventKind::EpsCap(k) => {
                     let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
-                    self.clearance_state(k, sc).eps - cap
+                    let st = self.clearance_state(k, sc);
+                    (st.eps - cap, st.eps_dot)
                 }
                 EventKind::Corner(k, c) => {
-                    self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs).0
+                    self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs)
                 }
             };
+            g[i] = v;
+            if let Some(gd) = g_dot.as_deref_mut() {
+                gd[i] = d;
+            }
         }
     }
 
@@ -1064,24 +1176,78 @@ pub(crate) fn cholesky_in_place(smat: &mut [f64], m: usize) -> Result<(), usize>
     Ok(())
 }
 
-/// Solves L Lᵀ x = b in place (forward, then back substitution), L the lower triangle of the
-/// row-major m × m `l` from [`cholesky_in_place`].
+/// Cholesky factorisation S = L Lᵀ in place over the rows `blk` of a diagonal block of S (the
+/// entries of S between `blk` and the other rows being zero, those of L are too): the strict
+/// lower triangle of the row-major m × m `smat` becomes that of L and its diagonal holds
+/// 1/L_jj, so that the solves multiply instead of divide (one division per column, none per
+/// solve: the latency of divisions and square roots dominated the Schur-complement solve of a
+/// small S). `Err(j)` when the pivot d_j = S_jj − Σ_k L_jk² of row j is not a positive number
+/// (S is not positive definite in f64).
+#[inline]
+pub(crate) fn block_cholesky_inv(smat: &mut [f64], m: usize, blk: &[usize]) -> Result<(), usize> {
+    for (p, &j) in blk.iter().enumerate() {
+        let mut d = smat[j * m + j];
+        for &k in &blk[..p] {
+            let v = smat[j * m + k];
+            d -= v * v;
+        }
+        if !(d > 0.0) {
+            smat[j * m + j] = d;
+            return Err(j);
+        }
+        let r = 1.0 / d.sqrt();
+        smat[j * m + j] = r;
+        for &i in &blk[p + 1..] {
+            let mut s = smat[i * m + j];
+            for &k in &blk[..p] {
+                s -= smat[i * m + k] * smat[j * m + k];
+            }
+            smat[i * m + j] = s * r;
+        }
+    }
+    Ok(())
+}
+
+/// [`cholesky_solve`] restricted to the rows `blk` of a diagonal block (after
+/// [`block_cholesky_inv`]).
+#[inline]
+pub(crate) fn block_cholesky_solve(l: &[f64], m: usize, blk: &[usize], b: &mut [f64]) {
+    for (p, &i) in blk.iter().enumerate() {
+        let mut s = b[i];
+        for &k in &blk[..p] {
+            s -= l[i * m + k] * b[k];
+        }
+        b[i] = s * l[i * m + i];
+    }
+    for (p, &i) in blk.iter().enumerate().rev() {
+        let mut s = b[i];
+        for &k in &blk[p + 1..] {
+            s -= l[k * m + i] * b[k];
+        }
+        b[i] = s * l[i * m + i];
+    }
+}
+
+/// Solves L Lᵀ x = b in place (forward, then back substitution), L the dense factor left by
+/// [`block_cholesky_inv`] on every block of S (the diagonal holding 1/L_jj).
 #[inline]
 pub(crate) fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
+    let l = &l[..m * m];
+    let b = &mut b[..m];
     for i in 0..m {
         let li = &l[i * m..i * m + i];
         let mut s = b[i];
         for (&x, &y) in li.iter().zip(&b[..i]) {
             s -= x * y;
         }
-        b[i] = s / l[i * m + i];
+        b[i] = s * l[i * m + i];
     }
     for i in (0..m).rev() {
         let mut s = b[i];
         for k in i + 1..m {
             s -= l[k * m + i] * b[k];
         }
-        b[i] = s / l[i * m + i];
+        b[i] = s * l[i * m + i];
     }
 }
 
@@ -1253,7 +1419,14 @@ impl OdeSystem for Mechanism {
     fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
         let mut sc = self.scratch.borrow_mut();
         self.kinematics(t, y, &mut sc);
-        self.event_values(&sc, g);
+        self.event_values(&sc, g, None);
+    }
+
+    fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
+        let mut sc = self.scratch.borrow_mut();
+        self.kinematics(t, y, &mut sc);
+        self.event_values(&sc, g, Some(g_dot));
+        true
     }
 
     fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {
@@ -1299,6 +1472,7 @@ mod tests {
         let t = 0.123;
         let mut sc = m.scratch.borrow().clone();
         assert!(m.evaluate(t, &y, &mut sc, false));
+        m.dense_constraint_jacobian(&mut sc);
         assert!(sc.clr[0].f_n > 0.0, "the test state is in contact");
         let n = nq + nc;
         let mut kkt = Mat::<f64>::zeros(n, n);

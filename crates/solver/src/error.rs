@@ -34,11 +34,12 @@ pub enum SolveError {
         y: Vec<f64>,
     },
     /// Fixed-step RK4 (with `rk4_instability_steps` > 0) took that many steps in a row outside
-    /// its stability region: h·ρ > 2.785 with ρ estimated from the stages (`rk4` module doc).
+    /// its stability region: h·ρ > 2.785 with ρ estimated from the stages, confirmed by an
+    /// eigenvalue λ of ∂f/∂y with |R(hλ)| > 1 (`rk4` module doc).
     /// The state is finite; its numbers are not a solution any more.
     #[error(
         "RK4 beyond its stability limit at t = {t:e}: step {h:e} s, estimated limit {h_limit:.3e} s \
-         (h·ρ > 2.785 on {steps} steps in a row)"
+         (h·λ outside the stability region on {steps} steps in a row)"
     )]
     Rk4Unstable {
         /// Time of the last accepted state.
@@ -47,7 +48,8 @@ pub enum SolveError {
         y: Vec<f64>,
         /// The step, s.
         h: f64,
-        /// The largest stable step estimated at the last flagged step, 2.785/ρ, s.
+        /// The largest stable step at the last flagged step, from the eigenvalues of ∂f/∂y
+        /// there (`rk4` module doc), s.
         h_limit: f64,
         /// Flagged steps in a row (`rk4_instability_steps`).
         steps: usize,

@@ -178,8 +178,9 @@ pub struct SolverOptions {
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
     /// Stability check of fixed-step RK4: fail with `Rk4Unstable` once this many
-    /// consecutive steps lie outside RK4's stability region by the estimate of
-    /// [`crate::rk4::RK4_STABILITY_RADIUS`] (h·ρ > 2.785). Default 0: off (the paper's RK4
+    /// consecutive steps lie outside RK4's stability region (suspected from the stages,
+    /// h·ρ > [`crate::rk4::RK4_STABILITY_RADIUS`], and confirmed by the eigenvalues of ∂f/∂y:
+    /// `rk4` module doc). Default 0: off (the paper's RK4
     /// unchanged); `lash` turns it on (15) for mechanism runs. Ignored by the other methods.
     pub rk4_instability_steps: usize,
 }

@@ -26,17 +26,31 @@
 //! k2, k3 are f at the same time t + h/2, at Y2 = y + h/2 k1 and Y3 = y + h/2 k2, so
 //!   ρ = ‖k3 − k2‖ / ‖Y3 − Y2‖,   h ρ = 2 ‖k3 − k2‖ / ‖k2 − k1‖       (Euclidean norms)
 //! estimates h|λ| of the dominant mode (HNW II §IV.2, the stiffness detection of DOPRI5).
-//! a step is outside the stability region when h ρ > r = 2.785293563 (RK4's radius on the
-//! negative real axis); the run fails with Rk4Unstable (the step, the estimated limit
-//! 2.785/ρ of the last flagged step, the time and state) after n such steps in a row
-//! (n = rk4_instability_steps; 15 as in DOPRI5's detection). Steps where ‖k2 − k1‖ is at
-//! rounding level (‖k2 − k1‖² ≤ (64 ε)² · 2 (‖k1‖² + ‖k2‖²)) are not judged.
+//! a step is suspect when h ρ > r = 2.785293563 (RK4's radius on the negative real axis);
+//! steps where ‖k2 − k1‖ is at rounding level (‖k2 − k1‖² ≤ (64 ε)² · 2 (‖k1‖² + ‖k2‖²))
+//! are not judged.
+//! a suspect step is confirmed from the spectrum: the eigenvalues λ_i of J = ∂f/∂y at (t, y)
+//! (the system's Jacobian, else central differences; faer's real Schur form), and the step
+//! is flagged when some λ_i with Re λ_i ≤ 0 has |R(h λ_i)| > 1 (R(z) = 1 + z + z²/2 + z³/6 +
+//! z⁴/24: h λ_i outside RK4's stability region).
+//! the run fails with Rk4Unstable (the step, the limit min_i r(θ_i)/|λ_i| over the decaying
+//! eigenvalues of the last flagged step, r(θ) the region's extent along the ray of λ_i, the
+//! time and state) after n flagged steps in a row (n = rk4_instability_steps; 15 as in
+//! DOPRI5's detection).
 //! ```
+//! Why the confirmation: the quotient is a power-iteration estimate of ‖J v‖/‖v‖ for the one
+//! direction v = Y3 − Y2, and for a non-normal J it can exceed the spectral radius by far. On
+//! a mechanism J = [[0, I], [∂q̈/∂q, ∂q̈/∂q̇]] mixes positions and velocities: on the
+//! lubricated press at h = 3 µs it flagged runs of hundreds of steps where every h λ_i lies
+//! inside the region and RK4 runs stably (BENCHMARKS.md, "RK4 beyond its stability limit").
+//! Eigenvalues with Re λ > 0 are growing modes of the system itself (|R(z)| < e^{Re z} there
+//! for small z): they are not judged.
 //! Consecutive, because across a kink of f (contact onset, the end of the damping ramp) the
 //! difference quotient is not an eigenvalue and spikes for one or two steps. On the press the
 //! kinks flag a few steps in a row and a real instability hundreds (BENCHMARKS.md, "RK4 beyond
 //! its stability limit").
 
+use crate::analysis::{eigenvalues, jacobian_at, rk4_amplification, rk4_ray_limit};
 use crate::error::SolveError;
 use crate::options::{Method, SolverOptions};
 use crate::stats::Stats;
@@ -118,6 +132,30 @@ impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
         }
     }
 
+    /// The spectral confirmation of a suspect step (module doc): Some(limit) when some decaying
+    /// eigenvalue λ of ∂f/∂y at (t, y) has |R(h λ)| > 1, the limit being the largest step
+    /// that keeps every decaying h λ inside the region along its ray; None when every h λ is
+    /// inside. A Jacobian or spectrum that cannot be computed confirms the suspicion, with
+    /// the quotient's limit `fallback`.
+    fn spectral_check(&self, h: f64, fallback: f64) -> Option<f64> {
+        let Ok(ev) =
+            jacobian_at(self.sys, self.t, &self.y, None).and_then(|j| eigenvalues(j.as_ref()))
+        else {
+            return Some(fallback);
+        };
+        let decaying = ev.iter().filter(|e| e.re <= 0.0);
+        if !decaying
+            .clone()
+            .any(|e| rk4_amplification(h * e.re, h * e.im) > 1.0)
+        {
+            return None;
+        }
+        let limit = decaying
+            .filter_map(|e| rk4_ray_limit(e.re, e.im).map(|r| r / e.modulus()))
+            .fold(f64::INFINITY, f64::min);
+        Some(if limit.is_finite() { limit } else { fallback })
+    }
+
     /// h ρ = 2 ‖k3 − k2‖ / ‖k2 − k1‖ when it exceeds [`RK4_STABILITY_RADIUS`] (module doc);
     /// None inside the region or when ‖k2 − k1‖ is at rounding level.
     fn outside_stability_region(&self) -> Option<f64> {
@@ -167,14 +205,17 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
         }
         sys.rhs(t + 0.5 * h, &self.tmp, &mut self.k3);
         if self.instability_steps > 0 {
-            if let Some(h_rho) = self.outside_stability_region() {
+            let flagged = self
+                .outside_stability_region()
+                .and_then(|h_rho| self.spectral_check(h, h * RK4_STABILITY_RADIUS / h_rho));
+            if let Some(h_limit) = flagged {
                 self.unstable_run += 1;
                 if self.unstable_run >= self.instability_steps {
                     return Err(SolveError::Rk4Unstable {
                         t: self.t,
                         y: self.y.clone(),
                         h,
-                        h_limit: h * RK4_STABILITY_RADIUS / h_rho,
+                        h_limit,
                         steps: self.unstable_run,
                     });
                 }

@@ -113,6 +113,22 @@ pub trait OdeSystem {
     /// Evaluates all m event functions into `g`.
     fn events(&self, _t: f64, _y: &[f64], _g: &mut [f64]) {}
 
+    /// The event functions into `g` and their rates ġ_i = dg_i/dt along the solution into
+    /// `g_dot`, at (t, y); returns false (the default) when the system does not provide the
+    /// rates, and then writes nothing.
+    ///
+    /// ```text
+    /// ġ_i(t) = ∂g_i/∂t + ∂g_i/∂y · f(t, y)
+    /// ```
+    /// With the rates at both ends of a step the integrator skips the interior event samples
+    /// when every g_i stays far from zero (see [`crate::Integrator`]). A system should provide
+    /// them only when they are cheap: for a mechanism, g and ġ come from positions and
+    /// velocities (kinematics) without the force laws or the constraint solve.
+    fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
+        let _ = (t, y, g, g_dot);
+        false
+    }
+
     /// Runs after an event has been located, with the state at the event time. It may change
     /// `y` (a bounce) and the system's own state (an impact velocity stored for a contact law).
     /// Returns what the integrator does next; the default is the event's declared action.

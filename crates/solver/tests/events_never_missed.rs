@@ -217,3 +217,126 @@ fn a_flight_shorter_than_the_last_step_is_found_with_every_method() {
         }
     }
 }
+
+/// The ball with the rates of its event function (ġ = v), so that the integrator's far test
+/// (`lash_solver::integrator`, module documentation) skips the interior samples of steps
+/// where the ball stays far above the floor.
+struct RatedBall(Ball);
+
+impl OdeSystem for RatedBall {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.0.rhs(t, y, dy);
+    }
+    fn n_events(&self) -> usize {
+        1
+    }
+    fn event_spec(&self, i: usize) -> EventSpec {
+        self.0.event_spec(i)
+    }
+    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        self.0.events(t, y, g);
+    }
+    fn event_rates(&self, _t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
+        g[0] = y[0];
+        g_dot[0] = y[1];
+        true
+    }
+    fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {
+        self.0.on_event(hit, y)
+    }
+}
+
+/// Runs the rated ball with `method` at default options: the bounces of the plain ball (same
+/// times to 1e-6 relative, none lost) and the number of interior samples the far test skipped.
+fn rated_ball_bounces(ball: Ball, method: Method) -> Result<(Vec<f64>, usize), SolveError> {
+    let rated = RatedBall(ball);
+    let expected = rated.0.bounce_times();
+    let t_end = expected.last().unwrap() + 1.0;
+    let o = SolverOptions::with_method(method);
+    let problem = Problem::new(&rated, &o)?;
+    let mut it = problem.integrator(0.0, t_end, &[rated.0.h0, 0.0])?;
+    let mut bounces = Vec::new();
+    loop {
+        match it.step()? {
+            StepOutcome::Accepted { .. } => {}
+            StepOutcome::Event { t, stopped, .. } => {
+                bounces.push(t);
+                if stopped {
+                    break;
+                }
+            }
+            StepOutcome::StopTime { .. } => break,
+        }
+    }
+    Ok((bounces, it.samples_skipped()))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The far test keeps the guarantee: 200 random balls with event rates × every adaptive
+    /// method find every bounce at its analytic time, as the balls without rates do.
+    #[test]
+    fn every_bounce_is_found_when_the_far_test_skips_samples(
+        g in 1.0f64..20.0,
+        e in 0.3f64..0.95,
+        log_h0 in (0.01f64).ln()..(10.0f64).ln(),
+    ) {
+        let ball = Ball::new(g, e, log_h0.exp());
+        let expected = ball.bounce_times();
+        for method in adaptive_methods() {
+            let (found, _) = rated_ball_bounces(Ball::new(g, e, log_h0.exp()), method)
+                .map_err(|e| TestCaseError::fail(format!("{method}: {e}")))?;
+            prop_assert_eq!(found.len(), expected.len(), "{}: {:?} vs {:?}", method, found, expected);
+            for (t, te) in found.iter().zip(&expected) {
+                prop_assert!((t - te).abs() <= 1e-6 * te, "{}: {} vs {}", method, t, te);
+            }
+        }
+    }
+
+    /// Soundness of the far test on every constant-acceleration motion (the ball's flight,
+    /// and the local model of any smooth g): g(t) = g₀ + v₀ t + a t²/2 on [0, h] never
+    /// reaches zero when `far_from_zero` holds for its end values and rates. (Its extremum
+    /// g₀ − v₀²/(2a) lies inside only if the rate changes sign, and then the travel to it,
+    /// v₀²/(2|a|) ≤ |v₀| h/2, is below the margin κ h max|ġ| with κ = 2.)
+    #[test]
+    fn far_test_is_sound_for_parabolas(
+        g0 in -10.0f64..10.0,
+        v0 in -10.0f64..10.0,
+        a in -100.0f64..100.0,
+        log_h in (1e-4f64).ln()..(1.0f64).ln(),
+    ) {
+        let h = log_h.exp();
+        let gh = g0 + v0 * h + 0.5 * a * h * h;
+        let vh = v0 + a * h;
+        if lash_solver::integrator::far_from_zero(g0, v0, gh, vh, h) {
+            // Minimum of |g| over [0, h]: the ends and the extremum if inside.
+            let mut lo = g0.abs().min(gh.abs());
+            let same_sign = g0.signum() == gh.signum();
+            if a != 0.0 {
+                let ts = -v0 / a;
+                if ts > 0.0 && ts < h {
+                    let gs = g0 + v0 * ts + 0.5 * a * ts * ts;
+                    prop_assert!(gs.signum() == g0.signum(), "root inside: g0 {} v0 {} a {} h {}", g0, v0, a, h);
+                    lo = lo.min(gs.abs());
+                }
+            }
+            prop_assert!(same_sign && lo > 0.0);
+        }
+    }
+}
+
+/// On a long fall the far test skips interior samples (the steps far above the floor), with
+/// every adaptive method, and the bounces are those of the plain ball.
+#[test]
+fn the_far_test_skips_the_samples_of_steps_far_from_the_floor() {
+    for method in adaptive_methods() {
+        let (found, skipped) = rated_ball_bounces(Ball::new(9.81, 0.5, 10.0), method).unwrap();
+        let expected = Ball::new(9.81, 0.5, 10.0).bounce_times();
+        assert_eq!(found.len(), expected.len(), "{method}");
+        assert!(skipped > 0, "{method}: no sample skipped");
+    }
+}

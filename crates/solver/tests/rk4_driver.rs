@@ -110,7 +110,7 @@ fn stability_check_catches_spurious_bounded_solutions() {
     assert!(y > 0.05 && y < 1.0, "spurious solution {y}");
     // With the check: Rk4Unstable within the first 15 + a few steps (the amplitude must
     // first grow from 1e-3; the flagged run starts at once since h ρ ≈ h k = 4 there). The
-    // estimated limit is 2.785/ρ with ρ ≈ |∂f/∂y| = k/(1 + (y/s)²)² ≤ k, so at least 2.785/k,
+    // limit is 2.785/|λ| with λ = ∂f/∂y = −k(1 − (y/s)²)/(1 + (y/s)²)², |λ| ≤ k, so at least 2.785/k,
     // and at most the step (the step was flagged).
     for hk in [3.0, 4.0, 6.0] {
         match run(hk, 15) {

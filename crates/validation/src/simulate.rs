@@ -87,8 +87,9 @@
 //!  bound         divergence (NonFiniteState), not motion of a mechanism: 1000 km, 1000 km/s,
 //!                1.6e5 revolutions of an integrated body. The solver's own default, 1e100,
 //!                let an unstable RK4 run go on for ~16× as many steps of growth first.
-//! rk4 stability  15: fixed-step RK4 fails with NonFiniteState after 15 consecutive steps
-//!  check         outside its stability region (h·ρ > 2.785, lash_solver::rk4). Past the
+//! rk4 stability  15: fixed-step RK4 fails with Rk4Unstable after 15 consecutive steps
+//!  check         outside its stability region (h·λ outside it for an eigenvalue λ of ∂f/∂y,
+//!                suspected from the stages: lash_solver::rk4). Past the
 //!                limit the oil film of a lubricated joint does not blow up: the numerical
 //!                journal drifts to a lower eccentricity where the step is stable, finite
 //!                and wrong (BENCHMARKS.md, "Extremes" → "What the matrix found"), which no
