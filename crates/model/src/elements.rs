@@ -844,8 +844,8 @@ pub(crate) fn validate_prismatic(
             ),
         ));
     }
-    let np = format!("{p}.normal");
-    let k_of = |k: &Option<f64>, m: &Option<crate::scene::Materials>| -> Result<(), SceneError> {
+    // A flat guide face has no radii: the stiffness is given, never derived from materials.
+    let k_of = |np: &str, k: &Option<f64>, m: &Option<crate::scene::Materials>| {
         if m.is_some() {
             return Err(invalid(
                 format!("{np}.materials"),
@@ -855,44 +855,12 @@ pub(crate) fn validate_prismatic(
         match k {
             Some(k) => C::positive(&format!("{np}.k"), *k, "stiffness k"),
             None => Err(invalid(
-                np.clone(),
+                np.to_string(),
                 "the normal law needs its stiffness k (N/m^1.5)",
             )),
         }
     };
-    match &s.normal {
-        NormalSpec::Impact(n) => {
-            k_of(&n.k, &n.materials)?;
-            C::non_negative(&format!("{np}.c_max"), n.c_max, "c_max")?;
-            C::positive(&format!("{np}.d_max"), n.d_max, "d_max")?;
-        }
-        NormalSpec::LankaraniNikravesh(n) | NormalSpec::Flores(n) | NormalSpec::HuntCrossley(n) => {
-            k_of(&n.k, &n.materials)?;
-            let rp = format!("{np}.restitution");
-            C::finite(&rp, n.restitution)?;
-            if !(n.restitution > 0.0 && n.restitution <= 1.0) {
-                return Err(invalid(
-                    rp,
-                    format!(
-                        "the coefficient of restitution must lie in (0, 1], got {}",
-                        n.restitution
-                    ),
-                ));
-            }
-        }
-    }
-    if let FrictionSpec::Coulomb(f) = &s.friction {
-        let fp = format!("{p}.friction");
-        C::non_negative(&format!("{fp}.mu"), f.mu, "mu")?;
-        C::non_negative(&format!("{fp}.v0"), f.v0, "v0")?;
-        C::finite(&format!("{fp}.v1"), f.v1)?;
-        if !(f.v1 >= f.v0) {
-            return Err(invalid(
-                format!("{fp}.v1"),
-                format!("v1 must be >= v0 = {}, got {}", f.v0, f.v1),
-            ));
-        }
-    }
+    crate::scene::check_contact_laws(p, &s.normal, &s.friction, &k_of)?;
     C::finite(&format!("{p}.initial_offset"), s.initial_offset)?;
     C::finite(&format!("{p}.initial_tilt"), s.initial_tilt)?;
     C::finite(&format!("{p}.initial_offset_rate"), s.initial_offset_rate)?;

@@ -1475,42 +1475,7 @@ impl Scene {
                     )),
                 }
             };
-        let np = format!("{p}.normal");
-        match &c.normal {
-            NormalSpec::Impact(s) => {
-                check_k(&np, &s.k, &s.materials)?;
-                C::non_negative(&format!("{np}.c_max"), s.c_max, "c_max")?;
-                C::positive(&format!("{np}.d_max"), s.d_max, "d_max")?;
-            }
-            NormalSpec::LankaraniNikravesh(s)
-            | NormalSpec::Flores(s)
-            | NormalSpec::HuntCrossley(s) => {
-                check_k(&np, &s.k, &s.materials)?;
-                let rp = format!("{np}.restitution");
-                C::finite(&rp, s.restitution)?;
-                if !(s.restitution > 0.0 && s.restitution <= 1.0) {
-                    return Err(invalid(
-                        rp,
-                        format!(
-                            "the coefficient of restitution must lie in (0, 1], got {}",
-                            s.restitution
-                        ),
-                    ));
-                }
-            }
-        }
-        if let FrictionSpec::Coulomb(f) = &c.friction {
-            let fp = format!("{p}.friction");
-            C::non_negative(&format!("{fp}.mu"), f.mu, "mu")?;
-            C::non_negative(&format!("{fp}.v0"), f.v0, "v0")?;
-            C::finite(&format!("{fp}.v1"), f.v1)?;
-            if !(f.v1 >= f.v0) {
-                return Err(invalid(
-                    format!("{fp}.v1"),
-                    format!("v1 must be >= v0 = {}, got {}", f.v0, f.v1),
-                ));
-            }
-        }
+        check_contact_laws(p, &c.normal, &c.friction, &check_k)?;
         if let Some(film) = &c.film {
             let fp = format!("{p}.film");
             C::non_negative(&format!("{fp}.viscosity"), film.viscosity, "viscosity")?;
@@ -1575,4 +1540,55 @@ impl fmt::Display for JointSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{} joint '{}'", self.type_name(), self.name())
     }
+}
+
+/// `check_k(path of the normal law, k, materials)`: a joint's check of its contact stiffness.
+pub(crate) type StiffnessCheck<'a> =
+    dyn Fn(&str, &Option<f64>, &Option<Materials>) -> Result<(), SceneError> + 'a;
+
+/// The checks a clearance joint's normal and friction laws share, revolute or prismatic:
+/// `check_k(path of the normal law, k, materials)` checks the stiffness (a revolute joint may
+/// derive it from materials, a flat guide face may not); the rest is the same for both.
+pub(crate) fn check_contact_laws(
+    p: &str,
+    normal: &NormalSpec,
+    friction: &FrictionSpec,
+    check_k: &StiffnessCheck<'_>,
+) -> Result<(), SceneError> {
+    type C = Checker;
+    let np = format!("{p}.normal");
+    match normal {
+        NormalSpec::Impact(s) => {
+            check_k(&np, &s.k, &s.materials)?;
+            C::non_negative(&format!("{np}.c_max"), s.c_max, "c_max")?;
+            C::positive(&format!("{np}.d_max"), s.d_max, "d_max")?;
+        }
+        NormalSpec::LankaraniNikravesh(s) | NormalSpec::Flores(s) | NormalSpec::HuntCrossley(s) => {
+            check_k(&np, &s.k, &s.materials)?;
+            let rp = format!("{np}.restitution");
+            C::finite(&rp, s.restitution)?;
+            if !(s.restitution > 0.0 && s.restitution <= 1.0) {
+                return Err(invalid(
+                    rp,
+                    format!(
+                        "the coefficient of restitution must lie in (0, 1], got {}",
+                        s.restitution
+                    ),
+                ));
+            }
+        }
+    }
+    if let FrictionSpec::Coulomb(f) = friction {
+        let fp = format!("{p}.friction");
+        C::non_negative(&format!("{fp}.mu"), f.mu, "mu")?;
+        C::non_negative(&format!("{fp}.v0"), f.v0, "v0")?;
+        C::finite(&format!("{fp}.v1"), f.v1)?;
+        if !(f.v1 >= f.v0) {
+            return Err(invalid(
+                format!("{fp}.v1"),
+                format!("v1 must be >= v0 = {}, got {}", f.v0, f.v1),
+            ));
+        }
+    }
+    Ok(())
 }
