@@ -15,6 +15,11 @@
 //! (f) lubricated 150 rpm, c = 0.1 mm, as (b): lash's cheapest run with error ≤ 1e-6 m/s²
 //!     against diffsol's BDF alone on the hand-written minimal-coordinate press
 //!     (`lash_benches::handwritten`), finite-difference Jacobians counted
+//! (g) dry 150 rpm, c = 0.1 mm, as (c) against a reference with kink events: every method with
+//!     and without the kink events of the force laws (`Mechanism::set_kink_events`), work in
+//!     RHS-equivalents (RHS + n per Jacobian, n = 12 the cost of a finite-difference one), the
+//!     observed order p from a least-squares fit of log error = c − p log work over the runs
+//!     with 1e-7 ≥ error ≥ 1e-9 · 30 … (error below 1e-2), and the cheapest run with error ≤ 1e-6
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -637,6 +642,86 @@ fn section_f(ctx: &Ctx) {
     }
 }
 
+/// Work of a run in RHS-equivalents: RHS evaluations plus, per Jacobian, the `n` evaluations of
+/// a forward-difference one.
+fn work(r: &Run, n: usize) -> usize {
+    r.rhs + n * r.jac
+}
+
+/// Observed order: least-squares slope p of log error = c − p log work over the runs with
+/// error in [1e-9, 1e-2] (None with fewer than three).
+fn observed_order(runs: &[Run], n: usize) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = runs
+        .iter()
+        .filter(|r| r.error <= 1e-2 && r.error >= 1e-9)
+        .map(|r| ((work(r, n) as f64).ln(), r.error.ln()))
+        .collect();
+    if pts.len() < 3 {
+        return None;
+    }
+    let k = pts.len() as f64;
+    let (mx, my) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / k, b + y / k));
+    let (sxy, sxx) = pts.iter().fold((0.0, 0.0), |(a, b), (x, y)| {
+        (a + (x - mx) * (y - my), b + (x - mx) * (x - mx))
+    });
+    Some(-sxy / sxx)
+}
+
+fn section_g(ctx: &Ctx) {
+    let stem = "dry_150rpm_c0.1";
+    println!(
+        "\n(g) {stem}, error over the first half revolution (target {TARGET:.0e} m/s²), without \
+         and with kink events; work = RHS + 12 per Jacobian"
+    );
+    let plain = press(stem, 0.5);
+    let mut kinked = press(stem, 0.5);
+    kinked.set_kink_events(true);
+    let n = plain.dim();
+    let half = 0.5 * crank_period(&plain);
+    let times = grid(0.0, half, N_GRID);
+    let t_end = plain.t_end();
+    println!("  reference with kink events:");
+    let reference = reference(&kinked, t_end, &times);
+    let tols: Vec<f64> = (32..=48).map(|k| 10f64.powf(-k as f64 / 4.0)).collect();
+    let mut summary = Vec::new();
+    for method in [
+        Method::Tsit54,
+        Method::Dopri54,
+        Method::Dop853,
+        Method::Bdf,
+        Method::Rodas5p,
+    ] {
+        for (label, m) in [("without kinks", &plain), ("with kinks", &kinked)] {
+            println!("  {} {label}:", method.name());
+            print_header();
+            let runs = scan(ctx, method, m, t_end, &times, &reference, &tols, true);
+            let order = observed_order(&runs, n);
+            let best = runs
+                .iter()
+                .filter(|r| r.error <= TARGET)
+                .min_by_key(|r| work(r, n))
+                .cloned();
+            summary.push((method.name(), label, order, best));
+        }
+    }
+    println!("  summary (cheapest run with error ≤ {TARGET:.0e}, by work):");
+    for (name, label, order, best) in &summary {
+        let order = order.map_or("-".to_string(), |p| format!("{p:.1}"));
+        match best {
+            Some(r) => println!(
+                "  {name:8} {label:14} order {order:>4}  {:28} error {:.2e}  work {:>7}  wall {:.4} s",
+                r.label,
+                r.error,
+                work(r, n),
+                r.wall
+            ),
+            None => println!("  {name:8} {label:14} order {order:>4}  none within the scan"),
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut reps = 3;
@@ -650,15 +735,17 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--reps takes a number");
             }
-            s @ ("a" | "b" | "c" | "d" | "e" | "f") => sections.push(s.to_string()),
+            s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g") => sections.push(s.to_string()),
             other => {
-                eprintln!("unknown argument {other}: expected a, b, c, d, e, f, --reps N");
+                eprintln!("unknown argument {other}: expected a, b, c, d, e, f, g, --reps N");
                 std::process::exit(2);
             }
         }
     }
     if sections.is_empty() {
-        sections = ["a", "b", "c", "d", "e", "f"].map(String::from).to_vec();
+        sections = ["a", "b", "c", "d", "e", "f", "g"]
+            .map(String::from)
+            .to_vec();
     }
     let ctx = Ctx { reps };
     for s in sections {
@@ -668,7 +755,8 @@ fn main() {
             "c" => section_c(&ctx),
             "d" => section_d(&ctx),
             "e" => section_e(&ctx),
-            _ => section_f(&ctx),
+            "f" => section_f(&ctx),
+            _ => section_g(&ctx),
         }
     }
 }

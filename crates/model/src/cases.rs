@@ -237,6 +237,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         t_end: None,
         revolutions: Some(2.0),
         roles,
+        kink_events: false,
     }
 }
 

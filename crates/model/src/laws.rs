@@ -194,17 +194,68 @@ impl NormalLaw {
             NormalLaw::Impact { c_max, d_max, .. } => {
                 elastic + step_damping(delta, d_max, c_max) * delta_dot
             }
-            NormalLaw::LankaraniNikravesh {
-                restitution: cr, ..
-            } => hyst(3.0 * (1.0 - cr * cr) / 4.0),
-            NormalLaw::Flores {
-                restitution: cr, ..
-            } => hyst(8.0 * (1.0 - cr) / (5.0 * cr)),
-            NormalLaw::HuntCrossley {
-                restitution: cr, ..
-            } => hyst(3.0 * (1.0 - cr) / 2.0),
+            _ => hyst(self.hysteresis_coefficient()),
         };
         f.max(0.0)
+    }
+
+    /// The coefficient of δ̇/δ̇⁻ of a restitution law: 3(1 − c_r²)/4 (Lankarani–Nikravesh),
+    /// 8(1 − c_r)/(5 c_r) (Flores), 3(1 − c_r)/2 (Hunt–Crossley); 0 for IMPACT.
+    #[inline]
+    fn hysteresis_coefficient(&self) -> f64 {
+        match *self {
+            NormalLaw::Impact { .. } => 0.0,
+            NormalLaw::LankaraniNikravesh {
+                restitution: cr, ..
+            } => 3.0 * (1.0 - cr * cr) / 4.0,
+            NormalLaw::Flores {
+                restitution: cr, ..
+            } => 8.0 * (1.0 - cr) / (5.0 * cr),
+            NormalLaw::HuntCrossley {
+                restitution: cr, ..
+            } => 3.0 * (1.0 - cr) / 2.0,
+        }
+    }
+
+    /// Whether the force can reach the clip at 0 during restitution (a damping term that can
+    /// outweigh the elastic one): c_max > 0 for IMPACT, c_r < 1 for the restitution laws.
+    pub fn can_clip(&self) -> bool {
+        match *self {
+            NormalLaw::Impact { c_max, .. } => c_max > 0.0,
+            NormalLaw::LankaraniNikravesh { restitution, .. }
+            | NormalLaw::Flores { restitution, .. }
+            | NormalLaw::HuntCrossley { restitution, .. } => restitution < 1.0,
+        }
+    }
+
+    /// The unclipped force over its elastic part, for δ > 0 (1 for δ ≤ 0):
+    ///
+    /// ```text
+    /// r = (K δ^{3/2} + D(δ, δ̇)) / (K δ^{3/2}),  F_N = max(K δ^{3/2} r, 0)
+    /// Impact: r = 1 + C(δ) δ̇ / (K δ^{3/2});  restitution laws: r = 1 + coef · δ̇ / δ̇⁻
+    /// ```
+    /// r changes sign exactly where the clip of F_N at 0 starts or ends acting (a kink of the
+    /// force in time). For IMPACT, C(δ)/δ^{3/2} → 0 as δ → 0, so r is continuous at contact
+    /// onset and loss.
+    #[inline]
+    pub fn unclipped_ratio(&self, delta: f64, delta_dot: f64, impact_velocity: f64) -> f64 {
+        if delta <= 0.0 {
+            return 1.0;
+        }
+        let v_minus = impact_velocity.abs();
+        let hyst = |coef: f64| {
+            if v_minus < MIN_IMPACT_VELOCITY {
+                1.0
+            } else {
+                1.0 + coef * delta_dot / v_minus
+            }
+        };
+        match *self {
+            NormalLaw::Impact { k, c_max, d_max } => {
+                1.0 + step_damping(delta, d_max, c_max) * delta_dot / (k * delta * delta.sqrt())
+            }
+            _ => hyst(self.hysteresis_coefficient()),
+        }
     }
 
     /// Elastic contact potential 2/5 · K · δ^{5/2} (0 for δ ≤ 0), J.
@@ -453,5 +504,66 @@ impl Film {
                 (fr, ft)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// F_N = max(K δ^{3/2} r, 0) for every law, so r changes sign exactly where the clip
+    /// starts or ends acting; r → 1 at δ → 0 for IMPACT (continuous at contact onset).
+    #[test]
+    fn unclipped_ratio_marks_the_clip() {
+        let k = 2.34e10;
+        let laws = [
+            NormalLaw::Impact {
+                k,
+                c_max: 1e5,
+                d_max: 1e-5,
+            },
+            NormalLaw::LankaraniNikravesh {
+                k,
+                restitution: 0.5,
+            },
+            NormalLaw::Flores {
+                k,
+                restitution: 0.3,
+            },
+            NormalLaw::HuntCrossley {
+                k,
+                restitution: 0.5,
+            },
+        ];
+        let v_minus = 0.1;
+        for law in laws {
+            assert!(law.can_clip());
+            let mut clipped = 0;
+            for &delta in &[1e-8, 1e-7, 1e-6, 5e-6, 1e-5, 5e-5] {
+                for i in -40..=40 {
+                    let delta_dot = 0.01 * i as f64;
+                    let r = law.unclipped_ratio(delta, delta_dot, v_minus);
+                    let elastic = k * delta * delta.sqrt();
+                    let f = law.force(delta, delta_dot, v_minus);
+                    assert!(
+                        (f - (elastic * r).max(0.0)).abs() <= 1e-12 * elastic.max(f),
+                        "{law:?} δ {delta} δ̇ {delta_dot}: F {f} against {}",
+                        elastic * r
+                    );
+                    assert_eq!(f == 0.0, r <= 0.0);
+                    clipped += usize::from(r <= 0.0);
+                }
+            }
+            assert!(clipped > 0, "{law:?}: the grid reaches the clip");
+            assert_eq!(law.unclipped_ratio(0.0, -1.0, v_minus), 1.0);
+        }
+        let impact = laws[0];
+        let r = impact.unclipped_ratio(1e-20, -1.0, v_minus);
+        assert!((r - 1.0).abs() < 1e-3, "IMPACT's r near δ = 0: {r}");
+        let elastic_only = NormalLaw::HuntCrossley {
+            k,
+            restitution: 1.0,
+        };
+        assert!(!elastic_only.can_clip());
     }
 }

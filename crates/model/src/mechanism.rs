@@ -180,6 +180,28 @@ pub(crate) enum EventKind {
     EpsCap(usize),
     /// δ_i of corner i of prismatic clearance joint k (docs/model.md §11).
     Corner(usize, usize),
+    /// A point where a force law of clearance joint k is not smooth (docs/model.md §7).
+    Kink(usize, Kink),
+}
+
+/// The points where the force laws of a revolute clearance joint have a kink in time while it
+/// is in contact (docs/model.md §7), each an event when the run asks for them:
+///
+/// ```text
+/// FullDamping  g = δ − d_max                   (IMPACT: STEP's damping reaches c_max)
+/// Clip         g = r(δ, δ̇) in contact, else 1  (F_N's clip at 0, NormalLaw::unclipped_ratio)
+/// SlipV0       g = v_T² − v₀² in contact, else 1  (c_d leaves 0)
+/// SlipV1       g = v_T² − v₁² in contact, else 1  (c_d reaches 1)
+/// ```
+/// Outside contact the laws act not at all, so the last three are held at 1 there; at contact
+/// onset r → 1 (continuous), and the slip functions jump only when the contact begins below
+/// v₁, where the onset's own restart already covers the kink.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kink {
+    FullDamping,
+    Clip,
+    SlipV0,
+    SlipV1,
 }
 
 /// Per-joint results of one evaluation.
@@ -455,22 +477,7 @@ impl Mechanism {
             }
         }
 
-        let mut events = Vec::new();
-        for k in 0..clr.len() {
-            events.push(EventKind::Contact(k));
-        }
-        // A capped film changes form at ε = ε_cap; a film without a cap has no such point
-        // below contact (docs/model.md §7).
-        for (k, c) in clr.iter().enumerate() {
-            if c.film.is_some_and(|f| f.eps_cap.is_some()) {
-                events.push(EventKind::EpsCap(k));
-            }
-        }
-        for k in 0..prismatic.len() {
-            for i in 0..4 {
-                events.push(EventKind::Corner(k, i));
-            }
-        }
+        let events = event_list(&clr, prismatic.len(), scene.kink_events);
         // Defaults that need the assembled state (a spring's free length) are set after the
         // assembly below.
         let elements = crate::elements::compile(scene, &|_| f64::NAN);
@@ -1119,6 +1126,7 @@ impl Mechanism {
                 EventKind::Corner(k, c) => {
                     self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs)
                 }
+                EventKind::Kink(k, kink) => self.kink_value(k, kink, sc),
             };
             g[i] = v;
             if let Some(gd) = g_dot.as_deref_mut() {
@@ -1135,7 +1143,60 @@ impl Mechanism {
             EventKind::Contact(k) => ("contact", self.clr[k].name.as_str()),
             EventKind::EpsCap(k) => ("eps_cap", self.clr[k].name.as_str()),
             EventKind::Corner(k, _) => ("corner_contact", self.prismatic[k].name.as_str()),
+            EventKind::Kink(k, kink) => (
+                match kink {
+                    Kink::FullDamping => "kink_full_damping",
+                    Kink::Clip => "kink_force_clip",
+                    Kink::SlipV0 => "kink_slip_v0",
+                    Kink::SlipV1 => "kink_slip_v1",
+                },
+                self.clr[k].name.as_str(),
+            ),
         })
+    }
+
+    /// The value and rate of a kink function ([`Kink`]) of clearance joint `k` (after
+    /// `kinematics`). The rate of δ − d_max is δ̇; the others need accelerations, so in contact
+    /// their rate is given as infinite (the step is always sampled) and outside contact, where
+    /// they are held at 1, as 0.
+    fn kink_value(&self, k: usize, kink: Kink, sc: &Scratch) -> (f64, f64) {
+        let c = &self.clr[k];
+        let st = self.clearance_state(k, sc);
+        if kink == Kink::FullDamping {
+            let d_max = match c.normal {
+                NormalLaw::Impact { d_max, .. } => d_max,
+                _ => f64::INFINITY,
+            };
+            return (st.delta - d_max, st.delta_dot);
+        }
+        if st.delta <= 0.0 {
+            return (1.0, 0.0);
+        }
+        let (v0, v1) = match c.friction {
+            Some(FrictionLaw::Coulomb { v0, v1, .. }) => (v0, v1),
+            _ => (0.0, 0.0),
+        };
+        let g = match kink {
+            Kink::Clip => c
+                .normal
+                .unclipped_ratio(st.delta, st.delta_dot, c.impact_velocity.get()),
+            Kink::SlipV0 => st.v_t * st.v_t - v0 * v0,
+            _ => st.v_t * st.v_t - v1 * v1,
+        };
+        (g, f64::INFINITY)
+    }
+
+    /// Adds (or removes) the kink events of the revolute clearance joints' force laws
+    /// ([`Kink`], docs/model.md §7). With them an integration restarts at every kink, so a
+    /// method of high order keeps its order through a contact; every other event keeps its
+    /// index.
+    pub fn set_kink_events(&mut self, on: bool) {
+        self.events = event_list(&self.clr, self.prismatic.len(), on);
+    }
+
+    /// Whether the kink events are on ([`Mechanism::set_kink_events`]).
+    pub fn kink_events(&self) -> bool {
+        self.events.iter().any(|e| matches!(e, EventKind::Kink(..)))
     }
 
     /// Sets the stored impact velocity δ̇⁻ of clearance joint `k` (m/s), as the contact-onset
@@ -1145,6 +1206,49 @@ impl Mechanism {
             c.impact_velocity.set(v);
         }
     }
+}
+
+/// The event functions of a mechanism: every clearance joint's δ, the ε − ε_cap of each capped
+/// film, the four corner gaps of each prismatic clearance joint and, with `kinks`, the kinks of
+/// each revolute clearance joint's force laws ([`Kink`]).
+fn event_list(clr: &[Clr], n_prismatic: usize, kinks: bool) -> Vec<EventKind> {
+    let mut events = Vec::new();
+    for k in 0..clr.len() {
+        events.push(EventKind::Contact(k));
+    }
+    // A capped film changes form at ε = ε_cap; a film without a cap has no such point
+    // below contact (docs/model.md §7).
+    for (k, c) in clr.iter().enumerate() {
+        if c.film.is_some_and(|f| f.eps_cap.is_some()) {
+            events.push(EventKind::EpsCap(k));
+        }
+    }
+    for k in 0..n_prismatic {
+        for i in 0..4 {
+            events.push(EventKind::Corner(k, i));
+        }
+    }
+    if kinks {
+        for (k, c) in clr.iter().enumerate() {
+            if let NormalLaw::Impact { c_max, .. } = c.normal {
+                if c_max > 0.0 {
+                    events.push(EventKind::Kink(k, Kink::FullDamping));
+                }
+            }
+            if c.normal.can_clip() {
+                events.push(EventKind::Kink(k, Kink::Clip));
+            }
+            if let Some(FrictionLaw::Coulomb { mu, v0, v1 }) = c.friction {
+                if mu > 0.0 && v0 > 0.0 {
+                    events.push(EventKind::Kink(k, Kink::SlipV0));
+                }
+                if mu > 0.0 && v1 > v0 {
+                    events.push(EventKind::Kink(k, Kink::SlipV1));
+                }
+            }
+        }
+    }
+    events
 }
 
 /// Cholesky factorisation S = L Lᵀ in place: the lower triangle of the row-major m × m

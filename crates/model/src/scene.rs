@@ -159,6 +159,11 @@ pub struct Scene {
     /// Named parts the press metrics need (docs/outputs.md, "Scene roles"). Default none.
     #[serde(default, deserialize_with = "object")]
     pub roles: RoleNames,
+    /// Events at the kinks of the revolute clearance joints' force laws (δ = d_max, the clip
+    /// of F_N at 0, |v_T| = v₀ and v₁; docs/model.md §7), so that an integration restarts at
+    /// each. Default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub kink_events: bool,
 }
 
 /// A rigid body with its centre of mass as reference point.
