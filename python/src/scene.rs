@@ -39,6 +39,7 @@ use crate::errors::{failure_kind, scene_error, solve_error, usage_error};
 /// contact        δ = |e| − c of a clearance joint      rising: contact_onset, falling: contact_loss
 /// eps_cap        ε − ε_cap of a lubricated joint       eps_cap_reached / eps_cap_left
 /// corner_contact δ_i of a prismatic joint's corner     corner_contact_onset / corner_contact_loss
+/// kink_*         a kink of a force law (kink_events)   kink_*_rising / kink_*_falling
 /// ```
 pub fn event_kind(kind: &str, rising: bool) -> String {
     match (kind, rising) {

@@ -106,6 +106,26 @@ def test_events_are_the_runs_contacts():
         assert np.interp(e.time, t, eps) == pytest.approx(1.0, abs=0.05)
 
 
+def test_kink_events_add_kinks_and_keep_the_contacts():
+    """With "kink_events": true (docs/model.md §7) the dry press's run reports the kinks of its
+    force laws as well; its contact onsets and losses stay those of the plain run (the first
+    0.1 s: seven contact phases, default options), to the integration tolerance."""
+    scene = json.loads(DRY.read_text())
+    plain = lash.run(scene, t_end=0.1)
+    scene["kink_events"] = True
+    kinked = lash.run(scene, t_end=0.1)
+    kinds = {e.kind for e in kinked.events}
+    assert {"kink_full_damping_rising", "kink_full_damping_falling",
+            "kink_slip_v0_rising", "kink_slip_v0_falling"} <= kinds
+    contacts = [(e.time, e.kind) for e in kinked.events if e.kind.startswith("contact")]
+    reference = [(e.time, e.kind) for e in plain.events]
+    assert [k for _, k in contacts] == [k for _, k in reference]
+    assert len(reference) == 15
+    for (a, _), (b, _) in zip(contacts, reference):
+        assert a == pytest.approx(b, abs=2e-6)
+    assert kinked.summary["events"] == len(kinked.events) > len(reference)
+
+
 def test_a_dict_scene_runs_like_its_file():
     scene = json.loads(LUBRICATED.read_text())
     from_file = lash.run(LUBRICATED, t_end=0.1)
