@@ -1187,9 +1187,9 @@ impl Mechanism {
     }
 
     /// Adds (or removes) the kink events of the revolute clearance joints' force laws
-    /// ([`Kink`], docs/model.md §7). With them an integration restarts at every kink, so a
-    /// method of high order keeps its order through a contact; every other event keeps its
-    /// index.
+    /// (δ = d_max, the clip of F_N at 0, |v_T| = v₀ and v₁; docs/model.md §7), as the scene
+    /// field `kink_events` does. With them an integration restarts at every kink, so a method
+    /// of high order keeps its order through a contact; every other event keeps its index.
     pub fn set_kink_events(&mut self, on: bool) {
         self.events = event_list(&self.clr, self.prismatic.len(), on);
     }
