@@ -1112,21 +1112,32 @@ impl Mechanism {
     /// `kinematics`): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i (docs/model.md §2,
     /// §7, §11), all from positions and velocities.
     fn event_values(&self, sc: &Scratch, g: &mut [f64], mut g_dot: Option<&mut [f64]>) {
+        // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
+        // the last one computed is kept.
+        let mut last: Option<(usize, ClearanceState)> = None;
+        let mut state = |k: usize| match last {
+            Some((j, st)) if j == k => st,
+            _ => {
+                let st = self.clearance_state(k, sc);
+                last = Some((k, st));
+                st
+            }
+        };
         for (i, ev) in self.events.iter().enumerate() {
             let (v, d) = match *ev {
                 EventKind::Contact(k) => {
-                    let st = self.clearance_state(k, sc);
+                    let st = state(k);
                     (st.delta, st.delta_dot)
                 }
                 EventKind::EpsCap(k) => {
                     let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
-                    let st = self.clearance_state(k, sc);
+                    let st = state(k);
                     (st.eps - cap, st.eps_dot)
                 }
                 EventKind::Corner(k, c) => {
                     self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs)
                 }
-                EventKind::Kink(k, kink) => self.kink_value(k, kink, sc),
+                EventKind::Kink(k, kink) => self.kink_value(k, kink, state(k)),
             };
             g[i] = v;
             if let Some(gd) = g_dot.as_deref_mut() {
@@ -1155,13 +1166,12 @@ impl Mechanism {
         })
     }
 
-    /// The value and rate of a kink function ([`Kink`]) of clearance joint `k` (after
-    /// `kinematics`). The rate of δ − d_max is δ̇; the others need accelerations, so in contact
+    /// The value and rate of a kink function ([`Kink`]) of clearance joint `k` at its clearance
+    /// state `st`. The rate of δ − d_max is δ̇; the others need accelerations, so in contact
     /// their rate is given as infinite (the step is always sampled) and outside contact, where
     /// they are held at 1, as 0.
-    fn kink_value(&self, k: usize, kink: Kink, sc: &Scratch) -> (f64, f64) {
+    fn kink_value(&self, k: usize, kink: Kink, st: ClearanceState) -> (f64, f64) {
         let c = &self.clr[k];
-        let st = self.clearance_state(k, sc);
         if kink == Kink::FullDamping {
             let d_max = match c.normal {
                 NormalLaw::Impact { d_max, .. } => d_max,
