@@ -115,3 +115,142 @@ impl ClearanceState {
         }
     }
 }
+
+/// The derivatives of a [`ClearanceState`] in u = (e_x, e_y, ė_x, ė_y, φ̇_J, φ̇_B), away from
+/// the centred guard (|e| ≥ 1e-12·c):
+///
+/// ```text
+/// ∂n/∂e = t tᵀ/|e|,  ∂t/∂e = −n tᵀ/|e|          (n, t do not depend on ė, φ̇)
+/// ∂δ  = (nᵀ, 0, 0, 0)
+/// ∂δ̇  = (γ̇ tᵀ, nᵀ, 0, 0)                        γ̇ = t·ė/|e|
+/// ∂v_T = (−(δ̇/|e|) tᵀ, tᵀ, R_J, −R_B)
+/// ∂γ̇  = (−(δ̇ tᵀ + (t·ė) nᵀ)/|e|², tᵀ/|e|, 0, 0),  ∂Ω = −2 ∂γ̇ + (0, 0, 1, 1)
+/// ∂ε = ∂δ/c,  ∂ε̇ = ∂δ̇/c
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StateDerivatives {
+    /// ∂δ/∂u.
+    pub delta: [f64; 6],
+    /// ∂δ̇/∂u.
+    pub delta_dot: [f64; 6],
+    /// ∂v_T/∂u.
+    pub v_t: [f64; 6],
+    /// ∂Ω/∂u.
+    pub omega: [f64; 6],
+    /// ∂n_i/∂e_j.
+    pub dn: [[f64; 2]; 2],
+    /// ∂t_i/∂e_j.
+    pub dt: [[f64; 2]; 2],
+}
+
+impl ClearanceState {
+    /// The derivatives of the state in u (see [`StateDerivatives`]) given ė and the radii;
+    /// `None` at the centred guard, where n is held at (1, 0) and has no derivative.
+    pub(crate) fn derivatives(
+        &self,
+        ed: [f64; 2],
+        radius_j: f64,
+        radius_b: f64,
+    ) -> Option<StateDerivatives> {
+        let c = radius_b - radius_j;
+        let r = self.e_norm;
+        if r < 1e-12 * c || r == 0.0 {
+            return None;
+        }
+        let (n, t) = (self.n, self.t);
+        let te = t[0] * ed[0] + t[1] * ed[1];
+        let gd = te / r;
+        let dd = self.delta_dot;
+        let r2 = r * r;
+        let omega_e = |i: usize| 2.0 * (dd * t[i] + te * n[i]) / r2;
+        Some(StateDerivatives {
+            delta: [n[0], n[1], 0.0, 0.0, 0.0, 0.0],
+            delta_dot: [gd * t[0], gd * t[1], n[0], n[1], 0.0, 0.0],
+            v_t: [
+                -dd / r * t[0],
+                -dd / r * t[1],
+                t[0],
+                t[1],
+                radius_j,
+                -radius_b,
+            ],
+            omega: [
+                omega_e(0),
+                omega_e(1),
+                -2.0 * t[0] / r,
+                -2.0 * t[1] / r,
+                1.0,
+                1.0,
+            ],
+            dn: [
+                [t[0] * t[0] / r, t[0] * t[1] / r],
+                [t[1] * t[0] / r, t[1] * t[1] / r],
+            ],
+            dt: [
+                [-n[0] * t[0] / r, -n[0] * t[1] / r],
+                [-n[1] * t[0] / r, -n[1] * t[1] / r],
+            ],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every derivative against central differences of `compute` in each of u's six entries
+    /// (steps 1e-7 of each entry's scale; the differences err by ~1e-9 relative).
+    #[test]
+    fn state_derivatives_match_differences() {
+        let (rj, rb) = (0.009, 0.010);
+        let u0 = [3e-4, -6e-4, 0.02, 0.05, 3.0, -1.5];
+        let state = |u: &[f64; 6]| {
+            ClearanceState::compute(&ClearanceInput {
+                r_j: [u[0], u[1]],
+                r_b: [0.0, 0.0],
+                v_j: [u[2], u[3]],
+                v_b: [0.0, 0.0],
+                phi_dot_j: u[4],
+                phi_dot_b: u[5],
+                radius_j: rj,
+                radius_b: rb,
+            })
+        };
+        let s0 = state(&u0);
+        let d = s0.derivatives([u0[2], u0[3]], rj, rb).unwrap();
+        let scales = [1e-3, 1e-3, 0.1, 0.1, 1.0, 1.0];
+        for j in 0..6 {
+            let h = 1e-7 * scales[j];
+            let (mut up, mut um) = (u0, u0);
+            up[j] += h;
+            um[j] -= h;
+            let (p, m) = (state(&up), state(&um));
+            let diff = |a: f64, b: f64| (a - b) / (2.0 * h);
+            let pairs = [
+                (d.delta[j], diff(p.delta, m.delta), "δ"),
+                (d.delta_dot[j], diff(p.delta_dot, m.delta_dot), "δ̇"),
+                (d.v_t[j], diff(p.v_t, m.v_t), "v_T"),
+                (d.omega[j], diff(p.omega, m.omega), "Ω"),
+            ];
+            for (a, b, what) in pairs {
+                assert!(
+                    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1e-3 / scales[j]),
+                    "∂{what}/∂u{j}: {a:e} vs {b:e}"
+                );
+            }
+            for i in 0..2 {
+                let (dn, dt) = if j < 2 {
+                    (d.dn[i][j], d.dt[i][j])
+                } else {
+                    (0.0, 0.0)
+                };
+                assert!((dn - diff(p.n[i], m.n[i])).abs() <= 1e-6 / scales[0]);
+                assert!((dt - diff(p.t[i], m.t[i])).abs() <= 1e-6 / scales[0]);
+            }
+        }
+        // The centred guard has no derivative.
+        assert!(state(&[0.0, 0.0, 0.1, 0.0, 1.0, 0.0])
+            .derivatives([0.1, 0.0], rj, rb)
+            .is_none());
+    }
+}

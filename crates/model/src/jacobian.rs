@@ -12,7 +12,11 @@
 //!                ∂r/∂q̇ = ∂γ/∂q̇ − 2α Φ_q   (closed form; γ ∋ ω² (w·A s))
 //!   ∂g/∂y = ∂g/∂u · ∂u/∂y + ∂g/∂φ |_u,  u = (e, ė, φ̇_J, φ̇_B) of each clearance joint,
 //!           ∂u/∂y closed form (e = r_J + A_J s_J − r_B − A_B s_B, ė its time derivative),
-//!           ∂(F, T)/∂u by central differences in u, with steps scaled to the joint:
+//!           ∂(F, T)/∂u in closed form: the chain rule through ∂(δ, δ̇, v_T, ε, ε̇, Ω, n, t)/∂u
+//!           (`ClearanceState::derivatives`) and the laws' own partial derivatives
+//!           (`force_derivatives` of the normal, friction and film laws; one-sided at their
+//!           kinks). At the centred guard (|e| < 1e-12 c, n undefined) central differences
+//!           in u, with steps scaled to the joint:
 //!           h_e = 1e-6 · min(|e|, |δ|) (floor 1e-10 c), h_ė = 1e-6 · max(|ė|, |v_T|, 1e-9);
 //!           a mirrored film caps them so that Ω moves by at most 1e-3 Ω₀ (h_φ̇ ≤ 1e-3 Ω₀,
 //!           h_ė ≤ 1e-3 Ω₀ |e|/2, h_e ≤ 1e-3 Ω₀ |e|²/(2|ė|))
@@ -47,19 +51,57 @@ const LOCAL_STEP: f64 = 1e-6;
 /// sign width Ω₀ (central differences of tanh(Ω/Ω₀) then err by about 3e-7 relative).
 const OMEGA_STEP: f64 = 1e-3;
 
+/// The buffers of [`jacobian`], kept with the mechanism so that a Jacobian allocates nothing
+/// after the first (each is resized to the mechanism on use).
+#[derive(Debug, Default)]
+pub(crate) struct JacWork {
+    /// ∂g/∂y, nq × n column-major.
+    dg: Vec<f64>,
+    /// P = M⁻¹Φ_qᵀS⁻¹, nq × m row-major.
+    pmat: Vec<f64>,
+    /// S⁻¹, m × m.
+    sinv: Vec<f64>,
+    /// ∂r/∂q̇, m × nq row-major.
+    drdv: Vec<f64>,
+    /// ∂u/∂y of one clearance joint, one row per column of y.
+    du: Vec<[f64; 6]>,
+    /// A = M⁻¹ − P Φ_q M⁻¹, nq × nq column-major.
+    amat: Vec<f64>,
+    /// The lower blocks of ∂f/∂y, nq × n column-major.
+    low: Vec<f64>,
+    /// m-vector scratch.
+    w: Vec<f64>,
+    w2: Vec<f64>,
+}
+
+/// `v` resized to `len` and zeroed (no allocation once it has been that long).
+fn zeroed<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
+    v.clear();
+    v.resize(len, T::default());
+    v
+}
+
 /// Fills `jac` (n × n) with ∂f/∂y at (t, y).
 pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, f64>) {
     let n = y.len();
     let nq = n / 2;
     let m = mech.rows.len();
-    for j in 0..n {
-        for i in 0..n {
-            jac[(i, j)] = 0.0;
-        }
-    }
+    jac.fill(0.0);
     for i in 0..nq {
         jac[(i, nq + i)] = 1.0;
     }
+    let mut work = mech.jac_work.borrow_mut();
+    let JacWork {
+        dg,
+        pmat,
+        sinv,
+        drdv,
+        du,
+        amat,
+        low,
+        w,
+        w2,
+    } = &mut *work;
     let mut sc = mech.scratch.borrow_mut();
     if !mech.evaluate(t, y, &mut sc, false) {
         for j in 0..n {
@@ -71,68 +113,96 @@ pub(crate) fn jacobian(mech: &Mechanism, t: f64, y: &[f64], mut jac: MatMut<'_, 
     }
     mech.dense_constraint_jacobian(&mut sc);
     // ∂g/∂y (nq × n, column-major) through the clearance joints.
-    let mut dg = vec![0.0; nq * n];
+    let dg = zeroed(dg, nq * n);
     for k in 0..mech.clr.len() {
-        clearance_force_jacobian(mech, k, &sc, n, &mut dg);
+        clearance_force_jacobian(mech, k, &sc, n, dg, du);
     }
     if !(mech.elements.is_empty() && mech.prismatic.is_empty()) {
-        element_force_jacobian(mech, t, y, &sc, &mut dg);
+        element_force_jacobian(mech, t, y, &sc, dg);
     }
-    // P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, row-major), from m solves with the factor of S: every later
+    // P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, column-major), from m solves with the factor of S: every later
     // product with S⁻¹ is a product with P.
-    let pmat = kkt_projector(mech, &sc);
-    // Lower-left and lower-right blocks: A ∂g/∂y, A = M⁻¹ − P Φ_q M⁻¹, column by column.
-    let mut col = vec![0.0; nq];
-    let mut w = vec![0.0; m];
-    for j in 0..n {
-        let dgj = &dg[j * nq..(j + 1) * nq];
-        if dgj.iter().all(|&v| v == 0.0) {
-            continue;
+    let pmat = zeroed(pmat, nq * m);
+    kkt_projector(mech, &sc, zeroed(sinv, m * m), pmat);
+    // The lower blocks (nq × n, column-major) are built in `low`, then copied into `jac`.
+    let low = zeroed(low, nq * n);
+    // A ∂g/∂y with A = M⁻¹ − P Φ_q M⁻¹ (nq × nq, column-major, built once): each nonzero
+    // entry of ∂g/∂y adds a multiple of a column of A.
+    let amat = zeroed(amat, nq * nq);
+    for j in 0..nq {
+        let aj = &mut amat[j * nq..(j + 1) * nq];
+        aj[j] = mech.minv[j];
+        for a in 0..m {
+            let f = sc.jac[a * nq + j] * mech.minv[j];
+            if f != 0.0 {
+                for (x, p) in aj.iter_mut().zip(&pmat[a * nq..(a + 1) * nq]) {
+                    *x -= p * f;
+                }
+            }
         }
-        project(mech, &sc, &pmat, dgj, &mut w, &mut col);
-        for i in 0..nq {
-            jac[(nq + i, j)] = col[i];
+    }
+    for j in 0..n {
+        let lj = &mut low[j * nq..(j + 1) * nq];
+        for (k, &d) in dg[j * nq..(j + 1) * nq].iter().enumerate() {
+            if d != 0.0 {
+                for (x, a) in lj.iter_mut().zip(&amat[k * nq..(k + 1) * nq]) {
+                    *x += a * d;
+                }
+            }
         }
     }
     // ∂K/∂q̇ at fixed g: P ∂r/∂q̇, column by column.
-    let drdv = constraint_rhs_velocity_jacobian(mech, &sc);
+    let drdv = zeroed(drdv, m * nq);
+    constraint_rhs_velocity_jacobian(mech, &sc, drdv);
     for j in 0..nq {
-        for i in 0..nq {
-            let mut s = 0.0;
-            for a in 0..m {
-                s += pmat[i * m + a] * drdv[a * nq + j];
+        let lj = &mut low[(nq + j) * nq..(nq + j + 1) * nq];
+        for a in 0..m {
+            let d = drdv[a * nq + j];
+            if d != 0.0 {
+                for (x, p) in lj.iter_mut().zip(&pmat[a * nq..(a + 1) * nq]) {
+                    *x += p * d;
+                }
             }
-            jac[(nq + i, nq + j)] += s;
         }
     }
     // ∂K/∂q at fixed g, in closed form (module doc).
-    constraint_position_jacobian(mech, &sc, &pmat, &mut jac);
+    constraint_position_jacobian(mech, &sc, pmat, zeroed(w, m), zeroed(w2, m), low);
+    for j in 0..n {
+        let src = &low[j * nq..(j + 1) * nq];
+        let col = jac.as_mut().col_mut(j).subrows_mut(nq, nq);
+        match col.try_as_col_major_mut() {
+            Some(c) => c.as_slice_mut().copy_from_slice(src),
+            None => {
+                let mut c = jac.as_mut().col_mut(j);
+                for i in 0..nq {
+                    c[nq + i] = src[i];
+                }
+            }
+        }
+    }
 }
 
-/// P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, row-major) after an evaluation (Φ_q in `sc.jac`, the factor of
+/// P = M⁻¹ Φ_qᵀ S⁻¹ (nq × m, column-major) after an evaluation (Φ_q in `sc.jac`, the factor of
 /// S in `sc.smat`): S⁻¹ column by column from the factor, then the product.
-fn kkt_projector(mech: &Mechanism, sc: &Scratch) -> Vec<f64> {
+/// `sinv` (m × m) is scratch; `p` receives P.
+fn kkt_projector(mech: &Mechanism, sc: &Scratch, sinv: &mut [f64], p: &mut [f64]) {
     let nq = mech.nq();
     let m = mech.rows.len();
-    let mut sinv = vec![0.0; m * m];
-    let mut e = vec![0.0; m];
     for a in 0..m {
-        e.iter_mut().for_each(|v| *v = 0.0);
+        // S⁻¹ is symmetric: row a = column a, the solve of S x = e_a in place.
+        let e = &mut sinv[a * m..(a + 1) * m];
         e[a] = 1.0;
-        cholesky_solve(&sc.smat, m, &mut e);
-        sinv[a * m..(a + 1) * m].copy_from_slice(&e); // S⁻¹ is symmetric: row a = column a
+        cholesky_solve(&sc.smat, m, e);
     }
-    let mut p = vec![0.0; nq * m];
     for i in 0..nq {
         for a in 0..m {
             let mut s = 0.0;
             for b in 0..m {
                 s += sc.jac[b * nq + i] * sinv[b * m + a];
             }
-            p[i * m + a] = mech.minv[i] * s;
+            p[a * nq + i] = mech.minv[i] * s;
         }
     }
-    p
 }
 
 /// Adds ∂K/∂q at fixed g to the lower-left block of `jac` (after an evaluation: q̈, λ, Φ_q,
@@ -149,11 +219,14 @@ fn kkt_projector(mech: &Mechanism, sc: &Scratch) -> Vec<f64> {
 ///   ∂Φ̇/∂φ_i = −(w · A s) φ̇_i,   ∂γ/∂φ_i = φ̇_i² (w · b)   (γ ∋ φ̇_i² (w · A s))
 /// ```
 /// Before, central differences of 12 KKT solves (BENCHMARKS.md, "What was optimised").
+/// `dphiq` and `rhs` (length m) are scratch.
 fn constraint_position_jacobian(
     mech: &Mechanism,
     sc: &Scratch,
     pmat: &[f64],
-    jac: &mut MatMut<'_, f64>,
+    dphiq: &mut [f64],
+    rhs: &mut [f64],
+    low: &mut [f64],
 ) {
     let nq = mech.nq();
     let m = mech.rows.len();
@@ -161,8 +234,7 @@ fn constraint_position_jacobian(
         return;
     }
     let (a2, b2) = (2.0 * mech.alpha, mech.beta * mech.beta);
-    let mut dphiq = vec![0.0; m]; // ∂Φ_q[:, j]/∂q_j (the only nonzero column)
-    let mut rhs = vec![0.0; m];
+    // dphiq: ∂Φ_q[:, j]/∂q_j (the only nonzero column).
     for j in 0..nq {
         let (body_i, comp) = (j / 3, j % 3);
         dphiq.iter_mut().for_each(|v| *v = 0.0);
@@ -196,12 +268,12 @@ fn constraint_position_jacobian(
             rhs[a] += dphiq[a] * sc.qdd[j] - sc.jac[a * nq + j] * mj * u;
         }
         // ∂q̈/∂q_j = −M⁻¹ u e_j − P (S ∂λ).
-        for i in 0..nq {
-            let mut v = if i == j { mech.minv[i] * u } else { 0.0 };
-            for a in 0..m {
-                v += pmat[i * m + a] * rhs[a];
+        let lj = &mut low[j * nq..(j + 1) * nq];
+        lj[j] -= mech.minv[j] * u;
+        for a in 0..m {
+            for (x, p) in lj.iter_mut().zip(&pmat[a * nq..(a + 1) * nq]) {
+                *x -= p * rhs[a];
             }
-            jac[(nq + i, j)] -= v;
         }
     }
 }
@@ -238,41 +310,11 @@ fn element_force_jacobian(mech: &Mechanism, t: f64, y: &[f64], sc: &Scratch, dg:
     }
 }
 
-/// out = A v = M⁻¹ v − P Φ_q M⁻¹ v (after an evaluation: Φ_q in `sc.jac`; P from
-/// [`kkt_projector`]); `w` is scratch of length m.
-fn project(
-    mech: &Mechanism,
-    sc: &Scratch,
-    pmat: &[f64],
-    v: &[f64],
-    w: &mut [f64],
-    out: &mut [f64],
-) {
-    let nq = v.len();
-    let m = w.len();
-    let minv = &mech.minv;
-    for a in 0..m {
-        let ja = &sc.jac[a * nq..(a + 1) * nq];
-        let mut s = 0.0;
-        for j in 0..nq {
-            s += ja[j] * minv[j] * v[j];
-        }
-        w[a] = s;
-    }
-    for i in 0..nq {
-        let mut s = minv[i] * v[i];
-        for a in 0..m {
-            s -= pmat[i * m + a] * w[a];
-        }
-        out[i] = s;
-    }
-}
-
-/// ∂r/∂q̇ (m × nq, row-major) of the constraint right-hand side r = γ − 2αΦ̇ − β²Φ.
-fn constraint_rhs_velocity_jacobian(mech: &Mechanism, sc: &Scratch) -> Vec<f64> {
+/// ∂r/∂q̇ (m × nq, row-major, into the zeroed `out`) of the constraint right-hand side
+/// r = γ − 2αΦ̇ − β²Φ.
+fn constraint_rhs_velocity_jacobian(mech: &Mechanism, sc: &Scratch, out: &mut [f64]) {
     let nq = mech.nq();
     let a2 = 2.0 * mech.alpha;
-    let mut out = vec![0.0; mech.rows.len() * nq];
     for (r, row) in mech.rows.iter().enumerate() {
         for term in &row.terms[..row.n_terms] {
             let Owner::Int(i) = mech.bodies[term.body].owner else {
@@ -293,7 +335,6 @@ fn constraint_rhs_velocity_jacobian(mech: &Mechanism, sc: &Scratch) -> Vec<f64> 
             }
         }
     }
-    out
 }
 
 /// The joint's force on its journal F and its friction force T as functions of
@@ -320,16 +361,78 @@ fn local_forces(mech: &Mechanism, k: usize, u: &[f64; 6]) -> [f64; 3] {
     ]
 }
 
-/// Adds the contribution of clearance joint k to ∂g/∂y (nq × n, column-major in `dg`).
-fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, dg: &mut [f64]) {
-    let nq = n / 2;
+/// ∂(F_x, F_y, T)/∂u of clearance joint k at the evaluated state, in closed form: the chain
+/// rule through the state's derivatives ([`ClearanceState::derivatives`]) and those of the
+/// laws (`force_derivatives` of the normal, friction and film laws). `None` at the centred
+/// guard (n undefined), where [`differenced_local_jacobian`] serves.
+fn analytic_local_jacobian(
+    mech: &Mechanism,
+    k: usize,
+    sc: &Scratch,
+    edot: [f64; 2],
+) -> Option<[[f64; 6]; 3]> {
+    let c = &mech.clr[k];
+    let ev = &sc.clr[k];
+    let st = ev.st;
+    let d = st.derivatives(edot, c.rj, c.rb)?;
+    // ∂F_N/∂u and ∂F_T/∂u (contact and friction act only for δ > 0, as in the evaluation).
+    let (mut dfn, mut dft) = ([0.0; 6], [0.0; 6]);
+    if st.delta > 0.0 {
+        let [nd, nv] = c
+            .normal
+            .force_derivatives(st.delta, st.delta_dot, c.impact_velocity.get());
+        for j in 0..6 {
+            dfn[j] = nd * d.delta[j] + nv * d.delta_dot[j];
+        }
+        if let Some(fr) = &c.friction {
+            let [fv, ff] = fr.force_derivatives(st.v_t, ev.f_n);
+            for j in 0..6 {
+                dft[j] = fv * d.v_t[j] + ff * dfn[j];
+            }
+        }
+    }
+    // ∂(F_r, F_t)/∂u of the film through ε = |e|/c, ε̇ = δ̇/c and Ω.
+    let (mut dfr, mut dftf) = ([0.0; 6], [0.0; 6]);
+    if let Some(film) = &c.film {
+        let fd = film.force_derivatives(st.eps, st.eps_dot, st.omega);
+        for j in 0..6 {
+            let (de, dv, dw) = (d.delta[j] / c.c, d.delta_dot[j] / c.c, d.omega[j]);
+            dfr[j] = fd[0][0] * de + fd[0][1] * dv + fd[0][2] * dw;
+            dftf[j] = fd[1][0] * de + fd[1][1] * dv + fd[1][2] * dw;
+        }
+    }
+    // F = (−F_N + F_r) n + (F_T + F_t) t, T = F_T.
+    let (normal, tangential) = (-ev.f_n + ev.f_r, ev.f_t + ev.f_tf);
+    let mut lu = [[0.0; 6]; 3];
+    for j in 0..6 {
+        let (dnorm, dtan) = (-dfn[j] + dfr[j], dft[j] + dftf[j]);
+        for i in 0..2 {
+            let (dn, dt) = if j < 2 {
+                (d.dn[i][j], d.dt[i][j])
+            } else {
+                (0.0, 0.0)
+            };
+            lu[i][j] = dnorm * st.n[i] + normal * dn + dtan * st.t[i] + tangential * dt;
+        }
+        lu[2][j] = dft[j];
+    }
+    Some(lu)
+}
+
+/// ∂(F_x, F_y, T)/∂u of clearance joint k by central differences of the laws in u, with steps
+/// scaled to the joint (see the module documentation): the centred journal's path, and the
+/// tests' reference for [`analytic_local_jacobian`].
+fn differenced_local_jacobian(
+    mech: &Mechanism,
+    k: usize,
+    sc: &Scratch,
+    edot: [f64; 2],
+) -> [[f64; 6]; 3] {
     let c = &mech.clr[k];
     let st = sc.clr[k].st;
     let w_j = c.journal.body.map_or(0.0, |b| sc.vel[b][2]);
     let w_b = c.bearing.body.map_or(0.0, |b| sc.vel[b][2]);
-    let edot = ed(mech, k, sc);
     let u0 = [st.e[0], st.e[1], edot[0], edot[1], w_j, w_b];
-    // Steps scaled to the joint (see the module documentation).
     let mut he = (LOCAL_STEP * st.e_norm.min(st.delta.abs())).max(1e-10 * c.c);
     let vscale = u0[2].abs().max(u0[3].abs()).max(st.v_t.abs()).max(1e-9);
     let mut hv = LOCAL_STEP * vscale;
@@ -351,9 +454,7 @@ fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, 
         }
     }
     let steps = [he, he, hv, hv, hw, hw];
-    // ∂(F_x, F_y, T)/∂u, 3 × 6.
     let mut lu = [[0.0; 6]; 3];
-    let f0 = local_forces(mech, k, &u0);
     let mut u = u0;
     for j in 0..6 {
         let h = steps[j];
@@ -368,9 +469,34 @@ fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, 
             lu[i][j] = (fp[i] - fm[i]) / (hp + hm);
         }
     }
+    lu
+}
+
+/// Adds the contribution of clearance joint k to ∂g/∂y (nq × n, column-major in `dg`).
+/// `du` is scratch (resized to n).
+fn clearance_force_jacobian(
+    mech: &Mechanism,
+    k: usize,
+    sc: &Scratch,
+    n: usize,
+    dg: &mut [f64],
+    du: &mut Vec<[f64; 6]>,
+) {
+    let nq = n / 2;
+    let c = &mech.clr[k];
+    let edot = ed(mech, k, sc);
+    // ∂(F_x, F_y, T)/∂u, 3 × 6.
+    let lu = analytic_local_jacobian(mech, k, sc, edot)
+        .unwrap_or_else(|| differenced_local_jacobian(mech, k, sc, edot));
+    let ev = &sc.clr[k];
+    let (normal, tangential) = (-ev.f_n + ev.f_r, ev.f_t + ev.f_tf);
+    let f = [
+        normal * ev.st.n[0] + tangential * ev.st.t[0],
+        normal * ev.st.n[1] + tangential * ev.st.t[1],
+    ];
     // ∂u/∂y for each integrated end: e = ±(r + A s), ė = ±(v + ω perp(A s)), φ̇ of the body.
     // Column index of (x, y, φ) of body i: 3i..3i+2; of (ẋ, ẏ, ω): nq + 3i..nq + 3i+2.
-    let mut du = vec![[0.0; 6]; n];
+    let du = zeroed(du, n);
     let ends = [(c.journal, 1.0, 4usize), (c.bearing, -1.0, 5usize)];
     for (end, sign, wslot) in ends {
         let Some(kb) = end.body else { continue };
@@ -402,7 +528,6 @@ fn clearance_force_jacobian(mech: &Mechanism, k: usize, sc: &Scratch, n: usize, 
         du[vw][wslot] += 1.0;
     }
     // dF/dy, dT/dy, then the generalized forces of both ends.
-    let f = [f0[0], f0[1]];
     for j in 0..n {
         let dj = &du[j];
         if dj.iter().all(|&v| v == 0.0) {
@@ -448,4 +573,132 @@ fn ed(mech: &Mechanism, k: usize, sc: &Scratch) -> [f64; 2] {
     };
     let (vj, vb) = (vel(&c.journal), vel(&c.bearing));
     [vj[0] - vb[0], vj[1] - vb[1]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scene;
+    use serde_json::json;
+
+    const RB: f64 = 0.010;
+    const RJ: f64 = 0.009;
+    const C: f64 = RB - RJ;
+
+    /// A free pin (journal) in a ground bearing with the given laws.
+    fn journal(
+        normal: serde_json::Value,
+        friction: serde_json::Value,
+        film: Option<serde_json::Value>,
+    ) -> Mechanism {
+        let mut joint = json!({"type": "clearance", "name": "j",
+            "bearing": {"body": "ground", "at": [0.0, 0.0], "radius": RB},
+            "journal": {"body": "pin", "point": "c", "radius": RJ},
+            "normal": normal, "friction": friction});
+        if let Some(f) = film {
+            joint["film"] = f;
+        }
+        let v = json!({
+            "bodies": [{"name": "pin", "mass": 2.0, "inertia": 0.1, "points": {"c": [0.0, 0.0]}}],
+            "joints": [joint],
+            "t_end": 1.0
+        });
+        Mechanism::from_scene(&Scene::from_json_str(&v.to_string()).unwrap()).unwrap()
+    }
+
+    /// The closed-form ∂(F_x, F_y, T)/∂u against central differences of the laws, for every
+    /// normal law, friction in each regime and every film model, capped and not, at states in
+    /// contact and in the film (oblique e, so that n and t turn). The differences (steps 1e-6
+    /// of the joint's scales) err by ~1e-9 of a row's scale; 1e-6 leaves room for that and
+    /// catches any wrong or missing term (each is at least 1e-3 of its row here).
+    #[test]
+    fn closed_form_law_jacobian_matches_differences() {
+        let k = 1e10;
+        let normals = [
+            json!({"law": "impact", "k": k, "c_max": 2e3, "d_max": 1e-5}),
+            json!({"law": "lankarani_nikravesh", "k": k, "restitution": 0.7}),
+            json!({"law": "flores", "k": k, "restitution": 0.8}),
+            json!({"law": "hunt_crossley", "k": k, "restitution": 0.9}),
+        ];
+        let frictions = [
+            json!({"law": "none"}),
+            json!({"law": "coulomb", "mu": 0.2, "v0": 1e-3, "v1": 0.5}),
+            json!({"law": "coulomb", "mu": 0.2, "v0": 1e-4, "v1": 1e-3}),
+        ];
+        let films = [
+            None,
+            Some(json!({"model": "long_gumbel", "viscosity": 0.4, "length": 0.02})),
+            Some(
+                json!({"model": "long_gumbel_mirrored", "viscosity": 0.4, "length": 0.02,
+                "omega0": 5.0}),
+            ),
+            Some(
+                json!({"model": "long_sommerfeld", "viscosity": 0.4, "length": 0.02,
+                "eps_cap": null}),
+            ),
+            Some(json!({"model": "short_ocvirk", "viscosity": 0.4, "length": 0.02})),
+            Some(
+                json!({"model": "short_ocvirk_mirrored", "viscosity": 0.4, "length": 0.02,
+                "eps_cap": null, "omega0": 5.0}),
+            ),
+        ];
+        let (ca, sa) = (0.6f64.cos(), 0.6f64.sin());
+        // (|e|, ė along n, ė along t, ω): in contact (δ = 4e-6 below d_max, approach; δ = 2e-5
+        // beyond it, separation with slip in the ramp of c_d) and in the film (ε = 0.6, 0.95).
+        let states = [
+            (C + 4e-6, 0.02, 0.3, 4.0),
+            (C + 2e-5, -0.01, 0.0, 0.05),
+            (0.6 * C, 0.01, -0.02, 3.0),
+            (0.95 * C, -0.003, 0.01, -1.0),
+        ];
+        let mut checked = 0;
+        for normal in &normals {
+            for friction in &frictions {
+                for film in &films {
+                    let m = journal(normal.clone(), friction.clone(), film.clone());
+                    m.clr[0].impact_velocity.set(0.4);
+                    for &(r, vn, vt, w) in &states {
+                        let y = [r * ca, r * sa, 0.0, vn * ca - vt * sa, vn * sa + vt * ca, w];
+                        let mut sc = m.scratch.borrow_mut();
+                        assert!(m.evaluate(0.0, &y, &mut sc, false));
+                        let edot = ed(&m, 0, &sc);
+                        let a = analytic_local_jacobian(&m, 0, &sc, edot).unwrap();
+                        let d = differenced_local_jacobian(&m, 0, &sc, edot);
+                        for i in 0..3 {
+                            // Row scale: the largest |∂F/∂u_j| times the scale of u_j.
+                            let us = [r, r, 0.1, 0.1, 1.0, 1.0];
+                            let scale = (0..6)
+                                .map(|j| a[i][j].abs().max(d[i][j].abs()) * us[j])
+                                .fold(0.0f64, f64::max);
+                            for j in 0..6 {
+                                let err = (a[i][j] - d[i][j]).abs() * us[j];
+                                assert!(
+                                    err <= 1e-6 * scale,
+                                    "{normal} {friction} {film:?} |e| {r:e}: ∂F{i}/∂u{j} \
+                                     closed form {:e}, differences {:e}",
+                                    a[i][j],
+                                    d[i][j]
+                                );
+                            }
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 4 * 3 * 6 * 4);
+    }
+
+    /// At the centred start (e = 0) n has no derivative: the differences serve.
+    #[test]
+    fn the_centred_journal_falls_back_to_differences() {
+        let m = journal(
+            json!({"law": "impact", "k": 1e10, "c_max": 1e3, "d_max": 1e-5}),
+            json!({"law": "none"}),
+            Some(json!({"model": "long_gumbel", "viscosity": 0.4, "length": 0.02})),
+        );
+        let mut sc = m.scratch.borrow_mut();
+        assert!(m.evaluate(0.0, &[0.0, 0.0, 0.0, 0.01, 0.0, 2.0], &mut sc, false));
+        assert!(analytic_local_jacobian(&m, 0, &sc, ed(&m, 0, &sc)).is_none());
+    }
 }

@@ -61,6 +61,17 @@ pub fn step_damping(delta: f64, d_max: f64, c_max: f64) -> f64 {
     c_max * s * s * (3.0 - 2.0 * s)
 }
 
+/// dC/dδ of [`step_damping`]: 6 c_max s (1 − s) / d_max for 0 < δ < d_max, else 0 (the
+/// one-sided slopes at the kinks δ = 0 and δ = d_max are both 0).
+#[inline]
+pub fn step_damping_slope(delta: f64, d_max: f64, c_max: f64) -> f64 {
+    if delta <= 0.0 || delta >= d_max {
+        return 0.0;
+    }
+    let s = delta / d_max;
+    6.0 * c_max * s * (1.0 - s) / d_max
+}
+
 /// Hertz stiffness of a pin in a hole from the materials (docs/model.md §3).
 ///
 /// ```text
@@ -199,6 +210,40 @@ impl NormalLaw {
         f.max(0.0)
     }
 
+    /// The partial derivatives (∂F_N/∂δ, ∂F_N/∂δ̇) of [`NormalLaw::force`] at fixed δ̇⁻:
+    ///
+    /// ```text
+    /// Impact:           (3/2 K δ^{1/2} + C'(δ) δ̇,  C(δ))
+    /// restitution laws: (3/2 K δ^{1/2} r,  K δ^{3/2} coef/δ̇⁻),  r = 1 + coef δ̇/δ̇⁻
+    /// ```
+    /// (0, 0) for δ ≤ 0 and where the force is clipped at 0; at the kinks (δ = d_max, the
+    /// clip) the one-sided derivative of the side the arguments lie on.
+    #[inline]
+    pub fn force_derivatives(&self, delta: f64, delta_dot: f64, impact_velocity: f64) -> [f64; 2] {
+        if delta <= 0.0 || self.force(delta, delta_dot, impact_velocity) <= 0.0 {
+            return [0.0, 0.0];
+        }
+        let k = self.stiffness();
+        let sq = delta.sqrt();
+        let elastic = k * delta * sq;
+        let d_elastic = 1.5 * k * sq;
+        match *self {
+            NormalLaw::Impact { c_max, d_max, .. } => [
+                d_elastic + step_damping_slope(delta, d_max, c_max) * delta_dot,
+                step_damping(delta, d_max, c_max),
+            ],
+            _ => {
+                let v_minus = impact_velocity.abs();
+                if v_minus < MIN_IMPACT_VELOCITY {
+                    [d_elastic, 0.0]
+                } else {
+                    let a = self.hysteresis_coefficient() / v_minus;
+                    [d_elastic * (1.0 + a * delta_dot), elastic * a]
+                }
+            }
+        }
+    }
+
     /// The coefficient of δ̇/δ̇⁻ of a restitution law: 3(1 − c_r²)/4 (Lankarani–Nikravesh),
     /// 8(1 − c_r)/(5 c_r) (Flores), 3(1 − c_r)/2 (Hunt–Crossley); 0 for IMPACT.
     #[inline]
@@ -328,6 +373,34 @@ impl FrictionLaw {
                 } else {
                     -mu * Self::cd(v_t, v0, v1) * f_n * v_t.signum()
                 }
+            }
+        }
+    }
+
+    /// The partial derivatives (∂F_T/∂v_T, ∂F_T/∂F_N) of [`FrictionLaw::force`]:
+    ///
+    /// ```text
+    /// (−μ_d c_d'(|v_T|) F_N,  −μ_d c_d(|v_T|) sign(v_T)),  c_d' = 1/(v₁ − v₀) on v₀ < |v_T| < v₁, else 0
+    /// ```
+    /// At v_T = 0 with v₀ = 0 < v₁ the slope −μ_d F_N / v₁ (the law is linear through 0 there);
+    /// pure Coulomb (v₀ = v₁) has no derivative at 0 and gets 0.
+    #[inline]
+    pub fn force_derivatives(&self, v_t: f64, f_n: f64) -> [f64; 2] {
+        match *self {
+            FrictionLaw::None => [0.0, 0.0],
+            FrictionLaw::Coulomb { mu, v0, v1 } => {
+                let v = v_t.abs();
+                let slope = if v1 > v0 && ((v > v0 && v < v1) || (v == 0.0 && v0 == 0.0)) {
+                    1.0 / (v1 - v0)
+                } else {
+                    0.0
+                };
+                let by_fn = if v_t == 0.0 {
+                    0.0
+                } else {
+                    -mu * Self::cd(v_t, v0, v1) * v_t.signum()
+                };
+                [-mu * slope * f_n, by_fn]
             }
         }
     }
@@ -505,6 +578,118 @@ impl Film {
             }
         }
     }
+
+    /// The partial derivatives of [`Film::force`] in (ε, ε̇, Ω):
+    /// `[[∂F_r/∂ε, ∂F_r/∂ε̇, ∂F_r/∂Ω], [∂F_t/∂ε, ∂F_t/∂ε̇, ∂F_t/∂Ω]]`.
+    ///
+    /// ```text
+    /// F_r = −S (a_r(ε) Ω_s + b_r(ε) ε̇),  F_t = S (a_t(ε) Ω + s(Ω) b_t(ε) ε̇)
+    /// (Ω_s = Ω, s = 1 for the printed laws; Ω_s = Ω tanh(Ω/Ω₀), s = tanh(Ω/Ω₀) mirrored)
+    /// ∂/∂ε  = ∓S (a' Ω_s + b' ε̇) …,  ∂/∂ε̇ = −S b_r, S s b_t,
+    /// ∂F_r/∂Ω = −S a_r dΩ_s/dΩ,  ∂F_t/∂Ω = S (a_t + s'(Ω) b_t ε̇)
+    /// a', b' from (1 − ε²)^{−k}' = 2kε (1 − ε²)^{−k−1},  (2 + ε²)^{−1}' = −2ε (2 + ε²)^{−2}
+    /// ```
+    /// Beyond the cap (or the guard) ε_eff is constant and ∂/∂ε = 0. NaN in, NaN out.
+    pub fn force_derivatives(&self, eps: f64, eps_dot: f64, omega: f64) -> [[f64; 3]; 2] {
+        let limit = self.eps_limit();
+        let (e, de) = if eps > limit {
+            (limit, 0.0)
+        } else if eps < 0.0 {
+            (0.0, 0.0)
+        } else {
+            (eps, 1.0)
+        };
+        let (sgn, dsgn, om, dom) = if self.is_mirrored() {
+            let s = (omega / self.mirror_width).tanh();
+            let ds = (1.0 - s * s) / self.mirror_width;
+            (s, ds, omega * s, s + omega * ds)
+        } else {
+            (1.0, 0.0, omega, 1.0)
+        };
+        let (scale, [ar, br, at, bt]) = self.coefficients(e);
+        [
+            [
+                -scale * (ar[1] * om + br[1] * eps_dot) * de,
+                -scale * br[0],
+                -scale * ar[0] * dom,
+            ],
+            [
+                scale * (at[1] * omega + sgn * bt[1] * eps_dot) * de,
+                scale * sgn * bt[0],
+                scale * (at[0] + dsgn * bt[0] * eps_dot),
+            ],
+        ]
+    }
+
+    /// The law's scale S and its coefficients with their ε-derivatives,
+    /// `[(a_r, a_r'), (b_r, b_r'), (a_t, a_t'), (b_t, b_t')]` at ε = `e` (see
+    /// [`Film::force_derivatives`]).
+    fn coefficients(&self, e: f64) -> (f64, [[f64; 2]; 4]) {
+        let (mu, l, r, c) = (self.viscosity, self.length, self.radius, self.clearance);
+        let pi = std::f64::consts::PI;
+        let e2 = e * e;
+        let one = if self.eps_cap.is_some() {
+            1.0 - e2
+        } else {
+            (1.0 - e) * (1.0 + e)
+        };
+        // Q^k = (1 − ε²)^{−k} and (Q^k)' = 2kε Q^{k+1}; P = 1/(2 + ε²), P' = −2ε P².
+        let q = 1.0 / one;
+        let q12 = q.sqrt();
+        let q32 = q * q12;
+        let q52 = q32 * q;
+        let p = 1.0 / (2.0 + e2);
+        let dp = -2.0 * e * p * p;
+        match self.model {
+            FilmModel::LongGumbel | FilmModel::LongGumbelMirrored => {
+                let s = 12.0 * mu * l * r * r * r / (c * c);
+                let dq = 2.0 * e * q * q;
+                let g = pi / 2.0 - 8.0 * p / pi;
+                (
+                    s,
+                    [
+                        [e2 * p * q, 2.0 * e * p * q + e2 * (dp * q + p * dq)],
+                        [g * q32, -8.0 * dp / pi * q32 + g * 3.0 * e * q52],
+                        [
+                            pi / 2.0 * e * p * q12,
+                            pi / 2.0 * (p * q12 + e * dp * q12 + e * p * e * q32),
+                        ],
+                        [2.0 * e * p * q, 2.0 * (p * q + e * dp * q + e * p * dq)],
+                    ],
+                )
+            }
+            FilmModel::LongSommerfeld => {
+                let s = 12.0 * pi * mu * l * r * r * r / (c * c);
+                (
+                    s,
+                    [
+                        [0.0, 0.0],
+                        [q32, 3.0 * e * q52],
+                        [e * p * q12, p * q12 + e * dp * q12 + e * p * e * q32],
+                        [0.0, 0.0],
+                    ],
+                )
+            }
+            FilmModel::ShortOcvirk | FilmModel::ShortOcvirkMirrored => {
+                let s = mu * r * l * l * l / (2.0 * c * c);
+                let q2 = q * q;
+                let q3 = q2 * q;
+                let q72 = q52 * q;
+                (
+                    s,
+                    [
+                        [2.0 * e2 * q2, 4.0 * e * q2 + 2.0 * e2 * 4.0 * e * q3],
+                        [
+                            pi * (1.0 + 2.0 * e2) * q52,
+                            pi * (4.0 * e * q52 + (1.0 + 2.0 * e2) * 5.0 * e * q72),
+                        ],
+                        [pi / 2.0 * e * q32, pi / 2.0 * (q32 + e * 3.0 * e * q52)],
+                        [4.0 * e * q2, 4.0 * (q2 + e * 4.0 * e * q3)],
+                    ],
+                )
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -565,5 +750,184 @@ mod tests {
             restitution: 1.0,
         };
         assert!(!elastic_only.can_clip());
+    }
+
+    /// Central difference of `f` at `x` with step `h`.
+    fn diff(f: impl Fn(f64) -> f64, x: f64, h: f64) -> f64 {
+        (f(x + h) - f(x - h)) / (2.0 * h)
+    }
+
+    /// |a − b| within 1e-8 of the scale (max |a|, |b|, `floor`). With steps of 1e-5 relative,
+    /// central differences of these smooth laws err by O(1e-10) (truncation h² f‴/6 and
+    /// rounding 1e-16/h); 1e-8 is far above that and far below any wrong term.
+    fn close(a: f64, b: f64, floor: f64, what: &str) {
+        let scale = a.abs().max(b.abs()).max(floor);
+        assert!(
+            (a - b).abs() <= 1e-8 * scale,
+            "{what}: analytic {a:e}, differences {b:e}"
+        );
+    }
+
+    #[test]
+    fn normal_law_derivatives_match_differences() {
+        let k = 2.34e10;
+        let laws = [
+            NormalLaw::Impact {
+                k,
+                c_max: 1e4,
+                d_max: 1e-5,
+            },
+            NormalLaw::LankaraniNikravesh {
+                k,
+                restitution: 0.8,
+            },
+            NormalLaw::Flores {
+                k,
+                restitution: 0.7,
+            },
+            NormalLaw::HuntCrossley {
+                k,
+                restitution: 0.9,
+            },
+        ];
+        // Below and above d_max, approach and restitution (unclipped), with and without δ̇⁻.
+        for law in laws {
+            for (delta, delta_dot, v_minus) in [
+                (3e-6, 0.05, 0.2),
+                (3e-6, -0.01, 0.2),
+                (4e-5, 0.1, 0.5),
+                (4e-5, 0.1, 0.0),
+            ] {
+                let d = law.force_derivatives(delta, delta_dot, v_minus);
+                let f0 = law.force(delta, delta_dot, v_minus);
+                assert!(f0 > 0.0);
+                let fd = diff(|x| law.force(x, delta_dot, v_minus), delta, 1e-5 * delta);
+                let fv = diff(|v| law.force(delta, v, v_minus), delta_dot, 1e-5);
+                close(d[0], fd, f0 / delta, &format!("{law:?} dF/dδ at {delta}"));
+                close(d[1], fv, f0, &format!("{law:?} dF/dδ̇ at {delta}"));
+            }
+            // Clipped (restitution fast enough): no force, no slope. Not in contact: the same.
+            if law.can_clip() {
+                assert_eq!(law.force_derivatives(3e-6, -1e3, 0.2), [0.0, 0.0]);
+            }
+            assert_eq!(law.force_derivatives(-1e-6, 0.1, 0.2), [0.0, 0.0]);
+        }
+        // The slope of STEP: the closed form against its own differences, 0 beyond d_max.
+        let (d_max, c_max) = (1e-5, 1e4);
+        let x = 0.3 * d_max;
+        close(
+            step_damping_slope(x, d_max, c_max),
+            diff(|x| step_damping(x, d_max, c_max), x, 1e-6 * x),
+            c_max / d_max,
+            "STEP slope",
+        );
+        assert_eq!(step_damping_slope(2.0 * d_max, d_max, c_max), 0.0);
+    }
+
+    #[test]
+    fn friction_derivatives_match_differences() {
+        let law = FrictionLaw::Coulomb {
+            mu: 0.1,
+            v0: 1e-4,
+            v1: 1e-3,
+        };
+        let f_n = 250.0;
+        for v in [5e-4, -5e-4, 2e-3, -0.3, 5e-5] {
+            let d = law.force_derivatives(v, f_n);
+            let fv = diff(|x| law.force(x, f_n), v, 1e-6 * v.abs());
+            let ff = diff(|x| law.force(v, x), f_n, 1e-3);
+            close(d[0], fv, 0.1 * f_n / 1e-3, &format!("dF_T/dv at {v}"));
+            close(d[1], ff, 0.1, &format!("dF_T/dF_N at {v}"));
+        }
+        // v₀ = 0: linear through 0, slope −μ F_N / v₁ there.
+        let lin = FrictionLaw::Coulomb {
+            mu: 0.1,
+            v0: 0.0,
+            v1: 1e-3,
+        };
+        let d = lin.force_derivatives(0.0, f_n);
+        close(
+            d[0],
+            diff(|x| lin.force(x, f_n), 0.0, 1e-6),
+            1.0,
+            "slope at 0",
+        );
+        assert_eq!(d[0], -0.1 * f_n / 1e-3);
+        assert_eq!(FrictionLaw::None.force_derivatives(0.2, f_n), [0.0, 0.0]);
+    }
+
+    #[test]
+    fn film_derivatives_match_differences() {
+        let models = [
+            FilmModel::LongGumbel,
+            FilmModel::LongGumbelMirrored,
+            FilmModel::LongSommerfeld,
+            FilmModel::ShortOcvirk,
+            FilmModel::ShortOcvirkMirrored,
+        ];
+        for model in models {
+            for eps_cap in [Some(0.999), None] {
+                let film = Film {
+                    model,
+                    viscosity: 0.1,
+                    length: 0.06,
+                    radius: 0.02,
+                    clearance: 1e-4,
+                    eps_cap,
+                    mirror_width: 0.01,
+                };
+                // Ω near the mirrored laws' sign width and far from it; ε low and near 1.
+                for (eps, eps_dot, omega) in [
+                    (0.3, 2.0, 15.7),
+                    (0.9, -40.0, -3.0),
+                    (0.99, 5.0, 0.004),
+                    (0.5, -0.7, -0.013),
+                ] {
+                    let d = film.force_derivatives(eps, eps_dot, omega);
+                    let (fr, ft) = film.force(eps, eps_dot, omega);
+                    let scale = fr.abs().max(ft.abs());
+                    let fe = |x: f64| film.force(x, eps_dot, omega);
+                    let fv = |x: f64| film.force(eps, x, omega);
+                    let fo = |x: f64| film.force(eps, eps_dot, x);
+                    let he = 1e-5 * (1.0 - eps);
+                    // The mirrored laws turn over Ω₀ (tanh is ±1 in f64 beyond 19.1 Ω₀).
+                    let near = film.is_mirrored() && omega.abs() < 20.0 * film.mirror_width;
+                    let ho = 1e-5 * if near { film.mirror_width } else { omega.abs() };
+                    let oscale = scale / film.mirror_width.max(omega.abs());
+                    let what = |q: &str| format!("{model:?} cap {eps_cap:?} {q} at ε {eps}");
+                    close(d[0][0], diff(|x| fe(x).0, eps, he), scale, &what("dF_r/dε"));
+                    close(d[1][0], diff(|x| fe(x).1, eps, he), scale, &what("dF_t/dε"));
+                    close(
+                        d[0][1],
+                        diff(|x| fv(x).0, eps_dot, 1e-5),
+                        scale,
+                        &what("dF_r/dε̇"),
+                    );
+                    close(
+                        d[1][1],
+                        diff(|x| fv(x).1, eps_dot, 1e-5),
+                        scale,
+                        &what("dF_t/dε̇"),
+                    );
+                    close(
+                        d[0][2],
+                        diff(|x| fo(x).0, omega, ho),
+                        oscale,
+                        &what("dF_r/dΩ"),
+                    );
+                    close(
+                        d[1][2],
+                        diff(|x| fo(x).1, omega, ho),
+                        oscale,
+                        &what("dF_t/dΩ"),
+                    );
+                }
+                // Beyond the cap ε_eff is constant.
+                if eps_cap.is_some() {
+                    let d = film.force_derivatives(0.9995, 1.0, 10.0);
+                    assert_eq!((d[0][0], d[1][0]), (0.0, 0.0));
+                }
+            }
+        }
     }
 }

@@ -303,6 +303,7 @@ pub struct Mechanism {
     pub(crate) y0: Vec<f64>,
     pub(crate) roles: Roles,
     pub(crate) scratch: RefCell<Scratch>,
+    pub(crate) jac_work: RefCell<crate::jacobian::JacWork>,
 }
 
 impl Mechanism {
@@ -585,6 +586,7 @@ impl Mechanism {
             y0: Vec::new(),
             roles,
             scratch: RefCell::new(scratch),
+            jac_work: RefCell::default(),
         };
         mech.t_end = match (scene.t_end, scene.revolutions) {
             (Some(te), _) => te,
