@@ -86,3 +86,28 @@ fn the_hand_written_dry_press_equals_the_general_model() {
     assert!(worst <= 1.0, "{worst} × the bound");
     assert!(rel < 1e-11, "second revolution: {rel:e} relative");
 }
+
+/// Stacked copies of the press run diffsol's BDF with the same steps, Newton iterations and
+/// results as one copy (identical blocks see identical arithmetic, and the RMS error norm over
+/// identical blocks is that of one), so that their wall time measures the dimension alone:
+/// the same accepted steps and slider accelerations equal bit for bit.
+#[test]
+fn stacked_copies_take_the_same_steps_as_one_press() {
+    use lash_benches::handwritten::{diffsol_bdf, diffsol_bdf_copies};
+    let hand = HandPress::paper(150.0, 1e-4, true);
+    let m = Mechanism::from_scene(&press_scene(PressJoint::Lubricated, 150.0, 1e-4)).unwrap();
+    let y0 = HandPress::minimal_state(&m.initial_state());
+    let t_end = m.t_start() + 0.4 * (m.t_end() - m.t_start());
+    let times: Vec<f64> = (0..=200)
+        .map(|k| m.t_start() + (t_end - m.t_start()) * k as f64 / 200.0)
+        .collect();
+    let rtol = 1e-8;
+    let one = diffsol_bdf(&hand, m.t_start(), y0, rtol, [rtol * 1e-3; 4], &times).unwrap();
+    for copies in [1, 3] {
+        let c =
+            diffsol_bdf_copies(&hand, m.t_start(), y0, rtol, rtol * 1e-3, &times, copies).unwrap();
+        assert_eq!(c.steps, one.steps, "{copies} copies");
+        assert_eq!(c.slider_a, one.slider_a, "{copies} copies");
+    }
+    assert!(diffsol_bdf_copies(&hand, m.t_start(), y0, rtol, 1e-11, &times, 4).is_err());
+}
