@@ -258,7 +258,8 @@ pub const MAX_COPIES: usize = 3;
 
 /// [`diffsol_bdf`] on `copies` identical copies of the hand-written press stacked into one
 /// state of 4·copies entries: the same method, steps and Newton iterations (every block sees
-/// the same arithmetic, and diffsol's RMS error norm is the same over identical blocks), the
+/// the same arithmetic, and diffsol's RMS error norm over identical blocks is that of one, up
+/// to its rounding: over two revolutions at rtol 3.2e-10, 1148 steps against 1146), the
 /// linear algebra and bookkeeping of the larger dimension, and one right-hand side per call
 /// (computed once and copied while the blocks are bitwise equal, as they stay). A measurement
 /// of what the dimension alone costs diffsol: with 3 copies it runs at the general model's 12

@@ -89,8 +89,10 @@ fn the_hand_written_dry_press_equals_the_general_model() {
 
 /// Stacked copies of the press run diffsol's BDF with the same steps, Newton iterations and
 /// results as one copy (identical blocks see identical arithmetic, and the RMS error norm over
-/// identical blocks is that of one), so that their wall time measures the dimension alone:
-/// the same accepted steps and slider accelerations equal bit for bit.
+/// identical blocks is that of one up to its rounding), so that their wall time measures the
+/// dimension alone: over the first 40 % of two revolutions at rtol 1e-8, the same accepted
+/// steps and slider accelerations equal bit for bit. (Over whole runs the rounding of the norm
+/// may flip a rare step decision: 1148 steps against 1146 at rtol 3.2e-10.)
 #[test]
 fn stacked_copies_take_the_same_steps_as_one_press() {
     use lash_benches::handwritten::{diffsol_bdf, diffsol_bdf_copies};
