@@ -295,6 +295,11 @@ fn corner_scene(stem: &str, stresses: &str, c: Corner, notes: &[&str]) -> Scene 
 ///             the largest step that was not stopped within 2e6 steps: RK4 at its stable step
 ///             does not fit the budget there, and the run ends with too many steps
 /// ```
+/// Since RK4's stability check confirms a suspect step by the eigenvalues of ∂f/∂y (it no
+/// longer stops a stable run), three beyond steps were scanned again and raised to the next
+/// stopped value: lubricated_speed_2000rpm 2e-6 → 5e-6, lubricated_clearance_1mm 2e-5 → 5e-5,
+/// lubricated_viscosity_10 1e-7 → 2e-7 (the old steps ran to t_end; at 2e-6 and 2e-5 within
+/// RK4's promise). The inside steps were kept: each still runs and agrees.
 pub fn catalogue() -> Vec<ExtremeScene> {
     let one_rev = Some(1.0);
     let mut v = Vec::new();
@@ -384,7 +389,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
         },
         &["clearance c = 1e-3 m with the film of cases/press; one crank revolution."],
         5e-6,
-        2e-5,
+        5e-5,
     );
     add(
         "dry_stiffness_1e6",
@@ -460,7 +465,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
         },
         &["2000 rpm with the film of cases/press: ε up to 0.94; two revolutions (0.06 s)."],
         5e-7,
-        2e-6,
+        5e-6,
     );
     add(
         "lubricated_viscosity_1e-4",
@@ -492,7 +497,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
              damping makes the problem 25 times stiffer; one crank revolution.",
         ],
         2e-8,
-        1e-7,
+        2e-7,
     );
     add(
         "lubricated_eccentricity_0.999",
