@@ -370,6 +370,17 @@ def run(press, method, rtol, times):
                 njev=sol.njev, nlu=sol.nlu, rhs=calls[0], wall=wall)
 
 
+HEADER = ("| method | rtol | error (m/s²) | steps | t<0.05 | nfev | njev | nlu "
+          "| rhs (counted) | nfev+4·njev |")
+
+
+def row(r):
+    """One table row of a successful run, in the columns of HEADER."""
+    return (f"| {r['method']} | {r['rtol']:.2e} | {r['error']:.2e} | {r['steps']} "
+            f"| {r['early']} | {r['nfev']} | {r['njev']} | {r['nlu']} | {r['rhs']} "
+            f"| {r['nfev'] + 4 * r['njev']} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="half-decade scan")
@@ -417,22 +428,18 @@ def main():
 
     print(f"\nscan, atol = rtol*1e-3 (errors below {floor:.0e} m/s², the references' "
           "disagreement, are not resolved):")
-    print("\n| method | rtol | error (m/s²) | steps | t<0.05 | nfev | njev | nlu "
-          "| rhs (counted) | nfev+4·njev | wall (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("\n" + HEADER + " wall (s) |")
+    print("|---" * 11 + "|")
     for r in runs:
         if "failed" in r:
             print(f"| {r['method']} | {r['rtol']:.2e} | failed: {r['failed']} "
                   "| | | | | | | | |")
             continue
-        print(f"| {r['method']} | {r['rtol']:.2e} | {r['error']:.2e} | {r['steps']} "
-              f"| {r['early']} | {r['nfev']} | {r['njev']} | {r['nlu']} | {r['rhs']} "
-              f"| {r['nfev'] + 4 * r['njev']} | {r['wall']:.2f} |")
+        print(row(r) + f" {r['wall']:.2f} |")
 
     print(f"\ncheapest run with error <= {TARGET:.0e} m/s² (by counted RHS calls):\n")
-    print("| method | rtol | error (m/s²) | steps | t<0.05 | nfev | njev | nlu "
-          "| rhs (counted) | nfev+4·njev |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print(HEADER)
+    print("|---" * 10 + "|")
     best = {}
     for method in ("Radau", "BDF", "LSODA"):
         ok = [r for r in runs if r["method"] == method and "failed" not in r
@@ -441,9 +448,7 @@ def main():
             print(f"| {method} | none reached {TARGET:.0e} | | | | | | | | |")
             continue
         r = best[method] = min(ok, key=lambda r: r["rhs"])
-        print(f"| {method} | {r['rtol']:.2e} | {r['error']:.2e} | {r['steps']} "
-              f"| {r['early']} | {r['nfev']} | {r['njev']} | {r['nlu']} | {r['rhs']} "
-              f"| {r['nfev'] + 4 * r['njev']} |")
+        print(row(r))
     if "Radau" in best and "BDF" in best:
         a, b = best["Radau"], best["BDF"]
         print(f"\nRadau / BDF at error <= {TARGET:.0e}: RHS calls {a['rhs'] / b['rhs']:.2f}x, "
