@@ -152,8 +152,10 @@ impl<'py> PySystem<'py> {
         }
         if self.n == 1 {
             // A scalar for a one-dimensional system, as scipy's LSODA accepts.
-            r = self.np.ravel(&r)?;
-            return self.np.read_array(&r, &[1], out, "jac(t, y)");
+            let flat = self.np.ravel(&r)?;
+            if flat.len()? == 1 {
+                return self.np.read_array(&flat, &[1], out, "jac(t, y)");
+            }
         }
         self.np.read_array(&r, &[self.n, self.n], out, "jac(t, y)")
     }
