@@ -24,10 +24,10 @@ use std::sync::OnceLock;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::case::sha256_hex;
-use crate::claim;
 use crate::error::Error;
-use crate::io;
+use crate::run::case::sha256_hex;
+use crate::store::claim;
+use crate::store::io;
 
 /// Name of the cache folder inside a command's output directory.
 pub const CACHE_DIR: &str = "cache";

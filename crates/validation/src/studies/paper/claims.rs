@@ -1006,8 +1006,8 @@ pub fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::Metrics;
-    use crate::study::{CaseStats, Deviations, Ensemble};
+    use crate::report::metrics::Metrics;
+    use crate::studies::paper::{CaseStats, Deviations, Ensemble};
 
     /// Statistics of one realisation with the given values (everything else neutral).
     #[derive(Clone, Copy)]

@@ -26,11 +26,11 @@ use lash_model::IdealSliderCrank;
 use lash_solver::SolveError;
 
 use crate::error::Error;
-use crate::io;
-use crate::metrics::Sample;
-use crate::plot::{self, Axes, Series, SeriesStyle};
-use crate::summary::{RunHeader, Summary, SUMMARY_FILE};
-use crate::trajectory::{self, Columns, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
+use crate::report::metrics::Sample;
+use crate::report::plot::{self, Axes, Series, SeriesStyle};
+use crate::report::summary::{RunHeader, Summary, SUMMARY_FILE};
+use crate::report::trajectory::{self, Columns, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
+use crate::store::io;
 
 /// File stems of the figures (each written as .svg and .png).
 pub const FIGURES: [&str; 5] = ["slider_x", "slider_v", "slider_a", "orbit", "joint_forces"];
@@ -359,9 +359,9 @@ pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::case::{Case, CaseSource};
-    use crate::metrics::grid;
-    use crate::trajectory::{Header, TrajectorySink};
+    use crate::report::metrics::grid;
+    use crate::report::trajectory::{Header, TrajectorySink};
+    use crate::run::case::{Case, CaseSource};
     use lash_solver::{SolverOptions, Stats};
 
     /// trajectory.csv rows of the window samples: t, slider x, v, a.

@@ -27,11 +27,11 @@ use std::path::{Path, PathBuf};
 
 use lash_solver::{ControllerKind, Method};
 
+use crate::compare::workprecision::fmt_num;
 use crate::error::{Error, OptionError};
-use crate::io;
-use crate::metrics::{EventQuantity, Sample, GRID_POINTS};
-use crate::simulate::{simulate, uniform_grid, Prepared, RunRequest, RunResult};
-use crate::workprecision::fmt_num;
+use crate::report::metrics::{EventQuantity, Sample, GRID_POINTS};
+use crate::run::simulate::{simulate, uniform_grid, Prepared, RunRequest, RunResult};
+use crate::store::io;
 
 /// Relative tolerance of reference runs.
 pub const REFERENCE_RTOL: f64 = 1e-12;
@@ -414,7 +414,7 @@ pub fn compare_one(
     let t_end = p.info.as_ref().map(|_| reference.t_end);
     let base = Compared {
         method,
-        controller: crate::summary::effective_controller(&opts),
+        controller: crate::report::summary::effective_controller(&opts),
         rtol: (!method.is_fixed_step()).then_some(opts.rtol),
         step: opts.step,
         norms: None,

@@ -14,7 +14,7 @@ use std::fmt::Write as _;
 
 use super::claims::{self, Claim, Origin};
 use super::{CaseResult, CaseStats, Ensemble, Kind, Setting, StudyResult};
-use crate::metrics::Metrics;
+use crate::report::metrics::Metrics;
 
 /// Text for a table cell: `|` escaped.
 pub fn cell(s: &str) -> String {

@@ -17,9 +17,9 @@ use std::path::{Path, PathBuf};
 use lash_solver::{ControllerKind, Method};
 
 use crate::error::{Error, OptionError};
-use crate::io;
 use crate::options::no_duplicates;
-use crate::plot::{self, Axes, Series, SeriesStyle};
+use crate::report::plot::{self, Axes, Series, SeriesStyle};
+use crate::store::io;
 
 /// A number for a table: plain for 0.01 ≤ |x| < 1e5 (at most 4 decimals), else scientific
 /// with at most 4 significant digits (`1e-6`, `3.25e-7`).

@@ -18,10 +18,10 @@ use std::path::{Path, PathBuf};
 
 use lash_solver::{Atol, ControllerKind, Method, SolverOptions, Stats};
 
-use crate::case::Case;
 use crate::error::Error;
-use crate::io;
-use crate::metrics::Metrics;
+use crate::report::metrics::Metrics;
+use crate::run::case::Case;
+use crate::store::io;
 
 /// File name of the summary in an output directory.
 pub const SUMMARY_FILE: &str = "summary.json";
@@ -134,9 +134,9 @@ pub struct Summary {
     /// Error against the reference solution (built-in test problems).
     pub reference_error: Option<f64>,
     /// How a run until periodic ended (`--until-periodic`; absent otherwise): revolutions,
-    /// whether the section settled, its change per revolution (crate::steady).
+    /// whether the section settled, its change per revolution (crate::run::steady).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub until_periodic: Option<crate::steady::Settled>,
+    pub until_periodic: Option<crate::run::steady::Settled>,
 }
 
 impl Summary {
@@ -227,7 +227,7 @@ impl Summary {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::{compute, grid, Sample, Window};
+    use crate::report::metrics::{compute, grid, Sample, Window};
 
     fn file_case(d: &Path) -> Case {
         std::fs::write(d.join("dry_150rpm_c0.1.json"), b"{}").unwrap();
@@ -269,7 +269,7 @@ mod tests {
         want.sort();
         assert_eq!(keys, want);
         assert_eq!(j["case"], "dry_150rpm_c0.1");
-        assert_eq!(j["scene_sha256"], crate::case::sha256_hex(b"{}"));
+        assert_eq!(j["scene_sha256"], crate::run::case::sha256_hex(b"{}"));
         assert_eq!(j["method"], "rk4");
         assert!(j["controller"].is_null() && j["rtol"].is_null() && j["atol"].is_null());
         assert_eq!(j["step"], 1e-5);
@@ -324,7 +324,7 @@ mod tests {
         // A built-in case is built directly (none is registered in this build).
         let case = Case {
             name: "testset:hires".into(),
-            source: crate::case::CaseSource::BuiltIn("hires".into()),
+            source: crate::run::case::CaseSource::BuiltIn("hires".into()),
         };
         let mut s = Summary::new(
             &case,
@@ -367,7 +367,7 @@ mod tests {
         .unwrap();
         let case = Case {
             name: "x".into(),
-            source: crate::case::CaseSource::BuiltIn("x".into()),
+            source: crate::run::case::CaseSource::BuiltIn("x".into()),
         };
         let mut s = Summary::new(
             &case,

@@ -46,12 +46,12 @@ use lash_solver::analysis::AnalysisError;
 use lash_solver::{Method, OdeSystem, Problem, SolverOptions, Stats, StepOutcome};
 
 use crate::error::{Error, OptionError};
-use crate::io;
-use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::progress::Progress;
-use crate::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
-use crate::summary::RunHeader;
-use crate::trajectory::fmt_num;
+use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
+use crate::report::summary::RunHeader;
+use crate::report::trajectory::fmt_num;
+use crate::run::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
+use crate::store::io;
 
 /// Default number of sample points along the run (both ends included): every 0.72° of crank
 /// angle over the paper's two revolutions; the analysis of a sample (one analytic Jacobian, the

@@ -41,15 +41,15 @@ use lash_solver::analysis::lyapunov::{
 };
 use lash_solver::SolverOptions;
 
+use crate::diagnostics::stiffness::analysis_error;
 use crate::error::{Error, OptionError};
-use crate::io;
 use crate::options::SolverChoice;
-use crate::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::progress::Progress;
-use crate::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
-use crate::stiffness_cmd::analysis_error;
-use crate::summary::RunHeader;
-use crate::trajectory::fmt_num;
+use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
+use crate::report::summary::RunHeader;
+use crate::report::trajectory::fmt_num;
+use crate::run::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
+use crate::store::io;
 
 /// Default number of revolutions.
 pub const DEFAULT_REVOLUTIONS: usize = 20;

@@ -15,7 +15,7 @@
 //! claims       claims::evaluate on the ensemble means (and per realisation)
 //! files        DIR/figures/figNN[a-d].{svg,png} → DIR/report.md → DIR/study.json (last)
 //! resuming     every finished run is kept in DIR/cache/ under the hash of its inputs
-//!              (crate::cache); a rerun reuses it, so an interrupted study (SIGINT, SIGTERM:
+//!              (crate::store::cache); a rerun reuses it, so an interrupted study (SIGINT, SIGTERM:
 //!              the runs in flight are abandoned) goes on where it stopped
 //! ```
 //!
@@ -34,7 +34,6 @@
 pub mod claims;
 mod figures;
 pub mod markdown;
-pub mod robustness;
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -47,14 +46,14 @@ use lash_model::{IdealSliderCrank, Scene};
 use lash_solver::{Atol, Method, SolverOptions, Stats};
 use rayon::prelude::*;
 
-use crate::cache::{RunCache, CACHE_DIR};
-use crate::case::Case;
 use crate::error::Error;
-use crate::io;
-use crate::metrics::{self, Metrics, Sample};
 use crate::progress::{NoProgress, Progress};
-use crate::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
-use crate::steady::UntilPeriodic;
+use crate::report::metrics::{self, Metrics, Sample};
+use crate::run::case::Case;
+use crate::run::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
+use crate::run::steady::UntilPeriodic;
+use crate::store::cache::{RunCache, CACHE_DIR};
+use crate::store::io;
 
 pub use claims::{Claim, Number, Origin, Quantity, Verdict};
 
@@ -371,14 +370,14 @@ pub struct CaseResult {
     pub steady: Option<SteadyRuns>,
 }
 
-/// A case's realisations run until periodic ([`crate::steady`]) at the three settings.
+/// A case's realisations run until periodic ([`crate::run::steady`]) at the three settings.
 ///
 /// ```text
 /// run until |s_k − s_{k−1}| < tol·c (section once per revolution), at most max_revolutions;
 /// statistics of the last revolution, as for the two-revolution runs
 /// ```
 ///
-/// Source: [`crate::steady`].
+/// Source: [`crate::run::steady`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SteadyRuns {
     /// The request.
@@ -520,7 +519,7 @@ struct Run {
 
 /// Runs the press scene `scene` (the catalogue case `name`, or one of its realisations) over
 /// its span through [`simulate`], or with `until` until its orbit settles
-/// ([`crate::steady`]); samples its last two revolutions.
+/// ([`crate::run::steady`]); samples its last two revolutions.
 fn run_case(
     name: &str,
     scene: &Scene,
@@ -537,7 +536,7 @@ fn run_case(
         .zip(info.crank_speed)
         .ok_or_else(|| Error::Input(format!("case {name}: no crank_driver role")))?;
     let settled = until
-        .map(|u| crate::steady::settle(&p, &settings.options(), u))
+        .map(|u| crate::run::steady::settle(&p, &settings.options(), u))
         .transpose()?;
     let t0 = info.t_start;
     let t_end = match &settled {
@@ -774,28 +773,28 @@ fn realisation(scene: &Scene, k: usize, step_rad: f64) -> Scene {
     s
 }
 
-struct Job<'a> {
-    case: usize,
-    name: &'a str,
+pub(crate) struct Job<'a> {
+    pub(crate) case: usize,
+    pub(crate) name: &'a str,
     /// The case's scene (before the realisation's crank phase).
-    scene: Scene,
-    setting: Setting,
-    member: usize,
+    pub(crate) scene: Scene,
+    pub(crate) setting: Setting,
+    pub(crate) member: usize,
     /// Run until the orbit settles instead of the scene's two revolutions.
-    until: Option<UntilPeriodic>,
+    pub(crate) until: Option<UntilPeriodic>,
 }
 
-/// What one job gives: stored in the cache of finished runs ([`crate::cache`]).
+/// What one job gives: stored in the cache of finished runs ([`crate::store::cache`]).
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
-struct JobOut {
-    stats: CaseStats,
-    acc: Vec<f64>,
-    curves: Option<Curves>,
-    solver: (Stats, usize, f64),
-    meta: (f64, Option<f64>),
+pub(crate) struct JobOut {
+    pub(crate) stats: CaseStats,
+    pub(crate) acc: Vec<f64>,
+    pub(crate) curves: Option<Curves>,
+    pub(crate) solver: (Stats, usize, f64),
+    pub(crate) meta: (f64, Option<f64>),
     /// Revolutions run and, until periodic, whether the orbit settled.
     #[serde(default)]
-    length: (usize, Option<bool>),
+    pub(crate) length: (usize, Option<bool>),
 }
 
 fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
@@ -825,7 +824,7 @@ fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
     })
 }
 
-fn spread(accs: &[&Vec<f64>]) -> f64 {
+pub(crate) fn spread(accs: &[&Vec<f64>]) -> f64 {
     let n = accs.first().map_or(0, |a| a.len());
     (0..n)
         .map(|i| {
@@ -839,7 +838,7 @@ fn spread(accs: &[&Vec<f64>]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn kind_of(name: &str) -> Kind {
+pub(crate) fn kind_of(name: &str) -> Kind {
     if name.starts_with("dry") {
         Kind::Dry
     } else if name.starts_with("lubricated") {
@@ -849,7 +848,7 @@ fn kind_of(name: &str) -> Kind {
     }
 }
 
-/// The inputs a job's result depends on (its cache key, with the build: [`crate::cache`]).
+/// The inputs a job's result depends on (its cache key, with the build: [`crate::store::cache`]).
 #[derive(serde::Serialize)]
 struct JobKey<'a> {
     case: &'a str,
@@ -866,7 +865,7 @@ struct JobKey<'a> {
 /// one stored there; `progress` gets one item per run done. A stop request
 /// (`lash_solver::interrupt`) abandons the runs in flight and starts no other:
 /// [`Error::Interrupted`], with what is kept. `what` names the command in notes.
-fn run_jobs(
+pub(crate) fn run_jobs(
     jobs: &[Job<'_>],
     plan: &Plan,
     cache: &RunCache,
@@ -1128,7 +1127,7 @@ fn run_plan(
 
 /// Runs the study with `plan` and writes `out/figures/*`, `out/report.md` and (last)
 /// `out/study.json`, each atomically. Nothing is written if a run fails but the finished runs
-/// in `out/cache/` ([`crate::cache`]), from which a rerun resumes.
+/// in `out/cache/` ([`crate::store::cache`]), from which a rerun resumes.
 pub fn run_and_write(plan: &Plan, out: &Path) -> Result<StudyResult, Error> {
     run_and_write_with(plan, out, &NoProgress)
 }
@@ -1141,8 +1140,8 @@ pub fn run_and_write_with(
 ) -> Result<StudyResult, Error> {
     let clock = Instant::now();
     // Temporary files of a study killed while writing (a second signal, SIGKILL).
-    crate::claim::remove_dead_temporaries(out);
-    crate::claim::remove_dead_temporaries(&out.join(FIGURES_DIR));
+    crate::store::claim::remove_dead_temporaries(out);
+    crate::store::claim::remove_dead_temporaries(&out.join(FIGURES_DIR));
     let cache = RunCache::new(&out.join(CACHE_DIR));
     let (mut result, curves) = run_plan(plan, &cache, progress)?;
     result.timing.runs_s = clock.elapsed().as_secs_f64();

@@ -30,14 +30,14 @@ use std::time::Instant;
 
 use lash_solver::Method;
 
-use crate::compare::{self, Compared, ErrorNorms, ErrorWindow, Reference};
+use crate::compare::reference::{self as compare, Compared, ErrorNorms, ErrorWindow, Reference};
+use crate::compare::workprecision::fmt_num;
 use crate::error::Error;
-use crate::io::{self, OutDir, Written};
-use crate::metrics::{Metrics, Sample};
-use crate::plot::{self, Axes, Series, SeriesStyle};
 use crate::progress::{NoProgress, Progress};
-use crate::simulate::{Prepared, RunResult};
-use crate::workprecision::fmt_num;
+use crate::report::metrics::{Metrics, Sample};
+use crate::report::plot::{self, Axes, Series, SeriesStyle};
+use crate::run::simulate::{Prepared, RunResult};
+use crate::store::io::{self, OutDir, Written};
 
 /// One case of the default run.
 ///

@@ -17,10 +17,10 @@
 //! ```
 //!
 //! Steady state for every case: a case with a clearance joint runs until its section settles
-//! (the study's [`super::Plan::steady`]); a dry joint is chaotic and runs to the cap. The ideal
+//! (the study's [`crate::studies::paper::Plan::steady`]); a dry joint is chaotic and runs to the cap. The ideal
 //! mechanism is periodic from its start and keeps its two revolutions.
 //!
-//! Source: docs/model.md §3, §4, §6; the study (`super`); [`crate::steady`].
+//! Source: docs/model.md §3, §4, §6; the study (`super`); [`crate::run::steady`].
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -30,12 +30,14 @@ use lash_model::laws::FilmModel;
 use lash_model::scene::{JointSpec, NormalSpec};
 use lash_model::Scene;
 
-use super::claims::{self, Cases, Claim, Number, Thresholds, Verdict};
-use super::{case_names, kind_of, run_jobs, spread, Ensemble, Job, JobOut, Kind, Plan, Setting};
-use crate::cache::{RunCache, CACHE_DIR};
 use crate::error::Error;
-use crate::io;
 use crate::progress::Progress;
+use crate::store::cache::{RunCache, CACHE_DIR};
+use crate::store::io;
+use crate::studies::paper::claims::{self, Cases, Claim, Number, Thresholds, Verdict};
+use crate::studies::paper::{
+    case_names, kind_of, run_jobs, spread, Ensemble, Job, JobOut, Kind, Plan, Setting,
+};
 
 /// File name of the robustness table (markdown).
 pub const MD_FILE: &str = "robustness.md";
@@ -398,7 +400,7 @@ pub fn run_and_write(
     progress: &dyn Progress,
 ) -> Result<RobustnessResult, Error> {
     let clock = Instant::now();
-    crate::claim::remove_dead_temporaries(out);
+    crate::store::claim::remove_dead_temporaries(out);
     let cache = RunCache::new(&out.join(CACHE_DIR));
     let (cases, runs) = run_variants(plan, variants, &cache, progress)?;
     let details = judge(variants, &cases, th)?;

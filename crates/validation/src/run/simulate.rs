@@ -118,16 +118,16 @@ use lash_solver::{
     Stats, StepOutcome,
 };
 
-use crate::case::{Case, CaseSource};
 use crate::error::{Error, OptionError};
-use crate::metrics::{
+use crate::options::SolverChoice;
+use crate::report::metrics::{
     self, DenseExtremes, EnergyTotals, EventQuantity, EventRecord, JointExtremes, JointInfo, Peaks,
     Sample, Window, GRID_POINTS,
 };
-use crate::options::SolverChoice;
-use crate::report::{self, RunOutput};
-use crate::summary::Summary;
-use crate::trajectory::{fmt_num, Columns, Header, TrajectorySink};
+use crate::report::summary::Summary;
+use crate::report::trajectory::{fmt_num, Columns, Header, TrajectorySink};
+use crate::run::case::{Case, CaseSource};
+use crate::run::files::{self as report, RunOutput};
 
 /// Default method of a mechanism run.
 pub const DEFAULT_METHOD: Method = Method::Bdf;
@@ -200,7 +200,7 @@ pub struct MechanismInfo {
     pub state_names: Vec<String>,
     /// Each event function's kind and element (`lash_model::Mechanism::event_name`:
     /// `("contact" | "eps_cap", clearance joint)`, `("corner_contact", prismatic joint)`), by
-    /// [`crate::metrics::EventRecord::index`].
+    /// [`crate::report::metrics::EventRecord::index`].
     pub event_names: Vec<(&'static str, String)>,
 }
 
@@ -1216,7 +1216,7 @@ impl<'a> Sampler<'a> {
         }
     }
 
-    /// Which fixed trajectory columns ([`crate::trajectory::COLUMNS`]) this mechanism fills.
+    /// Which fixed trajectory columns ([`crate::report::trajectory::COLUMNS`]) this mechanism fills.
     pub fn fixed_present(&self) -> [bool; 13] {
         let roles = self.mech.roles();
         let (crank, slider, joint) = (
@@ -1243,7 +1243,7 @@ impl<'a> Sampler<'a> {
 }
 
 /// The fixed trajectory columns of a sample (NaN where absent), in the order of
-/// [`crate::trajectory::COLUMNS`].
+/// [`crate::report::trajectory::COLUMNS`].
 fn fixed_values(s: &Sample) -> [f64; 13] {
     let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
     [

@@ -31,10 +31,10 @@ use plotters::prelude::*;
 use plotters::style::register_font;
 
 use crate::error::Error;
-use crate::io;
+use crate::store::io;
 
 /// The font all text is drawn with.
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 /// Font family name every text style of this module uses.
 const FAMILY: &str = "sans-serif";

@@ -27,7 +27,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
-use crate::io;
+use crate::store::io;
 
 /// File name of the trajectory in an output directory.
 pub const TRAJECTORY_FILE: &str = "trajectory.csv";

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use super::claims::{DRY_CLEARANCES, DRY_SPEEDS, LUB_CLEARANCES, LUB_SPEEDS};
 use super::{Curves, FigureRecord};
 use crate::error::Error;
-use crate::plot::{self, Axes, Series, SeriesStyle};
+use crate::report::plot::{self, Axes, Series, SeriesStyle};
 
 struct Set {
     first_figure: u32,

@@ -34,7 +34,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
-use crate::io;
+use crate::store::io;
 
 /// Name of the claim file inside a point's directory.
 pub const CLAIM_FILE: &str = "claim.json";

@@ -38,7 +38,7 @@
 //!             failures: any other result that breaks the promise, non-finite numbers in a
 //!                       result, any other error, a panic (caught)
 //! resuming    `lash extremes` keeps every finished reference and run in OUT/cache/ under the
-//!             hash of its inputs (crate::cache): an interrupted matrix goes on where it
+//!             hash of its inputs (crate::store::cache): an interrupted matrix goes on where it
 //!             stopped; a run cut short by the stop request is not a result and runs again
 //! ```
 //!
@@ -68,14 +68,14 @@ use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec};
 use lash_model::Scene;
 use lash_solver::{Method, SolveError};
 
-use crate::cache::RunCache;
-use crate::case::{sha256_hex, Case, CaseSource};
-use crate::compare::ErrorWindow;
+use crate::compare::reference::ErrorWindow;
+use crate::compare::workprecision::fmt_num;
 use crate::error::Error;
-use crate::io;
 use crate::progress::Progress;
-use crate::simulate::{simulate, Prepared, RunRequest, RunResult};
-use crate::workprecision::fmt_num;
+use crate::run::case::{sha256_hex, Case, CaseSource};
+use crate::run::simulate::{simulate, Prepared, RunRequest, RunResult};
+use crate::store::cache::RunCache;
+use crate::store::io;
 
 /// Relative tolerances of the full matrix.
 pub const TOLERANCES: [f64; 6] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
@@ -1446,7 +1446,7 @@ struct CachedReference {
 /// Runs the matrix of `plan`. A reference that cannot be computed at any rtol of the ladder
 /// is the solver's error (exit 3); everything else is recorded in the cells. `progress`
 /// receives one item per reference computed and per run done. With a `cache`
-/// ([`crate::cache`]), every finished reference and run is stored there and one found there
+/// ([`crate::store::cache`]), every finished reference and run is stored there and one found there
 /// is not done again. A stop request (`lash_solver::interrupt`) abandons the work in flight
 /// and starts no other: [`Error::Interrupted`], with what is kept.
 pub fn run_cached(

@@ -180,7 +180,7 @@ pub struct EventRecord {
     /// None when not known (every joint counts as the role's).
     pub joint: Option<usize>,
     /// The event function that crossed (its index in the mechanism's list,
-    /// `lash_model::Mechanism::event_name`; [`crate::simulate::MechanismInfo::event_names`]).
+    /// `lash_model::Mechanism::event_name`; [`crate::run::simulate::MechanismInfo::event_names`]).
     pub index: usize,
 }
 

@@ -23,7 +23,7 @@ use lash_model::Mechanism;
 use lash_solver::{Problem, SolverOptions, StepOutcome};
 
 use crate::error::Error;
-use crate::simulate::{Model, Prepared, Sampler};
+use crate::run::simulate::{Model, Prepared, Sampler};
 
 /// Fewest revolutions of a run until periodic: the metrics need a last revolution and the
 /// periodicity check a revolution before it.

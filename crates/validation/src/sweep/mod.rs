@@ -40,11 +40,11 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::case::{sha256_hex, Case};
-use crate::claim;
 use crate::error::Error;
-use crate::io;
 use crate::progress::{self, NoProgress, Progress};
+use crate::run::case::{sha256_hex, Case};
+use crate::store::claim;
+use crate::store::io;
 
 /// Name of the result file of a point.
 pub const RESULT_FILE: &str = "result.json";

@@ -35,24 +35,28 @@ use std::time::{Duration, Instant};
 
 use lash_solver::{ControllerKind, Method, SolveError, SolverOptions};
 
-use crate::cache::{RunCache, CACHE_DIR};
-use crate::case::Case;
-use crate::compare::{self, Compared, Comparison, Reference, COMPARE_TOLERANCES};
+use crate::compare::reference::{
+    self as compare, Compared, Comparison, Reference, COMPARE_TOLERANCES,
+};
+use crate::compare::workprecision::{WorkPrecisionPlan, WpRun, WpTable, DEFAULT_TARGETS};
+use crate::diagnostics::poincare::{self, PoincareResult, PoincareSettings};
+use crate::diagnostics::stiffness::{
+    self as stiffness_cmd, StiffnessResult, StiffnessSettings, DEFAULT_SAMPLES,
+};
 use crate::error::{Error, Message, OptionError};
-use crate::extremes::{self, Matrix};
-use crate::headline::{self, Headline};
-use crate::io::{OutDir, Written};
 use crate::options::SolverChoice;
-use crate::poincare::{self, PoincareResult, PoincareSettings};
 use crate::progress::Progress;
-use crate::report::{self, Failure, FAILURE_FILE};
-use crate::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
-use crate::stiffness_cmd::{self, StiffnessResult, StiffnessSettings, DEFAULT_SAMPLES};
-use crate::study::{self, StudyResult};
-use crate::summary::RunHeader;
+use crate::report::summary::RunHeader;
+use crate::report::trajectory::{CsvFile, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
+use crate::run::case::Case;
+use crate::run::files::{self as report, Failure, FAILURE_FILE};
+use crate::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
+use crate::store::cache::{RunCache, CACHE_DIR};
+use crate::store::io::{OutDir, Written};
+use crate::studies::extremes::{self, Matrix};
+use crate::studies::headline::{self, Headline};
+use crate::studies::paper::{self as study, StudyResult};
 use crate::sweep::{self, MergedTable, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
-use crate::trajectory::{CsvFile, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
-use crate::workprecision::{WorkPrecisionPlan, WpRun, WpTable, DEFAULT_TARGETS};
 
 /// The default run (module `headline`): the 150 rpm press, ideal vs dry vs lubricated, RK4
 /// against the best adaptive method; notes each case as it starts.
@@ -86,8 +90,8 @@ pub struct RunOptions {
     /// Output directory; None = `out/run/CASE`.
     pub out: Option<PathBuf>,
     /// Run until the clearance joint's once-per-revolution section settles
-    /// (crate::steady); excludes `t_end`.
-    pub until_periodic: Option<crate::steady::UntilPeriodic>,
+    /// (crate::run::steady); excludes `t_end`.
+    pub until_periodic: Option<crate::run::steady::UntilPeriodic>,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -173,13 +177,13 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
 
 /// The checked case and the request of a run (the same for [`run`] and [`run_in_memory`]):
 /// the solver choice checked against the defaults before the scene is read, then laid over
-/// the case's own options; with `until_periodic`, the settling pass (crate::steady) that
+/// the case's own options; with `until_periodic`, the settling pass (crate::run::steady) that
 /// decides the end time, and its report.
 fn run_request(
     case: Case,
     o: &RunOptions,
     deadline: Option<Instant>,
-) -> Result<(Prepared, RunRequest, Option<crate::steady::Settled>), Error> {
+) -> Result<(Prepared, RunRequest, Option<crate::run::steady::Settled>), Error> {
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
     let opts = prepared.options(&o.solver)?;
@@ -190,7 +194,7 @@ fn run_request(
                     "--until-periodic decides the end time: give it or --t-end, not both".into(),
                 ));
             }
-            Some(crate::steady::settle(&prepared, &opts, u)?)
+            Some(crate::run::steady::settle(&prepared, &opts, u)?)
         }
         None => None,
     };
@@ -223,7 +227,7 @@ fn within(r: RunResult, o: &RunOptions, deadline: Option<Instant>) -> Result<Run
 /// [`run`] without files, for a library caller (the Python binding's `lash.run`): the same
 /// checks, defaults, integration and summary, the trajectory's rows kept in memory
 /// ([`RunResult::trajectory`]) and every event of the run kept ([`RunResult::events`]);
-/// returned with the prepared case, whose [`MechanismInfo`](crate::simulate::MechanismInfo)
+/// returned with the prepared case, whose [`MechanismInfo`](crate::run::simulate::MechanismInfo)
 /// names the state components and the event functions.
 ///
 /// ```text
@@ -254,7 +258,7 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult)
 pub struct StudyOptions {
     /// Output directory; None = `out/study/paper`.
     pub out: Option<PathBuf>,
-    /// Run the robustness study instead (`study::robustness`): robustness.md and
+    /// Run the robustness study instead (`studies::robustness`): robustness.md and
     /// robustness.json in the same directory, sharing its cache of runs.
     pub robustness: bool,
 }
@@ -280,19 +284,19 @@ pub fn study_paper(
 }
 
 /// `lash study paper --robustness`: the claims under the modelling choices the paper leaves
-/// open (`study::robustness`), written to the study's directory.
+/// open (`studies::robustness`), written to the study's directory.
 pub fn study_robustness(
     o: &StudyOptions,
     progress: &dyn Progress,
-) -> Result<Written<study::robustness::RobustnessResult>, Error> {
+) -> Result<Written<crate::studies::robustness::RobustnessResult>, Error> {
     let out = o
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let r = study::robustness::paper(&out, progress)?;
+    let r = crate::studies::robustness::paper(&out, progress)?;
     let files = vec![
-        out.join(study::robustness::MD_FILE),
-        out.join(study::robustness::JSON_FILE),
+        out.join(crate::studies::robustness::MD_FILE),
+        out.join(crate::studies::robustness::JSON_FILE),
     ];
     Ok(Written {
         result: r,
@@ -427,7 +431,7 @@ pub struct WorkPrecisionOptions {
     /// Methods; None = every method of this build.
     pub methods: Option<Vec<Method>>,
     /// Relative tolerances of the adaptive methods (atol as in the case); None = the
-    /// defaults ([`crate::workprecision::DEFAULT_TOLERANCES`]).
+    /// defaults ([`crate::compare::workprecision::DEFAULT_TOLERANCES`]).
     pub tolerances: Option<Vec<f64>>,
     /// Steps of the fixed-step methods, s; None = derived from the case.
     pub steps: Option<Vec<f64>>,
@@ -744,7 +748,7 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
             "extremes"
         })
     });
-    crate::claim::remove_dead_temporaries(&out);
+    crate::store::claim::remove_dead_temporaries(&out);
     let cache = RunCache::new(&out.join(CACHE_DIR));
     let m = extremes::run_cached(&plan, Some(&cache), progress)?;
     let files = m.write(&out)?;
