@@ -21,16 +21,16 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 use lash_validation::commands::{self, describe_run, SweepOutcome, WorkPrecisionResult};
-use lash_validation::compare::Comparison;
-use lash_validation::extremes::{self, Matrix};
-use lash_validation::headline::Headline;
-use lash_validation::io::Written;
-use lash_validation::poincare::PoincareResult;
-use lash_validation::simulate::RunResult;
-use lash_validation::stiffness_cmd::StiffnessResult;
-use lash_validation::study;
+use lash_validation::compare::reference::Comparison;
+use lash_validation::compare::workprecision::WpTable;
+use lash_validation::diagnostics::poincare::PoincareResult;
+use lash_validation::diagnostics::stiffness::StiffnessResult;
+use lash_validation::run::simulate::RunResult;
+use lash_validation::store::io::Written;
+use lash_validation::studies::extremes::{self, Matrix};
+use lash_validation::studies::headline::Headline;
+use lash_validation::studies::paper as study;
 use lash_validation::sweep::{PointResult, SweepPoint, SweepReport};
-use lash_validation::workprecision::WpTable;
 use lash_validation::Error;
 
 use crate::args::{
@@ -94,7 +94,9 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
             let w = commands::study_robustness(&a.options(), &progress);
             progress.clear();
             let w = w?;
-            outln(&study::robustness::describe(&w.result, &w.dir));
+            outln(&lash_validation::studies::robustness::describe(
+                &w.result, &w.dir,
+            ));
             Ok(())
         }
         Command::Study(a) => {
