@@ -4,8 +4,10 @@
 //!
 //! # The rules
 //!
-//! This is the one place they are written; every front end (the engine, `lash`, Python) calls
-//! them instead of checking on its own, and spells the typed error ([`OptionError`]: which
+//! This is the one place they are written. The engine and `lash` call them instead of
+//! checking on their own (the Python binding still keeps copies of the rtol range, the
+//! default controllers and the dense-output degrees, to be replaced by these and
+//! [`Method::info`]), and each front end spells the typed error ([`OptionError`]: which
 //! field, what is wrong, the value, what is allowed) its own way.
 //!
 //! Which option fits which method follows the method's family ([`Method::info`],
