@@ -43,6 +43,8 @@
 
 use faer::MatMut;
 
+use crate::elements::input::Kin;
+use crate::elements::interface::ForceJacobian;
 use crate::geometry::{ClearanceInput, ClearanceState};
 use crate::linalg::cholesky_solve;
 use crate::mechanism::constraints::TermKind;
@@ -285,11 +287,38 @@ fn constraint_position_jacobian(
     }
 }
 
-/// Adds ∂g/∂y of the force elements and prismatic clearance joints (nq × n, column-major)
-/// by central differences of their generalized forces.
+/// Adds ∂g/∂y of the force elements and prismatic clearance joints (nq × n, column-major):
+/// each element's closed form where it has one, then central differences of the generalized
+/// forces of the others and of the prismatic clearance joints, all together.
 fn element_force_jacobian(mech: &Mechanism, t: f64, y: &[f64], sc: &Scratch, dg: &mut [f64]) {
     let n = y.len();
     let nq = n / 2;
+    let int_of: Vec<Option<usize>> = mech
+        .bodies
+        .iter()
+        .map(|b| match b.owner {
+            Owner::Int(i) => Some(i),
+            Owner::Pres(_) => None,
+        })
+        .collect();
+    let kin = Kin {
+        pose: &sc.pose,
+        vel: &sc.vel,
+        cs: &sc.cs,
+    };
+    let mut fj = ForceJacobian {
+        int_of: &int_of,
+        nq,
+        dg: &mut *dg,
+    };
+    let closed: Vec<bool> = mech
+        .elements
+        .iter()
+        .map(|e| e.jacobian(t, &kin, &mut fj))
+        .collect();
+    if mech.prismatic.is_empty() && closed.iter().all(|&c| c) {
+        return;
+    }
     let mut s2 = sc.clone();
     let mut yp = y.to_vec();
     let mut gp = vec![0.0; nq];
@@ -297,7 +326,7 @@ fn element_force_jacobian(mech: &Mechanism, t: f64, y: &[f64], sc: &Scratch, dg:
     let g_of = |yp: &[f64], s2: &mut Scratch, out: &mut [f64]| {
         mech.kinematics(t, yp, s2);
         s2.g.iter_mut().for_each(|v| *v = 0.0);
-        mech.element_forces(t, s2, false);
+        mech.element_forces(t, s2, false, &closed);
         out.copy_from_slice(&s2.g);
     };
     for j in 0..n {

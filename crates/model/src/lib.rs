@@ -62,6 +62,7 @@ pub mod clearance;
 pub mod elements;
 mod initial_check;
 pub mod jacobian;
+mod labels;
 mod linalg;
 pub mod mechanism;
 pub mod outputs;
@@ -70,6 +71,7 @@ pub mod scene;
 
 pub use assembly::{CoordinateChange, ProjectionReport};
 pub use clearance::{geometry, laws};
+pub use labels::{Column, EventLabels};
 pub use mechanism::Mechanism;
 pub use outputs::{
     BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,

@@ -17,6 +17,8 @@
 //! Source: docs/model.md §1–§5, docs/outputs.md ("`energy`", "`trajectory.csv`").
 
 use crate::clearance::revolute::{Clr, End};
+use crate::elements::interface::Account;
+use crate::labels::Column;
 use crate::mechanism::{Mechanism, Scratch};
 use crate::planar::{cross, perp, rot};
 use crate::scene::{JointSpec, Scene, SceneError};
@@ -175,9 +177,10 @@ pub const PRISMATIC_COLUMNS: [&str; 5] =
 pub struct ElementOutput {
     /// Element name.
     pub name: String,
-    /// Column suffixes of the element (`force`, `length`; `torque`, `angle`; `force`;
-    /// `torque`; `torque`, `speed`): the first is `load`, the second `coordinate`.
-    pub columns: &'static [&'static str],
+    /// Columns of the element, suffix and unit (`force` N, `length` m; `torque` N·m, `angle`
+    /// rad; `force` N; `torque` N·m; `torque` N·m, `speed` rad/s): the first is `load`, the
+    /// second `coordinate`.
+    pub columns: &'static [Column],
     /// The element's force or torque.
     pub load: f64,
     /// Its coordinate: length, angle or speed (NaN for forces and torques).
@@ -475,8 +478,12 @@ impl Mechanism {
                 names.extend(DRIVER_COLUMNS.iter().map(|s| format!("{}.{s}", d.name)));
             }
         }
-        for e in &self.elements {
-            names.extend(e.columns().iter().map(|s| format!("{}.{s}", e.name)));
+        for (e, f) in self.elements.iter().zip(&self.scene.forces) {
+            names.extend(
+                e.columns()
+                    .iter()
+                    .map(|s| format!("{}.{}", f.name(), s.suffix)),
+            );
         }
         for p in &self.prismatic {
             names.extend(PRISMATIC_COLUMNS.iter().map(|s| format!("{}.{s}", p.name)));
@@ -551,8 +558,9 @@ impl Mechanism {
             .elements
             .iter()
             .zip(&sc.el)
-            .map(|(e, ev)| ElementOutput {
-                name: e.name.clone(),
+            .zip(&self.scene.forces)
+            .map(|((e, ev), f)| ElementOutput {
+                name: f.name().to_string(),
                 columns: e.columns(),
                 load: ev.load,
                 coordinate: ev.coord,
@@ -627,8 +635,8 @@ impl Mechanism {
             }
         }
         for (e, ev) in self.elements.iter().zip(&sc.el) {
-            match e.kind {
-                crate::elements::Kind::Motor { .. } => p.motor += ev.power,
+            match e.account() {
+                Account::Motor => p.motor += ev.power,
                 _ => p.load += ev.power,
             }
             p.damper += ev.dissipation;

@@ -1,16 +1,21 @@
-//! The revolute clearance joint (docs/model.md §2–§4): its compiled form and its evaluation.
+//! The revolute clearance joint (docs/model.md §2–§4): its scene types, its checks, its
+//! compiled form and its evaluation.
 
 use std::cell::Cell;
 
 use serde::{Deserialize, Deserializer, Serialize};
 
-use crate::clearance::contact::{FrictionSpec, NormalSpec};
+use crate::clearance::contact::{
+    check_contact_laws, friction_law, normal_law, FrictionSpec, Materials, NormalSpec,
+};
 use crate::clearance::geometry::ClearanceState;
 use crate::clearance::laws::{
     hertz_stiffness, Film, FilmModel, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH,
 };
+use crate::scene::check::Checker;
 use crate::scene::de::{object, object_opt};
-use crate::scene::{Scene, GROUND};
+use crate::scene::error::{invalid, SceneError};
+use crate::scene::refs::{check_attachment, SceneRefs, GROUND};
 
 /// One side of a clearance joint: an attachment with a radius.
 ///
@@ -77,6 +82,9 @@ fn is_zero2(v: &[f64; 2]) -> bool {
     *v == [0.0, 0.0]
 }
 
+/// Hydrodynamic film of a lubricated clearance joint (docs/model.md §4).
+///
+/// ```text
 /// F_r, F_t = film model(ε_eff, ε̇, Ω);  R = R_J, c = R_B − R_J
 /// ε_eff = min(ε, ε_cap)  ("eps_cap": number, default 0.99)
 ///       = min(ε, 1 − 1e-12)  ("eps_cap": null: no cap, the law at the true ε)
@@ -194,25 +202,25 @@ impl Default for ClrEval {
     }
 }
 
-fn end_of(scene: &Scene, e: &ClearanceEnd) -> End {
+fn end_of(refs: &dyn SceneRefs, e: &ClearanceEnd) -> End {
     if e.body == GROUND {
         End {
             body: None,
             s: e.at.expect("validated"),
         }
     } else {
-        let k = scene.body_index(&e.body).expect("validated");
+        let k = refs.body_index(&e.body).expect("validated");
         End {
             body: Some(k),
-            s: scene.bodies[k].points[e.point.as_ref().expect("validated")],
+            s: refs.body_points(k)[e.point.as_ref().expect("validated")],
         }
     }
 }
 
-pub(crate) fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::ClearanceSpec) -> Clr {
+pub(crate) fn build_clearance(refs: &dyn SceneRefs, ji: usize, c: &ClearanceSpec) -> Clr {
     let rb = c.bearing.radius;
     let rj = c.journal.radius;
-    let stiffness = |k: Option<f64>, m: Option<crate::scene::Materials>| match (k, m) {
+    let stiffness = |k: Option<f64>, m: Option<Materials>| match (k, m) {
         (Some(k), _) => k,
         (None, Some(m)) => hertz_stiffness(
             rb,
@@ -224,34 +232,8 @@ pub(crate) fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::Cleara
         ),
         (None, None) => unreachable!("validated"),
     };
-    let normal = match &c.normal {
-        NormalSpec::Impact(s) => NormalLaw::Impact {
-            k: stiffness(s.k, s.materials),
-            c_max: s.c_max,
-            d_max: s.d_max,
-        },
-        NormalSpec::LankaraniNikravesh(s) => NormalLaw::LankaraniNikravesh {
-            k: stiffness(s.k, s.materials),
-            restitution: s.restitution,
-        },
-        NormalSpec::Flores(s) => NormalLaw::Flores {
-            k: stiffness(s.k, s.materials),
-            restitution: s.restitution,
-        },
-        NormalSpec::HuntCrossley(s) => NormalLaw::HuntCrossley {
-            k: stiffness(s.k, s.materials),
-            restitution: s.restitution,
-        },
-    };
-    let friction = match &c.friction {
-        FrictionSpec::None => None,
-        FrictionSpec::Coulomb(f) if f.mu == 0.0 => None,
-        FrictionSpec::Coulomb(f) => Some(FrictionLaw::Coulomb {
-            mu: f.mu,
-            v0: f.v0,
-            v1: f.v1,
-        }),
-    };
+    let normal = normal_law(&c.normal, stiffness);
+    let friction = friction_law(&c.friction);
     let film = c.film.as_ref().map(|f| Film {
         model: f.model,
         viscosity: f.viscosity,
@@ -264,8 +246,8 @@ pub(crate) fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::Cleara
     Clr {
         joint: ji,
         name: c.name.clone(),
-        bearing: end_of(scene, &c.bearing),
-        journal: end_of(scene, &c.journal),
+        bearing: end_of(refs, &c.bearing),
+        journal: end_of(refs, &c.journal),
         rb,
         rj,
         c: rb - rj,
@@ -276,4 +258,155 @@ pub(crate) fn build_clearance(scene: &Scene, ji: usize, c: &crate::scene::Cleara
         e0_rate: c.initial_eccentricity_rate,
         impact_velocity: Cell::new(0.0),
     }
+}
+
+/// Checks a revolute clearance joint at JSON path `p` (docs/scene-format.md, "clearance").
+pub(crate) fn validate(refs: &dyn SceneRefs, p: &str, c: &ClearanceSpec) -> Result<(), SceneError> {
+    type C = Checker;
+    let b = &c.bearing;
+    let j = &c.journal;
+    check_attachment(refs, &format!("{p}.bearing"), &b.body, &b.point, &b.at)?;
+    check_attachment(refs, &format!("{p}.journal"), &j.body, &j.point, &j.at)?;
+    if b.body == j.body {
+        return Err(invalid(
+            format!("{p}.journal.body"),
+            format!(
+                "bearing and journal must be on different bodies, both are '{}'",
+                b.body
+            ),
+        ));
+    }
+    C::positive(&format!("{p}.bearing.radius"), b.radius, "bearing radius")?;
+    C::finite(&format!("{p}.journal.radius"), j.radius)?;
+    let clearance = b.radius - j.radius;
+    if !(clearance > 0.0) {
+        return Err(invalid(
+                format!("{p}.journal.radius"),
+                format!(
+                    "clearance R_B − R_J = {clearance} m must be > 0 (bearing radius {}, journal radius {})",
+                    b.radius, j.radius
+                ),
+            ));
+    }
+    if !(clearance < b.radius) {
+        return Err(invalid(
+                format!("{p}.journal.radius"),
+                format!(
+                    "clearance R_B − R_J = {clearance} m must be smaller than the bearing radius {} m (the journal radius must be > 0)",
+                    b.radius
+                ),
+            ));
+    }
+    let check_k = |path: &str, k: &Option<f64>, m: &Option<Materials>| -> Result<(), SceneError> {
+        match (k, m) {
+            (Some(k), None) => C::positive(&format!("{path}.k"), *k, "stiffness k"),
+            (None, Some(m)) => {
+                for (side, mat) in [("bearing", m.bearing), ("journal", m.journal)] {
+                    let mp = format!("{path}.materials.{side}");
+                    C::positive(
+                        &format!("{mp}.youngs_modulus"),
+                        mat.youngs_modulus,
+                        "Young's modulus",
+                    )?;
+                    C::finite(&format!("{mp}.poisson_ratio"), mat.poisson_ratio)?;
+                    if !(mat.poisson_ratio > -1.0 && mat.poisson_ratio < 0.5) {
+                        return Err(invalid(
+                            format!("{mp}.poisson_ratio"),
+                            format!(
+                                "Poisson's ratio must lie in (-1, 0.5), got {}",
+                                mat.poisson_ratio
+                            ),
+                        ));
+                    }
+                }
+                // Within the magnitude range K stays finite and positive (c ≥ ulp(R_B)
+                // bounds K by about E·√(R_B/(2ε)) < 1e233); the check guards the
+                // formula should the range ever be widened.
+                let k = hertz_stiffness(
+                    b.radius,
+                    j.radius,
+                    m.bearing.youngs_modulus,
+                    m.bearing.poisson_ratio,
+                    m.journal.youngs_modulus,
+                    m.journal.poisson_ratio,
+                );
+                if !(k.is_finite() && k > 0.0) {
+                    return Err(invalid(
+                        format!("{path}.materials"),
+                        format!(
+                            "the Hertz stiffness K = {k} N/m^1.5 of these materials is \
+                                     not a finite positive number"
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+            (Some(_), Some(_)) => Err(invalid(
+                format!("{path}.materials"),
+                "give either k or materials, not both",
+            )),
+            (None, None) => Err(invalid(
+                path,
+                "the normal law needs its stiffness: k (N/m^1.5) or materials",
+            )),
+        }
+    };
+    check_contact_laws(p, &c.normal, &c.friction, &check_k)?;
+    if let Some(film) = &c.film {
+        let fp = format!("{p}.film");
+        C::non_negative(&format!("{fp}.viscosity"), film.viscosity, "viscosity")?;
+        C::positive(&format!("{fp}.length"), film.length, "bearing length")?;
+        if let Some(cap) = film.eps_cap {
+            C::finite(&format!("{fp}.eps_cap"), cap)?;
+            if !(cap > 0.0 && cap < 1.0) {
+                return Err(invalid(
+                    format!("{fp}.eps_cap"),
+                    format!("eps_cap must lie in (0, 1) or be null (no cap), got {cap}"),
+                ));
+            }
+        }
+        if let Some(w) = film.omega0 {
+            C::positive(&format!("{fp}.omega0"), w, "omega0")?;
+            if !matches!(
+                film.model,
+                FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored
+            ) {
+                return Err(invalid(
+                    format!("{fp}.omega0"),
+                    "omega0 (the width of the smooth sign of the mirrored models) applies \
+                         only to long_gumbel_mirrored and short_ocvirk_mirrored"
+                        .to_string(),
+                ));
+            }
+        }
+    }
+    C::finite2(&format!("{p}.initial_eccentricity"), c.initial_eccentricity)?;
+    C::finite2(
+        &format!("{p}.initial_eccentricity_rate"),
+        c.initial_eccentricity_rate,
+    )?;
+    let e0 = c.initial_eccentricity[0].hypot(c.initial_eccentricity[1]);
+    if e0 > clearance && !c.allow_initial_penetration {
+        return Err(invalid(
+            format!("{p}.initial_eccentricity"),
+            format!(
+                "|e| = {e0:e} m exceeds the clearance R_B − R_J = {clearance:e} m (the \
+                     journal would start {:e} m into the bearing); set \
+                     allow_initial_penetration: true to start in contact",
+                e0 - clearance
+            ),
+        ));
+    }
+    if !(e0 - clearance < j.radius) {
+        return Err(invalid(
+            format!("{p}.initial_eccentricity"),
+            format!(
+                "|e| = {e0:e} m puts the journal {:e} m into the bearing, beyond the \
+                     journal radius {} m: the contact law does not hold there",
+                e0 - clearance,
+                j.radius
+            ),
+        ));
+    }
+    Ok(())
 }

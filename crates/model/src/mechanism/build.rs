@@ -4,13 +4,15 @@ use std::cell::RefCell;
 
 use crate::clearance::prismatic::{Prismatic, PrismaticEval};
 use crate::clearance::revolute::{build_clearance, ClrEval};
-use crate::elements::ElementEval;
+use crate::elements::input::Kin;
+use crate::elements::interface::ElementEval;
 use crate::mechanism::bodies::{BodyInfo, Owner, Prescription};
-use crate::mechanism::constraints::{point_of, Row, Term, TermKind};
+use crate::mechanism::constraints::{Row, Term, TermKind};
 use crate::mechanism::events::event_list;
 use crate::mechanism::{Mechanism, SchurTerm, Scratch};
 use crate::outputs::Roles;
 use crate::planar::{dot, perp};
+use crate::scene::refs::point_of;
 use crate::scene::{JointSpec, Scene, SceneError, GROUND};
 
 impl Mechanism {
@@ -185,10 +187,10 @@ impl Mechanism {
             }
         }
 
-        let events = event_list(&clr, prismatic.len(), scene.kink_events);
         // Defaults that need the assembled state (a spring's free length) are set after the
         // assembly below.
-        let elements = crate::elements::compile(scene, &|_| f64::NAN);
+        let elements: Vec<_> = scene.forces.iter().map(|f| f.compile(scene)).collect();
+        let events = event_list(&clr, prismatic.len(), &elements, scene.kink_events);
         let mut minv = Vec::with_capacity(3 * int_bodies.len());
         for &k in &int_bodies {
             let b = &scene.bodies[k];
@@ -321,18 +323,13 @@ impl Mechanism {
         let t0 = self.t_start;
         let mut sc = self.scratch.borrow().clone();
         self.kinematics(t0, &y0, &mut sc);
+        let kin = Kin {
+            pose: &sc.pose,
+            vel: &sc.vel,
+            cs: &sc.cs,
+        };
         for e in &mut self.elements {
-            match &mut e.kind {
-                crate::elements::Kind::Spring { a, b, l0, .. } if l0.is_nan() => {
-                    *l0 =
-                        crate::elements::Input::Length(*a, *b).value(t0, &sc.pose, &sc.vel, &sc.cs);
-                }
-                crate::elements::Kind::RotSpring { a, b, theta0, .. } if theta0.is_nan() => {
-                    *theta0 = crate::elements::Input::Relative(Some(*a), *b)
-                        .value(t0, &sc.pose, &sc.vel, &sc.cs);
-                }
-                _ => {}
-            }
+            e.set_initial(t0, &kin);
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Constraint equations: each scalar equation Φ = konst + rate·t + Σ terms, and its evaluation.
 
 use crate::planar::dot;
-use crate::scene::{Attachment, Scene, GROUND};
+use crate::scene::refs::{point_of, Attachment, SceneRefs, GROUND};
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum TermKind {
@@ -61,26 +61,18 @@ impl Row {
     }
 
     /// Adds w · r^P of an attachment (folds a ground location into the constant).
-    pub(crate) fn add_attachment(&mut self, scene: &Scene, a: &Attachment, w: [f64; 2]) {
+    pub(crate) fn add_attachment(&mut self, refs: &dyn SceneRefs, a: &Attachment, w: [f64; 2]) {
         if a.body == GROUND {
             self.konst += dot(w, a.at.expect("validated"));
         } else {
-            let k = scene.body_index(&a.body).expect("validated");
+            let k = refs.body_index(&a.body).expect("validated");
             self.push(Term {
                 body: k,
                 kind: TermKind::Point {
-                    s: point_of(scene, a),
+                    s: point_of(refs, a),
                     w,
                 },
             });
         }
     }
-}
-
-pub(crate) fn point_of(scene: &Scene, a: &Attachment) -> [f64; 2] {
-    if a.body == GROUND {
-        return a.at.expect("validated");
-    }
-    let k = scene.body_index(&a.body).expect("validated");
-    scene.bodies[k].points[a.point.as_ref().expect("validated")]
 }

@@ -3,6 +3,8 @@
 use crate::clearance::geometry::ClearanceState;
 use crate::clearance::laws::{FrictionLaw, NormalLaw};
 use crate::clearance::revolute::{Clr, Kink};
+use crate::elements::input::Kin;
+use crate::elements::Element;
 use crate::mechanism::{Mechanism, Scratch};
 
 /// What the event functions are.
@@ -14,6 +16,8 @@ pub(crate) enum EventKind {
     EpsCap(usize),
     /// δ_i of corner i of prismatic clearance joint k (docs/model.md §11).
     Corner(usize, usize),
+    /// Event function i of force element k (its [`crate::elements::interface::ForceElement`]).
+    Element(usize, usize),
     /// A point where a force law of clearance joint k is not smooth (docs/model.md §7).
     Kink(usize, Kink),
 }
@@ -21,7 +25,13 @@ impl Mechanism {
     /// Event functions at (t, y) and, when `g_dot` is given, their rates (after
     /// `kinematics`): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i (docs/model.md §2,
     /// §7, §11), all from positions and velocities.
-    pub(crate) fn event_values(&self, sc: &Scratch, g: &mut [f64], mut g_dot: Option<&mut [f64]>) {
+    pub(crate) fn event_values(
+        &self,
+        t: f64,
+        sc: &Scratch,
+        g: &mut [f64],
+        mut g_dot: Option<&mut [f64]>,
+    ) {
         // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
         // the last one computed is kept.
         let mut last: Option<(usize, ClearanceState)> = None;
@@ -45,7 +55,20 @@ impl Mechanism {
                     (st.eps - cap, st.eps_dot)
                 }
                 EventKind::Corner(k, c) => {
-                    self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs)
+                    let kin = Kin {
+                        pose: &sc.pose,
+                        vel: &sc.vel,
+                        cs: &sc.cs,
+                    };
+                    self.prismatic[k].corner_gap(c, &kin)
+                }
+                EventKind::Element(k, i) => {
+                    let kin = Kin {
+                        pose: &sc.pose,
+                        vel: &sc.vel,
+                        cs: &sc.cs,
+                    };
+                    self.elements[k].event(i, t, &kin)
                 }
                 EventKind::Kink(k, kink) => self.kink_value(k, kink, state(k)),
             };
@@ -64,6 +87,10 @@ impl Mechanism {
             EventKind::Contact(k) => ("contact", self.clr[k].name.as_str()),
             EventKind::EpsCap(k) => ("eps_cap", self.clr[k].name.as_str()),
             EventKind::Corner(k, _) => ("corner_contact", self.prismatic[k].name.as_str()),
+            EventKind::Element(k, i) => (
+                self.elements[k].events()[i].kind,
+                self.scene.forces[k].name(),
+            ),
             EventKind::Kink(k, kink) => (
                 match kink {
                     Kink::FullDamping => "kink_full_damping",
@@ -111,7 +138,7 @@ impl Mechanism {
     /// field `kink_events` does. With them an integration restarts at every kink, so a method
     /// of high order keeps its order through a contact; every other event keeps its index.
     pub fn set_kink_events(&mut self, on: bool) {
-        self.events = event_list(&self.clr, self.prismatic.len(), on);
+        self.events = event_list(&self.clr, self.prismatic.len(), &self.elements, on);
     }
 
     /// Whether the kink events are on ([`Mechanism::set_kink_events`]).
@@ -131,7 +158,12 @@ impl Mechanism {
 /// The event functions of a mechanism: every clearance joint's δ, the ε − ε_cap of each capped
 /// film, the four corner gaps of each prismatic clearance joint and, with `kinks`, the kinks of
 /// each revolute clearance joint's force laws ([`Kink`]).
-pub(crate) fn event_list(clr: &[Clr], n_prismatic: usize, kinks: bool) -> Vec<EventKind> {
+pub(crate) fn event_list(
+    clr: &[Clr],
+    n_prismatic: usize,
+    elements: &[Element],
+    kinks: bool,
+) -> Vec<EventKind> {
     let mut events = Vec::new();
     for k in 0..clr.len() {
         events.push(EventKind::Contact(k));
@@ -146,6 +178,11 @@ pub(crate) fn event_list(clr: &[Clr], n_prismatic: usize, kinks: bool) -> Vec<Ev
     for k in 0..n_prismatic {
         for i in 0..4 {
             events.push(EventKind::Corner(k, i));
+        }
+    }
+    for (k, e) in elements.iter().enumerate() {
+        for i in 0..e.events().len() {
+            events.push(EventKind::Element(k, i));
         }
     }
     if kinks {

@@ -32,7 +32,9 @@ use std::cell::RefCell;
 use crate::clearance::geometry::{ClearanceInput, ClearanceState};
 use crate::clearance::prismatic::{Prismatic, PrismaticEval};
 use crate::clearance::revolute::{Clr, ClrEval, End};
-use crate::elements::{Element, ElementEval};
+use crate::elements::input::{Kin, Load};
+use crate::elements::interface::ElementEval;
+use crate::elements::Element;
 use crate::linalg::{block_cholesky_inv, block_cholesky_solve};
 use crate::mechanism::constraints::{Row, RowEval, TermKind};
 use crate::mechanism::events::EventKind;
@@ -130,7 +132,7 @@ impl Mechanism {
 
     /// Names of the force elements, in the order of [`crate::Outputs::elements`].
     pub fn element_names(&self) -> Vec<&str> {
-        self.elements.iter().map(|e| e.name.as_str()).collect()
+        self.scene.forces.iter().map(|e| e.name()).collect()
     }
 
     /// Names of the prismatic clearance joints, in the order of [`crate::Outputs::prismatic`].
@@ -360,13 +362,13 @@ impl Mechanism {
             sc.clr[k] = ev;
         }
         if !(self.elements.is_empty() && self.prismatic.is_empty()) {
-            self.element_forces(t, sc, full);
+            self.element_forces(t, sc, full, &[]);
         }
     }
 
     /// Adds a load (body, arm, force, torque) to the generalized forces.
     #[inline]
-    fn apply_load(&self, l: crate::elements::Load, sc: &mut Scratch, full: bool) {
+    fn apply_load(&self, l: Load, sc: &mut Scratch, full: bool) {
         let (k, arm, f, tau) = l;
         self.apply(k, arm, f, sc, full);
         if tau != 0.0 {
@@ -381,12 +383,21 @@ impl Mechanism {
     }
 
     /// The force elements and prismatic clearance joints (docs/model.md §10–§11), after
-    /// `kinematics`.
-    pub(crate) fn element_forces(&self, t: f64, sc: &mut Scratch, full: bool) {
-        let mut loads: [crate::elements::Load; 4] = [(0, [0.0; 2], [0.0; 2], 0.0); 4];
+    /// `kinematics`; the elements `i` with `skip[i]` (a shorter `skip`: none beyond it) are
+    /// left out.
+    pub(crate) fn element_forces(&self, t: f64, sc: &mut Scratch, full: bool, skip: &[bool]) {
+        let mut loads: [Load; 4] = [(0, [0.0; 2], [0.0; 2], 0.0); 4];
         for (i, e) in self.elements.iter().enumerate() {
+            if skip.get(i) == Some(&true) {
+                continue;
+            }
             let mut n = 0;
-            let ev = e.eval(t, &sc.pose, &sc.vel, &sc.cs, |l| {
+            let kin = Kin {
+                pose: &sc.pose,
+                vel: &sc.vel,
+                cs: &sc.cs,
+            };
+            let ev = e.eval(t, &kin, |l| {
                 loads[n] = l;
                 n += 1;
             });
@@ -397,7 +408,12 @@ impl Mechanism {
         }
         for (i, p) in self.prismatic.iter().enumerate() {
             let mut n = 0;
-            let ev = p.eval(&sc.pose, &sc.vel, &sc.cs, |l| {
+            let kin = Kin {
+                pose: &sc.pose,
+                vel: &sc.vel,
+                cs: &sc.cs,
+            };
+            let ev = p.eval(&kin, |l| {
                 loads[n] = l;
                 n += 1;
             });

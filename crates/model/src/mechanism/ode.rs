@@ -3,6 +3,7 @@
 use faer::MatMut;
 use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
+use crate::elements::input::Kin;
 use crate::mechanism::events::EventKind;
 use crate::mechanism::Mechanism;
 
@@ -45,13 +46,13 @@ impl OdeSystem for Mechanism {
     fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
         let mut sc = self.scratch.borrow_mut();
         self.kinematics(t, y, &mut sc);
-        self.event_values(&sc, g, None);
+        self.event_values(t, &sc, g, None);
     }
 
     fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
         let mut sc = self.scratch.borrow_mut();
         self.kinematics(t, y, &mut sc);
-        self.event_values(&sc, g, Some(g_dot));
+        self.event_values(t, &sc, g, Some(g_dot));
         true
     }
 
@@ -66,7 +67,12 @@ impl OdeSystem for Mechanism {
             Some(EventKind::Corner(k, c)) if hit.rising => {
                 let mut sc = self.scratch.borrow_mut();
                 self.kinematics(hit.t, y, &mut sc);
-                let (_, ddot) = self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs);
+                let kin = Kin {
+                    pose: &sc.pose,
+                    vel: &sc.vel,
+                    cs: &sc.cs,
+                };
+                let (_, ddot) = self.prismatic[k].corner_gap(c, &kin);
                 self.prismatic[k].impact_velocity[c].set(ddot);
             }
             _ => {}

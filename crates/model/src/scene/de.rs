@@ -115,3 +115,218 @@ pub(crate) fn tagged_object<'de, D: Deserializer<'de>>(
     };
     Ok((tag_value, obj))
 }
+
+/// The error of an unknown tag: "unknown WHAT `x`, expected one of `a`, `b`, …" (with two
+/// kinds: "expected `a` or `b`"), at the tag's own path.
+pub(crate) fn unknown_kind<'de, D: Deserializer<'de>>(
+    tag: &str,
+    what: &str,
+    other: &str,
+    kinds: &[&str],
+) -> D::Error {
+    let list: Vec<String> = kinds.iter().map(|k| format!("`{k}`")).collect();
+    let expected = match list.as_slice() {
+        [a, b] => format!("expected {a} or {b}"),
+        _ => format!("expected one of {}", list.join(", ")),
+    };
+    D::Error::custom(format!(
+        "{PATH_MARK}{tag}{PATH_MARK}unknown {what} `{other}`, {expected}"
+    ))
+}
+
+/// The table of an internally tagged enum of the scene format: one line per kind emits the
+/// variant (serialised with its tag), its entry in `KINDS` (the "expected one of" list, in
+/// order), its arm of `type_name()` and of the `Deserialize` that keeps the JSON path of an
+/// error inside the variant (module doc). With `named`, every variant holds a struct with a
+/// `name` field and `name()` is emitted too.
+///
+/// ```text
+/// tagged_kinds! {
+///     /// doc
+///     pub enum JointSpec named, tag "type", unknown "joint type" {
+///         /// doc
+///         "revolute" => Revolute(RevoluteSpec),
+///         …
+///     }
+/// }
+/// ```
+/// A kind without data (`"none" => None`) reads an empty object ([`NoData`]). A line may
+/// start with `@cfg(…)` (before its doc): the `#[cfg(…)]` of all that it emits.
+macro_rules! tagged_kinds {
+    (@variant $d:ident, $obj:ident, $tag:literal, $path:path, $ty:ty) => {
+        $crate::scene::de::variant::<$d, $ty>($obj, $tag).map($path)
+    };
+    (@variant $d:ident, $obj:ident, $tag:literal, $path:path) => {
+        $crate::scene::de::variant::<$d, $crate::scene::de::NoData>($obj, $tag).map(|_| $path)
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident named, tag $tag:literal, unknown $what:literal {
+            $(
+                $(@cfg($cfg:meta))?
+                $(#[$vmeta:meta])*
+                $kind:literal => $variant:ident($ty:ty)
+            ),+ $(,)?
+        }
+    ) => {
+        $crate::scene::de::tagged_kinds! {
+            $(#[$meta])*
+            $vis enum $name, tag $tag, unknown $what {
+                $( $(@cfg($cfg))? $(#[$vmeta])* $kind => $variant($ty) ),+
+            }
+        }
+        impl $name {
+            /// The name of the part (its `"name"` field).
+            pub fn name(&self) -> &str {
+                match self {
+                    $( $(#[cfg($cfg)])? $name::$variant(s) => &s.name, )+
+                }
+            }
+        }
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident, tag $tag:literal, unknown $what:literal {
+            $(
+                $(@cfg($cfg:meta))?
+                $(#[$vmeta:meta])*
+                $kind:literal => $variant:ident $(($ty:ty))?
+            ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug, PartialEq, serde::Serialize)]
+        #[serde(tag = $tag)]
+        $vis enum $name {
+            $(
+                $(#[cfg($cfg)])?
+                $(#[$vmeta])*
+                #[serde(rename = $kind)]
+                $variant $(($ty))?,
+            )+
+        }
+        impl $name {
+            /// Every kind's tag, in the order of the variants.
+            pub const KINDS: &'static [&'static str] = &[$( $(#[cfg($cfg)])? $kind ),+];
+
+            /// The tag of this kind.
+            pub fn type_name(&self) -> &'static str {
+                match self {
+                    $( $(#[cfg($cfg)])? $name::$variant { .. } => $kind, )+
+                }
+            }
+        }
+        impl<'de> serde::Deserialize<'de> for $name {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let (tag, obj) = $crate::scene::de::tagged_object::<D>(d, $tag)?;
+                match tag.as_str() {
+                    $(
+                        $(#[cfg($cfg)])?
+                        $kind => $crate::scene::de::tagged_kinds!(
+                            @variant D, obj, $tag, $name::$variant $(, $ty)?
+                        ),
+                    )+
+                    other => Err($crate::scene::de::unknown_kind::<D>(
+                        $tag, $what, other, Self::KINDS,
+                    )),
+                }
+            }
+        }
+    };
+}
+pub(crate) use tagged_kinds;
+
+#[cfg(test)]
+mod tests {
+    //! The tagged-kind table: its "expected one of" text, its `KINDS`, and that the tag a
+    //! variant serialises with is the one it reads back.
+    use crate::clearance::contact::{FrictionSpec, NormalSpec};
+    use crate::elements::ForceElementSpec;
+    use crate::scene::{JointSpec, Scene};
+
+    fn error(joints: &str, forces: &str) -> String {
+        let text = format!(
+            r#"{{"bodies": [{{"name": "b", "mass": 1.0, "inertia": 1.0, "points": {{"p": [0, 0]}}}}],
+                "joints": [{joints}], "forces": [{forces}], "t_end": 1.0}}"#
+        );
+        Scene::from_json_str(&text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn an_unknown_tag_lists_every_kind_in_table_order() {
+        let e = error(r#"{"type": "hinge", "name": "j"}"#, "");
+        assert!(
+            e.starts_with(
+                "joints[0].type: unknown joint type `hinge`, expected one of `revolute`, \
+                 `translational`, `driver`, `clearance`, `prismatic_clearance` at line"
+            ),
+            "{e}"
+        );
+        let e = error("", r#"{"type": "spring", "name": "s"}"#);
+        let list: Vec<String> = ForceElementSpec::KINDS
+            .iter()
+            .map(|k| format!("`{k}`"))
+            .collect();
+        assert!(
+            e.starts_with(&format!(
+                "forces[0].type: unknown force element type `spring`, expected one of {}",
+                list.join(", ")
+            )),
+            "{e}"
+        );
+        // A tagged kind inside a variant keeps its full path; with two kinds the list is
+        // "`a` or `b`".
+        let clearance = |friction: &str| {
+            format!(
+                r#"{{"type": "clearance", "name": "c",
+                    "bearing": {{"body": "ground", "at": [0, 0], "radius": 0.01}},
+                    "journal": {{"body": "b", "point": "p", "radius": 0.009}},
+                    "normal": {{"law": "impact", "k": 1e9, "c_max": 0, "d_max": 1e-5}},
+                    "friction": {friction}}}"#
+            )
+        };
+        let e = error(&clearance(r#"{"law": "viscous"}"#), "");
+        assert!(
+            e.starts_with(
+                "joints[0].friction.law: unknown friction law `viscous`, expected `none` or \
+                 `coulomb` at line"
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_tables_list_their_kinds_and_each_tag_round_trips() {
+        assert_eq!(
+            JointSpec::KINDS,
+            [
+                "revolute",
+                "translational",
+                "driver",
+                "clearance",
+                "prismatic_clearance"
+            ]
+        );
+        assert_eq!(
+            NormalSpec::KINDS,
+            ["impact", "lankarani_nikravesh", "flores", "hunt_crossley"]
+        );
+        assert_eq!(FrictionSpec::KINDS, ["none", "coulomb"]);
+        for kind in ForceElementSpec::KINDS {
+            assert!(!kind.is_empty());
+        }
+        // Serialised, a variant carries its tag; read back, the same variant.
+        let f: FrictionSpec = serde_json::from_str(r#"{"law": "none"}"#).unwrap();
+        assert_eq!(f, FrictionSpec::None);
+        assert_eq!(f.type_name(), "none");
+        assert_eq!(
+            serde_json::to_value(&f).unwrap(),
+            serde_json::json!({"law": "none"})
+        );
+        let n: NormalSpec =
+            serde_json::from_str(r#"{"law": "flores", "k": 1e9, "restitution": 0.5}"#).unwrap();
+        assert_eq!(n.type_name(), "flores");
+        let back: NormalSpec = serde_json::from_value(serde_json::to_value(&n).unwrap()).unwrap();
+        assert_eq!(back, n);
+    }
+}

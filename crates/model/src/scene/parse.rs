@@ -84,16 +84,6 @@ impl Scene {
     pub fn to_json_pretty(&self) -> String {
         serde_json::to_string_pretty(self).expect("a scene always serialises")
     }
-
-    /// Index of the body named `name`.
-    pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
-    }
-
-    /// Index of the joint named `name`.
-    pub fn joint_index(&self, name: &str) -> Option<usize> {
-        self.joints.iter().position(|j| j.name() == name)
-    }
 }
 
 /// The first key that an object of `text` repeats, as a [`SceneError::Schema`] at its path.
