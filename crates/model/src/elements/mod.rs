@@ -160,6 +160,7 @@ force_elements! {
     "force" => Force(force::ForceSpec => Force),
     "torque" => Torque(torque::TorqueSpec => Torque),
     "motor" => Motor(motor::MotorSpec => Motor),
+    "linear_bushing" => LinearBushing(linear_bushing::LinearBushingSpec => LinearBushing),
 }
 
 pub use force::Frame;
