@@ -10,6 +10,8 @@ use crate::clearance::contact::{
 };
 use crate::clearance::laws::{FrictionLaw, NormalLaw};
 use crate::elements::input::{point_state, Input, Kin, Load, Pt};
+use crate::labels::EventLabels;
+use crate::mechanism::row::{Row, Term, TermKind};
 use crate::planar::{dot, perp, rot};
 use crate::scene::check::Checker;
 use crate::scene::de::object;
@@ -247,6 +249,14 @@ pub(crate) fn validate(
     Ok(())
 }
 
+/// The event function of each corner of a prismatic clearance joint: its gap δ_i
+/// (docs/model.md §7, §11).
+pub(crate) const CORNER_CONTACT: EventLabels = EventLabels {
+    kind: "corner_contact",
+    rising: "corner_contact_onset",
+    falling: "corner_contact_loss",
+};
+
 /// A compiled prismatic clearance joint (docs/model.md §11).
 #[derive(Debug)]
 pub(crate) struct Prismatic {
@@ -334,6 +344,34 @@ impl Prismatic {
             tilt_rate0: s.initial_tilt_rate,
             impact_velocity: Default::default(),
         }
+    }
+
+    /// The equations held during the initial assembly (docs/model.md §1.6): the block's
+    /// offset and tilt at their initial values and rates (rows "offset", "tilt"); none when
+    /// its body is not integrated.
+    pub(crate) fn assembly_rows(&self, integrated: &dyn Fn(usize) -> bool, t0: f64) -> Vec<Row> {
+        if !integrated(self.body) {
+            return Vec::new();
+        }
+        let mut r1 = Row::new(self.joint, "offset");
+        r1.push(Term {
+            body: self.body,
+            kind: TermKind::Point {
+                s: self.s_c,
+                w: self.n,
+            },
+        });
+        r1.konst = -(self.n[0] * self.o[0] + self.n[1] * self.o[1]) - self.offset0;
+        let mut r2 = Row::new(self.joint, "tilt");
+        r2.push(Term {
+            body: self.body,
+            kind: TermKind::Angle { c: 1.0 },
+        });
+        r2.konst = self.angle_offset - self.tilt0;
+        vec![
+            r1.with_rate(self.offset_rate0, t0),
+            r2.with_rate(self.tilt_rate0, t0),
+        ]
     }
 
     /// The gap δ_i and its rate δ̇_i of corner i.

@@ -1,7 +1,7 @@
 //! Force elements a researcher brings (docs/model.md §10): springs and dampers, applied forces
 //! and torques (constant, or tabulated against time or one coordinate), motors with a
 //! torque–speed curve. One file per kind holds its scene type, its checks, its compiled form
-//! and its evaluation ([`interface`] says what a kind implements); the table below registers
+//! and its evaluation (`interface.rs` says what a kind implements); the table below registers
 //! the kinds.
 //!
 //! ```text
@@ -13,8 +13,8 @@
 //! f(s) = value | table(s) piecewise linear, s = t | x, y of a body point | a body angle |
 //!        a joint's relative coordinate | a spring's length
 //! ```
-//! Adding a kind: a new file implementing [`interface::ElementSpec`] and
-//! [`interface::ForceElement`], and one line in the `force_elements!` table of this file; the
+//! Adding a kind: a new file implementing `ElementSpec` and
+//! `ForceElement` (elements/interface.rs), and one line in the `force_elements!` table of this file; the
 //! line declares the module, the variant of [`ForceElementSpec`] (its `"type"` tag, its
 //! `Deserialize`, its place in the "expected one of" list) and of the compiled `Element`, and
 //! every dispatch. A scene without force elements runs none of this code.
@@ -120,6 +120,13 @@ macro_rules! force_elements {
                 match self {
                     $( $(#[cfg($cfg)])? Element::$variant(_) => <$module::$element as ForceElement>::ACCOUNT, )+
                 }
+            }
+
+            /// The event kinds of every element kind, in registry order.
+            pub(crate) fn all_events() -> Vec<EventLabels> {
+                let mut all = Vec::new();
+                $( $(#[cfg($cfg)])? all.extend_from_slice(<$module::$element as ForceElement>::EVENTS); )+
+                all
             }
 
             /// Its event functions' kinds.

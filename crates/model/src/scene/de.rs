@@ -242,7 +242,7 @@ mod tests {
     //! variant serialises with is the one it reads back.
     use crate::clearance::contact::{FrictionSpec, NormalSpec};
     use crate::elements::ForceElementSpec;
-    use crate::scene::{JointSpec, Scene};
+    use crate::scene::format::{JointSpec, Scene};
 
     fn error(joints: &str, forces: &str) -> String {
         let text = format!(

@@ -7,7 +7,7 @@
 //!                                                              relative coordinate, a spring's
 //!                                                              length)
 //! ```
-//! The scene's format ([`crate::scene::Scene`]) lists the joints and force elements, so their
+//! The scene's format ([`crate::scene::format::Scene`]) lists the joints and force elements, so their
 //! files cannot depend on it without an import circle: they check and compile themselves
 //! against [`SceneRefs`], which the scene implements (scene/format.rs). The checks of
 //! references every part shares (a moving body, a body point, an attachment) are here too.
@@ -90,16 +90,26 @@ pub(crate) fn point_of(refs: &dyn SceneRefs, a: &Attachment) -> [f64; 2] {
 
 /// A validated attachment as a point of a body or of the ground.
 pub(crate) fn pt_of(refs: &dyn SceneRefs, a: &Attachment) -> Pt {
-    if a.body == GROUND {
+    pt_at(refs, &a.body, &a.point, &a.at)
+}
+
+/// A validated (body, point) or ground location (`at`) as a point of a body or of the ground.
+pub(crate) fn pt_at(
+    refs: &dyn SceneRefs,
+    body: &str,
+    point: &Option<String>,
+    at: &Option<[f64; 2]>,
+) -> Pt {
+    if body == GROUND {
         Pt {
             body: None,
-            s: a.at.expect("validated"),
+            s: at.expect("validated"),
         }
     } else {
-        let k = refs.body_index(&a.body).expect("validated");
+        let k = refs.body_index(body).expect("validated");
         Pt {
             body: Some(k),
-            s: refs.body_points(k)[a.point.as_ref().expect("validated")],
+            s: refs.body_points(k)[point.as_ref().expect("validated")],
         }
     }
 }
