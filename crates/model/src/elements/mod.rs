@@ -10,12 +10,13 @@
 //! force                     F = f(s) d̂  at a body point, d̂ global or in the body frame
 //! torque                    τ = f(s)    on a body
 //! motor                     τ = T(ω),  ω = φ̇_rotor − φ̇_stator  (table, or T_s (1 − ω/ω₀))
+//! linear_bushing            F = −k d − c ḋ,  d = r_a^P − r_b^P  (isotropic)
 //! f(s) = value | table(s) piecewise linear, s = t | x, y of a body point | a body angle |
 //!        a joint's relative coordinate | a spring's length
 //! ```
-//! Adding a kind: a new file implementing `ElementSpec` and
-//! `ForceElement` (elements/interface.rs), and one line in the `force_elements!` table of this file; the
-//! line declares the module, the variant of [`ForceElementSpec`] (its `"type"` tag, its
+//! Adding a kind: a new file implementing `ElementSpec` and `ForceElement`
+//! (elements/interface.rs), and one line in the `force_elements!` table of this file; the line
+//! declares the module, the variant of [`ForceElementSpec`] (its `"type"` tag, its
 //! `Deserialize`, its place in the "expected one of" list) and of the compiled `Element`, and
 //! every dispatch. A scene without force elements runs none of this code.
 //!
