@@ -127,13 +127,23 @@ impl PrismaticClearanceSpec {
     }
 }
 
-/// Checks a prismatic clearance joint (docs/scene-format.md, "Prismatic clearance joint").
+/// Checks a prismatic clearance joint (docs/scene-format.md, "Prismatic clearance joint"): its
+/// guide, its block, its contact laws, its initial pose.
 pub(crate) fn validate(
     refs: &dyn SceneRefs,
     p: &str,
     s: &PrismaticClearanceSpec,
 ) -> Result<(), SceneError> {
-    type C = Checker;
+    check_guide(p, s)?;
+    check_block(refs, p, s)?;
+    check_contact_laws(p, &s.normal, &s.friction, &check_stiffness)?;
+    check_initial_pose(p, s)
+}
+
+type C = Checker;
+
+/// The guide: the ground, a finite line of non-zero direction, a positive width.
+fn check_guide(p: &str, s: &PrismaticClearanceSpec) -> Result<(), SceneError> {
     if s.guide.body != GROUND {
         return Err(invalid(
             format!("{p}.guide.body"),
@@ -153,6 +163,16 @@ pub(crate) fn validate(
         ));
     }
     C::positive(&format!("{p}.guide.width"), s.guide.width, "guide width")?;
+    Ok(())
+}
+
+/// The block: a point of a moving body, a non-zero axis, positive sizes narrower than the
+/// guide.
+fn check_block(
+    refs: &dyn SceneRefs,
+    p: &str,
+    s: &PrismaticClearanceSpec,
+) -> Result<(), SceneError> {
     let k = check_moving(refs, &format!("{p}.block.body"), &s.block.body)?;
     if !refs.body_points(k).contains_key(&s.block.point) {
         return Err(invalid(
@@ -182,23 +202,30 @@ pub(crate) fn validate(
             ),
         ));
     }
-    // A flat guide face has no radii: the stiffness is given, never derived from materials.
-    let k_of = |np: &str, k: &Option<f64>, m: &Option<Materials>| {
-        if m.is_some() {
-            return Err(invalid(
-                format!("{np}.materials"),
-                "a flat guide face has no radii for the Hertz stiffness: give k (N/m^1.5)",
-            ));
-        }
-        match k {
-            Some(k) => C::positive(&format!("{np}.k"), *k, "stiffness k"),
-            None => Err(invalid(
-                np.to_string(),
-                "the normal law needs its stiffness k (N/m^1.5)",
-            )),
-        }
-    };
-    check_contact_laws(p, &s.normal, &s.friction, &k_of)?;
+    Ok(())
+}
+
+/// The normal law's stiffness at `np`: a flat guide face has no radii, so the stiffness is
+/// given (k > 0), never derived from materials.
+fn check_stiffness(np: &str, k: &Option<f64>, m: &Option<Materials>) -> Result<(), SceneError> {
+    if m.is_some() {
+        return Err(invalid(
+            format!("{np}.materials"),
+            "a flat guide face has no radii for the Hertz stiffness: give k (N/m^1.5)",
+        ));
+    }
+    match k {
+        Some(k) => C::positive(&format!("{np}.k"), *k, "stiffness k"),
+        None => Err(invalid(
+            np.to_string(),
+            "the normal law needs its stiffness k (N/m^1.5)",
+        )),
+    }
+}
+
+/// The initial offset, tilt and their rates: finite, nearly aligned, and clear of the faces
+/// (or, allowed, in contact at most half the block's width deep).
+fn check_initial_pose(p: &str, s: &PrismaticClearanceSpec) -> Result<(), SceneError> {
     C::finite(&format!("{p}.initial_offset"), s.initial_offset)?;
     C::finite(&format!("{p}.initial_tilt"), s.initial_tilt)?;
     C::finite(&format!("{p}.initial_offset_rate"), s.initial_offset_rate)?;

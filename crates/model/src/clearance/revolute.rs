@@ -515,9 +515,24 @@ impl Revolute {
     }
 }
 
-/// Checks a revolute clearance joint at JSON path `p` (docs/scene-format.md, "clearance").
+/// Checks a revolute clearance joint at JSON path `p` (docs/scene-format.md, "clearance"):
+/// its ends and radii, its contact laws, its film, its initial eccentricity.
 pub(crate) fn validate(refs: &dyn SceneRefs, p: &str, c: &ClearanceSpec) -> Result<(), SceneError> {
-    type C = Checker;
+    let clearance = check_ends(refs, p, c)?;
+    check_contact_laws(p, &c.normal, &c.friction, &|path, k, m| {
+        check_stiffness(c, path, k, m)
+    })?;
+    if let Some(film) = &c.film {
+        check_film(&format!("{p}.film"), film)?;
+    }
+    check_initial_eccentricity(p, c, clearance)
+}
+
+type C = Checker;
+
+/// Bearing and journal: attachments on different bodies, radii with 0 < R_B − R_J < R_B. The
+/// clearance R_B − R_J.
+fn check_ends(refs: &dyn SceneRefs, p: &str, c: &ClearanceSpec) -> Result<f64, SceneError> {
     let b = &c.bearing;
     let j = &c.journal;
     check_attachment(refs, &format!("{p}.bearing"), &b.body, &b.point, &b.at)?;
@@ -552,89 +567,109 @@ pub(crate) fn validate(refs: &dyn SceneRefs, p: &str, c: &ClearanceSpec) -> Resu
                 ),
             ));
     }
-    let check_k = |path: &str, k: &Option<f64>, m: &Option<Materials>| -> Result<(), SceneError> {
-        match (k, m) {
-            (Some(k), None) => C::positive(&format!("{path}.k"), *k, "stiffness k"),
-            (None, Some(m)) => {
-                for (side, mat) in [("bearing", m.bearing), ("journal", m.journal)] {
-                    let mp = format!("{path}.materials.{side}");
-                    C::positive(
-                        &format!("{mp}.youngs_modulus"),
-                        mat.youngs_modulus,
-                        "Young's modulus",
-                    )?;
-                    C::finite(&format!("{mp}.poisson_ratio"), mat.poisson_ratio)?;
-                    if !(mat.poisson_ratio > -1.0 && mat.poisson_ratio < 0.5) {
-                        return Err(invalid(
-                            format!("{mp}.poisson_ratio"),
-                            format!(
-                                "Poisson's ratio must lie in (-1, 0.5), got {}",
-                                mat.poisson_ratio
-                            ),
-                        ));
-                    }
-                }
-                // Within the magnitude range K stays finite and positive (c ≥ ulp(R_B)
-                // bounds K by about E·√(R_B/(2ε)) < 1e233); the check guards the
-                // formula should the range ever be widened.
-                let k = hertz_stiffness(
-                    b.radius,
-                    j.radius,
-                    m.bearing.youngs_modulus,
-                    m.bearing.poisson_ratio,
-                    m.journal.youngs_modulus,
-                    m.journal.poisson_ratio,
-                );
-                if !(k.is_finite() && k > 0.0) {
+    Ok(clearance)
+}
+
+/// The normal law's stiffness at `path`: k > 0, or materials from which the Hertz K is finite.
+fn check_stiffness(
+    c: &ClearanceSpec,
+    path: &str,
+    k: &Option<f64>,
+    m: &Option<Materials>,
+) -> Result<(), SceneError> {
+    match (k, m) {
+        (Some(k), None) => C::positive(&format!("{path}.k"), *k, "stiffness k"),
+        (None, Some(m)) => {
+            for (side, mat) in [("bearing", m.bearing), ("journal", m.journal)] {
+                let mp = format!("{path}.materials.{side}");
+                C::positive(
+                    &format!("{mp}.youngs_modulus"),
+                    mat.youngs_modulus,
+                    "Young's modulus",
+                )?;
+                C::finite(&format!("{mp}.poisson_ratio"), mat.poisson_ratio)?;
+                if !(mat.poisson_ratio > -1.0 && mat.poisson_ratio < 0.5) {
                     return Err(invalid(
-                        format!("{path}.materials"),
+                        format!("{mp}.poisson_ratio"),
                         format!(
-                            "the Hertz stiffness K = {k} N/m^1.5 of these materials is \
-                                     not a finite positive number"
+                            "Poisson's ratio must lie in (-1, 0.5), got {}",
+                            mat.poisson_ratio
                         ),
                     ));
                 }
-                Ok(())
             }
-            (Some(_), Some(_)) => Err(invalid(
-                format!("{path}.materials"),
-                "give either k or materials, not both",
-            )),
-            (None, None) => Err(invalid(
-                path,
-                "the normal law needs its stiffness: k (N/m^1.5) or materials",
-            )),
-        }
-    };
-    check_contact_laws(p, &c.normal, &c.friction, &check_k)?;
-    if let Some(film) = &c.film {
-        let fp = format!("{p}.film");
-        C::non_negative(&format!("{fp}.viscosity"), film.viscosity, "viscosity")?;
-        C::positive(&format!("{fp}.length"), film.length, "bearing length")?;
-        if let Some(cap) = film.eps_cap {
-            C::finite(&format!("{fp}.eps_cap"), cap)?;
-            if !(cap > 0.0 && cap < 1.0) {
+            // Within the magnitude range K stays finite and positive (c ≥ ulp(R_B)
+            // bounds K by about E·√(R_B/(2ε)) < 1e233); the check guards the
+            // formula should the range ever be widened.
+            let k = hertz_stiffness(
+                c.bearing.radius,
+                c.journal.radius,
+                m.bearing.youngs_modulus,
+                m.bearing.poisson_ratio,
+                m.journal.youngs_modulus,
+                m.journal.poisson_ratio,
+            );
+            if !(k.is_finite() && k > 0.0) {
                 return Err(invalid(
-                    format!("{fp}.eps_cap"),
-                    format!("eps_cap must lie in (0, 1) or be null (no cap), got {cap}"),
+                    format!("{path}.materials"),
+                    format!(
+                        "the Hertz stiffness K = {k} N/m^1.5 of these materials is \
+                                 not a finite positive number"
+                    ),
                 ));
             }
+            Ok(())
         }
-        if let Some(w) = film.omega0 {
-            C::positive(&format!("{fp}.omega0"), w, "omega0")?;
-            if !matches!(
-                film.model,
-                FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored
-            ) {
-                return Err(invalid(
-                    format!("{fp}.omega0"),
-                    "omega0 (the width of the smooth sign of the mirrored models) applies \
-                         only to long_gumbel_mirrored and short_ocvirk_mirrored"
-                        .to_string(),
-                ));
-            }
+        (Some(_), Some(_)) => Err(invalid(
+            format!("{path}.materials"),
+            "give either k or materials, not both",
+        )),
+        (None, None) => Err(invalid(
+            path,
+            "the normal law needs its stiffness: k (N/m^1.5) or materials",
+        )),
+    }
+}
+
+/// The film at path `fp`: viscosity ≥ 0, length > 0, ε_cap in (0, 1) or none, Ω₀ > 0 only
+/// with a mirrored model.
+fn check_film(fp: &str, film: &FilmSpec) -> Result<(), SceneError> {
+    C::non_negative(&format!("{fp}.viscosity"), film.viscosity, "viscosity")?;
+    C::positive(&format!("{fp}.length"), film.length, "bearing length")?;
+    if let Some(cap) = film.eps_cap {
+        C::finite(&format!("{fp}.eps_cap"), cap)?;
+        if !(cap > 0.0 && cap < 1.0) {
+            return Err(invalid(
+                format!("{fp}.eps_cap"),
+                format!("eps_cap must lie in (0, 1) or be null (no cap), got {cap}"),
+            ));
         }
     }
+    if let Some(w) = film.omega0 {
+        C::positive(&format!("{fp}.omega0"), w, "omega0")?;
+        if !matches!(
+            film.model,
+            FilmModel::LongGumbelMirrored | FilmModel::ShortOcvirkMirrored
+        ) {
+            return Err(invalid(
+                format!("{fp}.omega0"),
+                "omega0 (the width of the smooth sign of the mirrored models) applies \
+                     only to long_gumbel_mirrored and short_ocvirk_mirrored"
+                    .to_string(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The initial eccentricity: within the clearance (or, allowed, in contact up to the journal
+/// radius), and finite with its rate.
+fn check_initial_eccentricity(
+    p: &str,
+    c: &ClearanceSpec,
+    clearance: f64,
+) -> Result<(), SceneError> {
+    let j = &c.journal;
     C::finite2(&format!("{p}.initial_eccentricity"), c.initial_eccentricity)?;
     C::finite2(
         &format!("{p}.initial_eccentricity_rate"),
