@@ -113,6 +113,16 @@ pub const DRIVER_COLUMNS: [&str; 1] = ["torque"];
 /// Column suffixes of a prismatic clearance joint, in the order of [`Outputs::column_values`].
 pub const PRISMATIC_COLUMNS: [&str; 5] =
     ["offset", "tilt", "delta", "contact_force", "friction_force"];
+/// SI units of [`BODY_COLUMNS`].
+pub const BODY_UNITS: [&str; 9] = [
+    "m", "m", "rad", "m/s", "m/s", "rad/s", "m/s²", "m/s²", "rad/s²",
+];
+/// SI units of [`CLEARANCE_COLUMNS`] (`1`: a ratio).
+pub const CLEARANCE_UNITS: [&str; 6] = ["1", "1", "m", "N", "N", "N"];
+/// SI unit of [`DRIVER_COLUMNS`].
+pub const DRIVER_UNITS: [&str; 1] = ["N·m"];
+/// SI units of [`PRISMATIC_COLUMNS`].
+pub const PRISMATIC_UNITS: [&str; 5] = ["m", "rad", "m", "N", "N"];
 
 /// One force element at one instant (docs/model.md §10).
 ///
@@ -355,7 +365,8 @@ impl Mechanism {
     ///        .friction_force .film_force                       every clearance joint
     /// <driver>.torque                                          every driver joint
     /// <spring>.force .length | <rotational spring>.torque .angle | <force>.force
-    /// | <torque>.torque | <motor>.torque .speed                every force element
+    /// | <torque>.torque | <motor>.torque .speed
+    /// | <bushing>.force .stretch                               every force element
     /// <joint>.offset .tilt .delta .contact_force .friction_force
     ///                                                          every prismatic clearance joint
     /// ```
@@ -384,6 +395,32 @@ impl Mechanism {
             names.extend(PRISMATIC_COLUMNS.iter().map(|s| format!("{}.{s}", p.name)));
         }
         names
+    }
+
+    /// The SI unit of every column of [`Mechanism::output_columns`], in the same order (`1`
+    /// for a ratio): the parts' own tables, and each force element's
+    /// ([`crate::Column::unit`]).
+    pub fn output_units(&self) -> Vec<&'static str> {
+        let mut units = Vec::new();
+        for _ in &self.scene().bodies {
+            units.extend(BODY_UNITS);
+        }
+        for _ in &self.forces().revolute {
+            units.extend(CLEARANCE_UNITS);
+        }
+        for j in &self.scene().joints {
+            if let JointSpec::Driver(_) = j {
+                units.extend(DRIVER_UNITS);
+            }
+        }
+        let forces = self.forces();
+        for e in &forces.elements {
+            units.extend(e.columns().iter().map(|c| c.unit));
+        }
+        for _ in &forces.prismatic {
+            units.extend(PRISMATIC_UNITS);
+        }
+        units
     }
 
     /// One evaluation of every output at (t, y). Non-finite values (a singular KKT matrix)

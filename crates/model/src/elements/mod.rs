@@ -169,6 +169,7 @@ force_elements! {
     "torque" => Torque(torque::TorqueSpec => Torque),
     "motor" => Motor(motor::MotorSpec => Motor),
     "linear_bushing" => LinearBushing(linear_bushing::LinearBushingSpec => LinearBushing),
+    @cfg(test) "test_height" => TestHeight(test_height::TestHeightSpec => TestHeight),
 }
 
 pub use force::Frame;
