@@ -21,19 +21,20 @@
 //!
 //! # Layers
 //!
-//! Each module uses only those on the layers below it (no import circle; the unit tests of a
-//! module may use the crate above it):
+//! Each module uses only the modules listed before it (line by line, and left to right within
+//! a line): no import circle, unit tests included.
 //!
 //! ```text
 //! 0  planar, linalg, labels, projection; clearance::{geometry, laws}
 //! 1  scene::{error, check, de}; elements::input
-//! 2  scene::refs (the SceneRefs seam: parts check and compile themselves against it)
+//! 2  scene::refs (the SceneRefs seam: joints and elements check and compile against it)
 //! 3  elements::{table, interface}; clearance::contact; mechanism::row
-//! 4  elements::<one file per kind>; clearance::{revolute, revolute_jacobian, prismatic}
-//! 5  elements (the registry); scene::{format, validate, parse}; scene (the public facade)
-//! 6  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
-//! 7  mechanism (the struct and its evaluation)
-//! 8  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases
+//! 4  elements::<one file per kind>; clearance::{revolute, prismatic, revolute_jacobian}
+//! 5  elements (the registry)
+//! 6  scene::{format, validate, parse}; scene (the public facade)
+//! 7  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
+//! 8  mechanism (the struct, its views and its evaluation)
+//! 9  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases
 //! ```
 //! Inside the crate, parts name the scene's submodules (`scene::format`, `scene::refs`, …),
 //! never the facade `scene`, which re-exports them for users.
