@@ -32,25 +32,12 @@ use lash_validation::{Error, SolverChoice};
 use crate::convert::bytearray_from_f64s;
 use crate::errors::{failure_kind, scene_error, solve_error, usage_error};
 
-/// The kind of a located event, as `lash.run` reports it: what crossed zero
-/// (`lash_model::Mechanism::event_name`, docs/model.md §7) and in which direction.
-///
-/// ```text
-/// contact        δ = |e| − c of a clearance joint      rising: contact_onset, falling: contact_loss
-/// eps_cap        ε − ε_cap of a lubricated joint       eps_cap_reached / eps_cap_left
-/// corner_contact δ_i of a prismatic joint's corner     corner_contact_onset / corner_contact_loss
-/// kink_*         a kink of a force law (kink_events)   kink_*_rising / kink_*_falling
-/// ```
+/// The kind of a located event, as `lash.run` reports it: the label of its crossing that the
+/// joint or element owning the event function declares (`lash_model::event_label`: a
+/// clearance joint's `contact` rising is `contact_onset`, falling `contact_loss`; docs/model.md
+/// §7).
 pub fn event_kind(kind: &str, rising: bool) -> String {
-    match (kind, rising) {
-        ("contact", true) => "contact_onset".into(),
-        ("contact", false) => "contact_loss".into(),
-        ("eps_cap", true) => "eps_cap_reached".into(),
-        ("eps_cap", false) => "eps_cap_left".into(),
-        ("corner_contact", true) => "corner_contact_onset".into(),
-        ("corner_contact", false) => "corner_contact_loss".into(),
-        (other, r) => format!("{other}_{}", if r { "rising" } else { "falling" }),
-    }
+    lash_model::event_label(kind, rising)
 }
 
 /// A scene error's JSON path and reason (docs/scene-format.md, "Errors"): `str(e)` of the
