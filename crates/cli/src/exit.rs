@@ -86,13 +86,16 @@ impl ExitStatus for Error {
 mod tests {
     use super::*;
     use lash_solver::SolveError;
-    use lash_validation::error::OptionError;
+    use lash_validation::OptionError;
 
     #[test]
     fn exit_codes_follow_interfaces() {
         assert_eq!(Error::Usage("x".into()).exit_code(), 2);
         assert_eq!(Error::Input("x".into()).exit_code(), 2);
-        let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
+        let io = Error::Io {
+            path: "a/b".into(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        };
         assert_eq!(io.exit_code(), 2);
         assert!(io.to_string().starts_with("a/b: "));
         let s = Error::Solver(SolveError::InvalidOptions("bad".into()));

@@ -8,7 +8,7 @@
 //! cargo run --release -p lash-validation --example extremes_rk4_scan -- [STEM...]
 //! RK4_STEPS=1e-3,2e-3 cargo run ... -- STEM     (only these steps)
 //! ```
-use lash_validation::studies::extremes::{catalogue, prepare, run_cell, Budget, Setting};
+use lash_validation::extremes::{catalogue, prepare, run_cell, Budget, Outcome, Setting};
 
 fn main() {
     let wanted: Vec<String> = std::env::args().skip(1).collect();
@@ -58,12 +58,7 @@ fn main() {
                     c.measured_c,
                     c.outcome
                 );
-                if c.outcome.is_allowed()
-                    && matches!(
-                        c.outcome,
-                        lash_validation::studies::extremes::Outcome::Agrees { .. }
-                    )
-                {
+                if c.outcome.is_allowed() && matches!(c.outcome, Outcome::Agrees { .. }) {
                     agreed += 1;
                     if agreed == 2 {
                         break 'scan;

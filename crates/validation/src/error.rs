@@ -113,12 +113,12 @@ impl Error {
     }
 
     /// Whether this is an interruption ([`Error::Interrupted`]).
-    pub fn is_interrupted(&self) -> bool {
+    pub(crate) fn is_interrupted(&self) -> bool {
         matches!(self, Error::Interrupted(_))
     }
 
     /// Wraps an I/O error with the path it concerns.
-    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.as_ref().to_path_buf(),
             source,
@@ -152,7 +152,7 @@ impl From<SolveError> for Error {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Piece {
+pub(crate) enum Piece {
     /// Text, as is.
     Text(String),
     /// An option, by its engine name (`rtol`, `t_end`, …).
@@ -172,24 +172,24 @@ pub enum Piece {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Message {
     /// The pieces, in order.
-    pub pieces: Vec<Piece>,
+    pub(crate) pieces: Vec<Piece>,
 }
 
 impl Message {
     /// Appends text.
-    pub fn text(mut self, s: impl Into<String>) -> Self {
+    pub(crate) fn text(mut self, s: impl Into<String>) -> Self {
         self.pieces.push(Piece::Text(s.into()));
         self
     }
 
     /// Appends an option name.
-    pub fn name(mut self, option: &'static str) -> Self {
+    pub(crate) fn name(mut self, option: &'static str) -> Self {
         self.pieces.push(Piece::Option(option));
         self
     }
 
     /// The same message with `text` before it.
-    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+    pub(crate) fn prefixed(mut self, text: impl Into<String>) -> Self {
         self.pieces.insert(0, Piece::Text(text.into()));
         self
     }
@@ -244,7 +244,7 @@ pub struct OptionError {
 
 impl OptionError {
     /// An empty message about `option`.
-    pub fn new(option: &'static str) -> Self {
+    pub(crate) fn new(option: &'static str) -> Self {
         OptionError {
             option,
             message: Message::default(),
@@ -257,19 +257,19 @@ impl OptionError {
     }
 
     /// Appends text.
-    pub fn text(mut self, s: impl Into<String>) -> Self {
+    pub(crate) fn text(mut self, s: impl Into<String>) -> Self {
         self.message = self.message.text(s);
         self
     }
 
     /// Appends an option name.
-    pub fn name(mut self, option: &'static str) -> Self {
+    pub(crate) fn name(mut self, option: &'static str) -> Self {
         self.message = self.message.name(option);
         self
     }
 
     /// The same error with `text` before its message.
-    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+    pub(crate) fn prefixed(mut self, text: impl Into<String>) -> Self {
         self.message = self.message.prefixed(text);
         self
     }

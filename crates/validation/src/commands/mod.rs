@@ -226,9 +226,8 @@ fn within(r: RunResult, o: &RunOptions, deadline: Option<Instant>) -> Result<Run
 
 /// [`run`] without files, for a library caller (the Python binding's `lash.run`): the same
 /// checks, defaults, integration and summary, the trajectory's rows kept in memory
-/// ([`RunResult::trajectory`]) and every event of the run kept ([`RunResult::events`]);
-/// returned with the prepared case, whose [`MechanismInfo`](crate::run::simulate::MechanismInfo)
-/// names the state components and the event functions.
+/// ([`RunResult::trajectory`]) and every event of the run kept ([`RunResult::events`], their
+/// functions named by [`RunResult::event_names`]).
 ///
 /// ```text
 /// case: loaded by the caller (Case::load, or a Case built from JSON text in memory);
@@ -236,7 +235,7 @@ fn within(r: RunResult, o: &RunOptions, deadline: Option<Instant>) -> Result<Run
 /// budget: solver.max_wall_time counts from this call, as in run
 /// solver failure: Error::Solver with time and state; nothing is written
 /// ```
-pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult), Error> {
+pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<RunResult, Error> {
     let deadline = o
         .solver
         .max_wall_time
@@ -244,7 +243,7 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<(Prepared, RunResult)
     let (prepared, req, settled) = run_request(case, o, deadline)?;
     let mut r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
     r.summary.until_periodic = settled;
-    Ok((prepared, r))
+    Ok(r)
 }
 
 /// What to study.
@@ -261,10 +260,13 @@ pub struct StudyOptions {
     /// Run the robustness study instead (`studies::robustness`): robustness.md and
     /// robustness.json in the same directory, sharing its cache of runs.
     pub robustness: bool,
+    /// What to run; None = the paper's plan ([`study::Plan::paper`](crate::study::Plan::paper)):
+    /// a library caller may run fewer realisations or other tolerances.
+    pub plan: Option<study::Plan>,
 }
 
 /// Runs the paper's study (module `study`): figures, report.md and study.json in the output
-/// directory ([`study::describe_paper`] says it in one line); each run as an item of
+/// directory ([`StudyResult::describe`] says it in one line); each run as an item of
 /// `progress`; finished runs are kept in DIR/cache/ and reused by a rerun.
 pub fn study_paper(
     o: &StudyOptions,
@@ -274,7 +276,8 @@ pub fn study_paper(
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let r = study::paper(&out, progress)?;
+    let plan = o.plan.unwrap_or_else(study::Plan::paper);
+    let r = study::run_and_write_with(&plan, &out, progress)?;
     let files = vec![out.join(study::REPORT_FILE), out.join(study::JSON_FILE)];
     Ok(Written {
         result: r,
@@ -293,7 +296,14 @@ pub fn study_robustness(
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let r = crate::studies::robustness::paper(&out, progress)?;
+    let plan = o.plan.unwrap_or_else(study::Plan::paper);
+    let r = crate::studies::robustness::run_and_write(
+        &plan,
+        &crate::studies::robustness::variants(),
+        &crate::studies::paper::claims::Thresholds::paper(),
+        &out,
+        progress,
+    )?;
     let files = vec![
         out.join(crate::studies::robustness::MD_FILE),
         out.join(crate::studies::robustness::JSON_FILE),
@@ -343,7 +353,7 @@ fn rk4_steps(
 pub struct CompareOptions {
     /// The case: a scene file (JSON) or `testset:NAME`.
     pub case: String,
-    /// Relative tolerances of the adaptive methods; None = [`COMPARE_TOLERANCES`].
+    /// Relative tolerances of the adaptive methods; None = `COMPARE_TOLERANCES`.
     pub tolerances: Option<Vec<f64>>,
     /// RK4 steps, s; None = the largest stable step h of the case and h/2, h/4 (scene cases
     /// with a crank), none for test problems.
@@ -431,7 +441,7 @@ pub struct WorkPrecisionOptions {
     /// Methods; None = every method of this build.
     pub methods: Option<Vec<Method>>,
     /// Relative tolerances of the adaptive methods (atol as in the case); None = the
-    /// defaults ([`crate::compare::workprecision::DEFAULT_TOLERANCES`]).
+    /// defaults (`crate::compare::workprecision::DEFAULT_TOLERANCES`).
     pub tolerances: Option<Vec<f64>>,
     /// Steps of the fixed-step methods, s; None = derived from the case.
     pub steps: Option<Vec<f64>>,
@@ -445,7 +455,7 @@ pub struct WorkPrecisionOptions {
 
 impl WorkPrecisionOptions {
     /// Checks the lists against each other and applies the defaults
-    /// ([`WorkPrecisionPlan::new`]).
+    /// (`WorkPrecisionPlan::new`).
     pub fn plan(&self) -> Result<WorkPrecisionPlan, Error> {
         WorkPrecisionPlan::new(
             self.methods.as_deref(),
@@ -468,7 +478,7 @@ pub struct WorkPrecisionResult {
 }
 
 /// Error against cost on one case: every method × tolerance and RK4 × step, and the
-/// controllers compared on one method of ours ([`WorkPrecisionPlan::controller_method`]),
+/// controllers compared on one method of ours (`WorkPrecisionPlan::controller_method`),
 /// against the case's reference; writes the markdown and JSON tables and the log–log figures.
 /// Notes the reference, a derived RK4 step (or that RK4 is left out) and each run as it ends.
 pub fn work_precision(
@@ -592,7 +602,7 @@ pub struct StiffnessOptions {
     pub case: String,
     /// Solver of the reference run over the case's defaults.
     pub solver: SolverChoice,
-    /// Sample points along the run, both ends included (≥ 2); None = [`DEFAULT_SAMPLES`].
+    /// Sample points along the run, both ends included (≥ 2); None = `DEFAULT_SAMPLES`.
     pub samples: Option<usize>,
     /// End time override, s (scene cases only).
     pub t_end: Option<f64>,
@@ -664,7 +674,7 @@ pub struct PoincareOptions {
     pub perturbation: Option<f64>,
     /// Renormalisations per crank revolution (≥ 1); None = the default.
     pub renorm_per_rev: Option<usize>,
-    /// Solver of both trajectories over the case's defaults ([`poincare::options`]).
+    /// Solver of both trajectories over the case's defaults (`poincare::options`).
     pub solver: SolverChoice,
     /// Output directory; None = `out/poincare/CASE`.
     pub out: Option<PathBuf>,
@@ -719,15 +729,19 @@ pub struct ExtremesOptions {
     pub max_steps: Option<usize>,
     /// Wall-clock budget of every run, s; None = the plan's.
     pub max_wall_time: Option<f64>,
+    /// Scenes of the catalogue to run, by stem (in the order given); None = the plan's.
+    pub scenes: Option<Vec<String>>,
+    /// Relative tolerances of the adaptive methods, each in (0, 1); None = the plan's.
+    pub tolerances: Option<Vec<f64>>,
     /// Output directory; None = `out/extremes` (`out/extremes-quick` when quick).
     pub out: Option<PathBuf>,
 }
 
 /// Runs the extremes matrix (or its quick subset) and writes extremes.md and extremes.json
 /// (in that order in `files`); each reference and run is an item of `progress`. Finished
-/// references and runs are kept in DIR/cache/ and reused by a rerun ([`extremes::run_cached`]).
+/// references and runs are kept in DIR/cache/ and reused by a rerun (`extremes::run_cached`).
 /// A run that ended in an outcome that is not allowed is in the result, not an error: see
-/// [`extremes::check`].
+/// [`Matrix::check`].
 pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<Matrix>, Error> {
     let mut plan = if o.quick {
         extremes::Plan::quick()
@@ -739,6 +753,25 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
     }
     if let Some(w) = o.max_wall_time {
         plan.budget.max_wall_time = w;
+    }
+    if let Some(v) = &o.scenes {
+        if v.is_empty() {
+            return Err(OptionError::leading("scenes", " lists no scene").into());
+        }
+        plan.scenes = v.clone();
+    }
+    if let Some(v) = &o.tolerances {
+        if let Some(bad) = v.iter().find(|r| !(**r > 0.0 && **r < 1.0)) {
+            return Err(OptionError::leading(
+                "tolerances",
+                format!(" must each be in (0, 1), got {bad}"),
+            )
+            .into());
+        }
+        if v.is_empty() {
+            return Err(OptionError::leading("tolerances", " lists no tolerance").into());
+        }
+        plan.tolerances = v.clone();
     }
     plan.jobs = o.jobs.unwrap_or(1);
     let out = o.out.clone().unwrap_or_else(|| {
@@ -794,7 +827,7 @@ pub struct SweepOutcome {
     pub dir: PathBuf,
 }
 
-/// Runs a sweep of scene runs ([`sweep_point`]): loads and checks the sweep file and its base
+/// Runs a sweep of scene runs (`sweep_point`): loads and checks the sweep file and its base
 /// case, then [`sweep_with`].
 pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
     let spec = sweep::SweepSpec::load(&o.file)?;
@@ -806,7 +839,7 @@ pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcom
 /// Runs a sweep with a point runner: loads and checks the sweep file, runs the shard's
 /// unfinished points in parallel (progress: each point as it ends). A point that failed
 /// otherwise than in the solver makes the whole sweep an error, after the others ran
-/// ([`SweepReport::into_result`]).
+/// (`SweepReport::into_result`).
 pub fn sweep_with<F>(
     o: &SweepRunOptions,
     runner: F,
@@ -829,8 +862,7 @@ where
         jobs: o.jobs,
         shard: o.shard.unwrap_or(Shard::ALL),
     };
-    let report =
-        sweep::run_sweep_with_progress(&points, &out, &opts, runner, progress)?.into_result()?;
+    let report = sweep::run_sweep(&points, &out, &opts, runner, progress)?.into_result()?;
     Ok(SweepOutcome {
         report,
         shard: opts.shard,
@@ -843,7 +875,11 @@ where
 /// its scene ([`sweep::apply_params`]) and its solver choice over the case's defaults;
 /// writes DIR/summary.json and returns the summary, flattened, for the merged table. A
 /// solver failure is returned as such (the sweep records it as a finished point).
-pub fn sweep_point(base: &Prepared, point: &SweepPoint, dir: &Path) -> Result<PointResult, Error> {
+pub(crate) fn sweep_point(
+    base: &Prepared,
+    point: &SweepPoint,
+    dir: &Path,
+) -> Result<PointResult, Error> {
     let pp = &point.params;
     let physical = pp.speed_rpm.is_some()
         || pp.clearance.is_some()
@@ -883,7 +919,7 @@ pub fn sweep_point(base: &Prepared, point: &SweepPoint, dir: &Path) -> Result<Po
 /// parameters hold them), the solver settings actually used renamed `used.method`,
 /// `used.controller`, `used.rtol`, `used.step` (the parameters say what was asked for), `atol`
 /// left in the point's summary.json only.
-pub fn point_values(mut summary: serde_json::Value) -> PointResult {
+pub(crate) fn point_values(mut summary: serde_json::Value) -> PointResult {
     if let Some(o) = summary.as_object_mut() {
         for k in ["case", "scene_sha256", "atol"] {
             o.remove(k);
@@ -1028,7 +1064,7 @@ pub fn describe_run(r: &RunResult) -> String {
 
 /// Default output directory of a command for a case: `out/COMMAND/NAME` (a `:` in a built-in
 /// name becomes `_`).
-pub fn default_out(command: &str, name: &str) -> PathBuf {
+pub(crate) fn default_out(command: &str, name: &str) -> PathBuf {
     PathBuf::from("out")
         .join(command)
         .join(name.replace(':', "_"))

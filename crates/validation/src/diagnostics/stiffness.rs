@@ -57,14 +57,14 @@ use crate::store::io;
 /// angle over the paper's two revolutions; the analysis of a sample (one analytic Jacobian, the
 /// eigenvalues of a 12 × 12 matrix) is cheap next to the measurement of the RK4 limit
 /// (BENCHMARKS.md, "Diagnostics").
-pub const DEFAULT_SAMPLES: usize = 1000;
+pub(crate) const DEFAULT_SAMPLES: usize = 1000;
 /// Fewest sample points.
-pub const MIN_SAMPLES: usize = 2;
+pub(crate) const MIN_SAMPLES: usize = 2;
 /// Most RK4 steps one probe run of the measurement may take; a bracket that would need more
 /// ends the measurement with a note instead (a stiff test problem over a long span).
-pub const MAX_PROBE_STEPS: f64 = 2e7;
+pub(crate) const MAX_PROBE_STEPS: f64 = 2e7;
 /// Most bracket attempts of the measurement (each widens the bracket by a factor 4).
-pub const MAX_BRACKET_ATTEMPTS: usize = 8;
+pub(crate) const MAX_BRACKET_ATTEMPTS: usize = 8;
 /// Largest constraint violation ‖Φ(q, t)‖₂ of a stable RK4 run of a mechanism, as a fraction
 /// of its length scale L (the smallest clearance, else 1e-3 m): Φ_max = L/100.
 ///
@@ -78,14 +78,7 @@ pub const MAX_BRACKET_ATTEMPTS: usize = 8;
 /// The check sees the accepted states only: an RK4 stage state y_n + (h/2)k moves pinned points
 /// along tangents and violates Φ by about |a| h²/8 (1e-8 m at 0.15 ms on the press) without any
 /// instability.
-pub const PHI_MAX_PER_LENGTH: f64 = 1e-2;
-/// Stems of the files written.
-pub const FILES: [&str; 4] = [
-    "stiffness.csv",
-    "stiffness.png",
-    "stiffness.md",
-    "stiffness.json",
-];
+pub(crate) const PHI_MAX_PER_LENGTH: f64 = 1e-2;
 
 /// What `lash stiffness` does besides the case's solver options.
 ///
@@ -96,7 +89,7 @@ pub const FILES: [&str; 4] = [
 ///
 /// Source: docs/outputs.md ("`lash stiffness CASE`").
 #[derive(Clone, Debug, PartialEq)]
-pub struct StiffnessSettings {
+pub(crate) struct StiffnessSettings {
     /// Sample points along the run, both ends included (≥ 2).
     pub samples: usize,
     /// End-time override, s (scene cases only).
@@ -127,7 +120,7 @@ impl Default for StiffnessSettings {
 ///
 /// HNW II §IV.2; Lambert (1991), ch. 6.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct StiffnessPoint {
+pub(crate) struct StiffnessPoint {
     /// Time, s.
     pub t: f64,
     /// Crank angle, rad (not wrapped), when the case has a crank.
@@ -173,7 +166,7 @@ impl StiffnessPoint {
 ///
 /// Source: this module.
 #[derive(Clone, Debug)]
-pub struct Sampled {
+pub(crate) struct Sampled {
     /// One analysis per requested time (fewer if a stopping event ended the run).
     pub points: Vec<StiffnessPoint>,
     /// Accepted step sizes of the reference run, s.
@@ -186,7 +179,7 @@ pub struct Sampled {
 
 impl Sampled {
     /// The median accepted step (the accuracy step of an implicit reference run), s.
-    pub fn median_step(&self) -> Option<f64> {
+    pub(crate) fn median_step(&self) -> Option<f64> {
         median(&self.steps)
     }
 }
@@ -218,7 +211,7 @@ fn median(v: &[f64]) -> Option<f64> {
 /// An analysis failure as a command error: a solver failure stays one (exit 3); a non-finite
 /// Jacobian or eigenvalue at a finite state, or an eigenvalue iteration that does not converge,
 /// is a defect of the model or the analysis (exit 1); bad settings are usage errors (exit 2).
-pub fn analysis_error(e: AnalysisError) -> Error {
+pub(crate) fn analysis_error(e: AnalysisError) -> Error {
     match e {
         AnalysisError::Solve(s) => Error::from(s),
         AnalysisError::InvalidInput(m) => Error::Usage(m),
@@ -232,7 +225,7 @@ pub fn analysis_error(e: AnalysisError) -> Error {
 /// Integrates `sys` over `t_span` from `y0` with `opts` and analyses the dense output at
 /// `times` (sorted, inside the span) as soon as a step covers them; `angle(t, y)` gives the
 /// crank angle of a sample (None without a crank). Records every accepted step size.
-pub fn sample_along<S: OdeSystem + ?Sized>(
+pub(crate) fn sample_along<S: OdeSystem + ?Sized>(
     sys: &S,
     t_span: (f64, f64),
     y0: &[f64],
@@ -303,7 +296,7 @@ pub fn sample_along<S: OdeSystem + ?Sized>(
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Measurement {
+pub(crate) struct Measurement {
     /// The bisection's result.
     pub limit: Option<MeasuredLimit>,
     /// Why there is no limit (no bracket within the attempts, or too many RK4 steps).
@@ -322,7 +315,7 @@ pub struct Measurement {
 /// [`MAX_PROBE_STEPS`] steps (at half its step, the bisection's first check), or whose
 /// upper end exceeds a quarter of the span, ends the search with a note. `valid` must hold at
 /// every accepted state of a stable run ([`measure_rk4_limit_where`]).
-pub fn measure_limit<S: OdeSystem + ?Sized>(
+pub(crate) fn measure_limit<S: OdeSystem + ?Sized>(
     sys: &S,
     t_span: (f64, f64),
     y0: &[f64],
@@ -400,7 +393,7 @@ pub fn measure_limit<S: OdeSystem + ?Sized>(
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct At {
+pub(crate) struct At {
     /// The value.
     pub value: f64,
     /// Time, s.
@@ -420,7 +413,7 @@ pub struct At {
 ///
 /// HNW II §IV.1–IV.2.
 #[derive(Clone, Debug, serde::Serialize)]
-pub struct StiffnessReport {
+pub(crate) struct StiffnessReport {
     /// Case and settings (the keys of summary.json).
     #[serde(flatten)]
     pub run: RunHeader,
@@ -477,13 +470,13 @@ pub struct StiffnessReport {
 #[derive(Clone, Debug)]
 pub struct StiffnessResult {
     /// The summary.
-    pub report: StiffnessReport,
+    pub(crate) report: StiffnessReport,
     /// One point per sample.
-    pub points: Vec<StiffnessPoint>,
+    pub(crate) points: Vec<StiffnessPoint>,
 }
 
 /// Φ_max of a mechanism case ([`PHI_MAX_PER_LENGTH`]), m.
-pub fn phi_max(p: &Prepared) -> f64 {
+pub(crate) fn phi_max(p: &Prepared) -> f64 {
     let l = p
         .info
         .as_ref()
@@ -494,7 +487,7 @@ pub fn phi_max(p: &Prepared) -> f64 {
 
 /// The stability criterion of the measurement in words (stiffness.json and .md); `phi_max`
 /// is the constraint check of a mechanism case ([`PHI_MAX_PER_LENGTH`]).
-pub fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
+pub(crate) fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
     format!(
         "fixed-step RK4 over the whole run without event location is stable at h when no state \
          is non-finite{} and max ‖y‖∞ ≤ {} × that of the run at the bracket's lower end (itself \
@@ -511,7 +504,7 @@ pub fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
 /// Runs the analysis of a prepared case with solver options `opts` (the reference run);
 /// `progress` gets its phases as items (the eigenvalues along the run, then the measured RK4
 /// limit).
-pub fn analyse(
+pub(crate) fn analyse(
     p: &Prepared,
     opts: &SolverOptions,
     settings: &StiffnessSettings,
@@ -772,7 +765,7 @@ fn opt(v: Option<f64>) -> String {
 /// ```
 /// (λ the eigenvalue of largest modulus, so lambda_abs = spectral_radius; `limiting` the one
 /// that sets rk4_h_max; empty fields where a value does not exist).
-pub fn to_csv(points: &[StiffnessPoint]) -> String {
+pub(crate) fn to_csv(points: &[StiffnessPoint]) -> String {
     let mut s = String::from(
         "t,crank_angle,lambda_re,lambda_im,lambda_abs,spectral_radius,stiffness_ratio,\
          rk4_h_max,limiting_re,limiting_im,n_unstable\n",
@@ -819,7 +812,7 @@ fn eig(e: &Eigenvalue) -> String {
 
 impl StiffnessReport {
     /// The lines `lash stiffness` prints: the two limits and the verdict.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let mut s = format!(
             "{}: {} samples over [{}, {}] s, {} reference run: {} steps, median {:.3e} s\n",
             self.run.case,
@@ -888,7 +881,7 @@ impl StiffnessReport {
     }
 
     /// stiffness.md: the numbers and the verdict.
-    pub fn to_markdown(&self) -> String {
+    pub(crate) fn to_markdown(&self) -> String {
         let mut s = format!("# Stiffness of {}\n\n", self.run.case);
         let _ = writeln!(
             s,
@@ -976,7 +969,7 @@ impl StiffnessReport {
 }
 
 /// The family's name in a sentence.
-pub fn family_name(v: &Verdict) -> &'static str {
+pub(crate) fn family_name(v: &Verdict) -> &'static str {
     use lash_solver::analysis::stiffness::Family;
     match v.family {
         Family::Explicit => "explicit",
@@ -986,9 +979,15 @@ pub fn family_name(v: &Verdict) -> &'static str {
 }
 
 impl StiffnessResult {
+    /// What the analysis found, in a few lines: the two RK4 limits, the stiffness ratio, the
+    /// verdict (what `lash stiffness` prints).
+    pub fn describe(&self) -> String {
+        self.report.describe()
+    }
+
     /// Writes stiffness.csv, stiffness.{svg,png}, stiffness.md and stiffness.json (last) into
     /// `dir`, each atomically; everything is checked before the first file is written.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         let csv = to_csv(&self.points);
         let md = self.report.to_markdown();
         let json = serde_json::to_string_pretty(&self.report)

@@ -24,12 +24,12 @@ use crate::run::case::Case;
 use crate::store::io;
 
 /// File name of the summary in an output directory.
-pub const SUMMARY_FILE: &str = "summary.json";
+pub(crate) const SUMMARY_FILE: &str = "summary.json";
 
 /// The controller a run uses: the chosen one, else the method's default (`pi` for explicit
 /// pairs, `gustafsson` for Rosenbrock methods, per `SolverOptions::controller`); None for
 /// fixed-step methods and diffsol's methods.
-pub fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
+pub(crate) fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
     let m = opts.method;
     if m.is_fixed_step() || m.is_diffsol() {
         return None;
@@ -51,7 +51,7 @@ pub fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
 ///
 /// Source: docs/outputs.md (`summary.json`, the same keys and meanings).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct RunHeader {
+pub(crate) struct RunHeader {
     /// lash version.
     pub version: String,
     /// Case name.
@@ -70,7 +70,7 @@ pub struct RunHeader {
 
 impl RunHeader {
     /// The header of a run of `case` with `opts`.
-    pub fn new(case: &Case, opts: &SolverOptions) -> RunHeader {
+    pub(crate) fn new(case: &Case, opts: &SolverOptions) -> RunHeader {
         let fixed = opts.method.is_fixed_step();
         RunHeader {
             version: env!("CARGO_PKG_VERSION").to_string(),
@@ -84,7 +84,7 @@ impl RunHeader {
     }
 
     /// `rtol R` (adaptive) or `step H s` (fixed-step).
-    pub fn accuracy(&self) -> String {
+    pub(crate) fn accuracy(&self) -> String {
         match (self.rtol, self.step) {
             (Some(t), _) => format!("rtol {t:e}"),
             (None, Some(h)) => format!("step {h:e} s"),
@@ -142,7 +142,7 @@ pub struct Summary {
 impl Summary {
     /// A summary of a run of `case` with `opts`, applying the null rules; metrics,
     /// final_state and reference_error start null.
-    pub fn new(
+    pub(crate) fn new(
         case: &Case,
         opts: &SolverOptions,
         t_end: f64,
@@ -172,7 +172,7 @@ impl Summary {
     }
 
     /// Checks that every number is finite (JSON has no NaN: serde_json would write null).
-    pub fn check_finite(&self) -> Result<(), Error> {
+    pub(crate) fn check_finite(&self) -> Result<(), Error> {
         let mut nums: Vec<(&str, f64)> = vec![
             ("t_end", self.t_end),
             ("wall_time_s", self.wall_time_s),
@@ -216,7 +216,7 @@ impl Summary {
     }
 
     /// Writes `dir/summary.json` atomically (after [`Summary::check_finite`]); returns its path.
-    pub fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
         self.check_finite()?;
         let p = dir.join(SUMMARY_FILE);
         io::write_json_atomic(&p, self)?;

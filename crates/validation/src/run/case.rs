@@ -20,11 +20,11 @@ use sha2::{Digest, Sha256};
 use crate::error::Error;
 
 /// Prefix of built-in test problems.
-pub const BUILTIN_PREFIX: &str = "testset:";
+pub(crate) const BUILTIN_PREFIX: &str = "testset:";
 
 /// Names (after the prefix) of the built-in test problems: the stiff problems of the IVP Test
 /// Set in `lash_solver::testset` (rober, vdpolm, hires, orego).
-pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
+pub(crate) const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 
 /// Where a case comes from.
 ///
@@ -34,7 +34,7 @@ pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 ///
 /// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum CaseSource {
+pub(crate) enum CaseSource {
     /// A scene file.
     File {
         /// Its path, as given (resolved against the base directory if relative).
@@ -65,7 +65,7 @@ pub struct Case {
     /// The name recorded in summary.json (`case`).
     pub name: String,
     /// The file or the built-in.
-    pub source: CaseSource,
+    pub(crate) source: CaseSource,
 }
 
 impl Case {
@@ -132,7 +132,7 @@ impl Case {
     }
 
     /// A built-in test problem by its name (without the prefix).
-    pub fn builtin(name: &str) -> Result<Case, Error> {
+    pub(crate) fn builtin(name: &str) -> Result<Case, Error> {
         if !BUILTIN_NAMES.contains(&name) {
             let known = if BUILTIN_NAMES.is_empty() {
                 "none in this build".to_string()
@@ -151,7 +151,7 @@ impl Case {
 
     /// A press scene of the catalogue (`lash_model::cases::press_catalogue`) by its name,
     /// e.g. `dry_150rpm_c0.1`; an unknown name is an input error.
-    pub fn catalogue(name: &str) -> Result<Case, Error> {
+    pub(crate) fn catalogue(name: &str) -> Result<Case, Error> {
         if !lash_model::cases::press_catalogue()
             .iter()
             .any(|(n, _)| n == name)
@@ -167,7 +167,7 @@ impl Case {
     }
 
     /// The scene's sha256 (hex), None for built-ins and catalogue scenes.
-    pub fn sha256(&self) -> Option<&str> {
+    pub(crate) fn sha256(&self) -> Option<&str> {
         match &self.source {
             CaseSource::File { sha256, .. } => Some(sha256),
             CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => None,
@@ -176,7 +176,7 @@ impl Case {
 }
 
 /// Lower-case hex sha256 of `bytes` (FIPS 180-4).
-pub fn sha256_hex(bytes: &[u8]) -> String {
+pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
     let digest = Sha256::digest(bytes);
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -1,7 +1,10 @@
 //! Running one case: case references, the runner every command calls, runs until periodic,
 //! and the files of one run.
 
-pub mod case;
-pub mod files;
-pub mod simulate;
-pub mod steady;
+pub(crate) mod case;
+pub(crate) mod files;
+pub(crate) mod simulate;
+pub(crate) mod steady;
+
+#[cfg(test)]
+mod tests;

@@ -130,28 +130,28 @@ use crate::run::case::{Case, CaseSource};
 use crate::run::files::{self as report, RunOutput};
 
 /// Default method of a mechanism run.
-pub const DEFAULT_METHOD: Method = Method::Bdf;
+pub(crate) const DEFAULT_METHOD: Method = Method::Bdf;
 /// Default relative tolerance of a mechanism run.
-pub const DEFAULT_RTOL: f64 = 1e-8;
+pub(crate) const DEFAULT_RTOL: f64 = 1e-8;
 /// Interior event samples per step of a mechanism run.
-pub const DEFAULT_EVENT_SAMPLES: usize = 4;
+pub(crate) const DEFAULT_EVENT_SAMPLES: usize = 4;
 /// h_max of a mechanism run with a crank driver, as a fraction of the crank period.
-pub const H_MAX_PER_PERIOD: f64 = 1.0 / 100.0;
+pub(crate) const H_MAX_PER_PERIOD: f64 = 1.0 / 100.0;
 /// Step limit of a mechanism run.
-pub const DEFAULT_MAX_STEPS: usize = 50_000_000;
+pub(crate) const DEFAULT_MAX_STEPS: usize = 50_000_000;
 /// Divergence bound of a mechanism run (module doc), in SI units.
-pub const MECHANISM_DIVERGENCE_BOUND: f64 = 1e6;
+pub(crate) const MECHANISM_DIVERGENCE_BOUND: f64 = 1e6;
 /// Consecutive RK4 steps outside the stability region that fail a mechanism run (module doc).
-pub const MECHANISM_RK4_INSTABILITY_STEPS: usize = 15;
+pub(crate) const MECHANISM_RK4_INSTABILITY_STEPS: usize = 15;
 /// Length scale L of the default atol for scenes without a clearance joint, m.
-pub const DEFAULT_LENGTH_SCALE: f64 = 1e-3;
+pub(crate) const DEFAULT_LENGTH_SCALE: f64 = 1e-3;
 /// Longest energy-quadrature panel of a run with a crank, as a fraction of the period: long
 /// adaptive steps are split (the power terms oscillate at multiples of the crank frequency).
-pub const QUADRATURE_PANEL_PER_PERIOD: f64 = 1.0 / 400.0;
+pub(crate) const QUADRATURE_PANEL_PER_PERIOD: f64 = 1.0 / 400.0;
 /// Default method of a built-in test problem.
-pub const TESTSET_METHOD: Method = Method::Rodas5p;
+pub(crate) const TESTSET_METHOD: Method = Method::Rodas5p;
 /// Default relative tolerance of a built-in test problem.
-pub const TESTSET_RTOL: f64 = 1e-6;
+pub(crate) const TESTSET_RTOL: f64 = 1e-6;
 
 /// What a case integrates.
 ///
@@ -161,7 +161,7 @@ pub const TESTSET_RTOL: f64 = 1e-6;
 ///
 /// Source: docs/outputs.md (`case`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Model {
+pub(crate) enum Model {
     /// A checked scene; each run builds its own `Mechanism` from it.
     Mechanism(Box<Scene>),
     /// A problem of `lash_solver::testset`, by name.
@@ -176,7 +176,7 @@ pub enum Model {
 ///
 /// Source: docs/model.md §1, §5.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MechanismInfo {
+pub(crate) struct MechanismInfo {
     /// Crank period T, s (crank driver role with ω ≠ 0).
     pub period: Option<f64>,
     /// |ω| of the crank driver, rad/s.
@@ -212,7 +212,7 @@ pub struct MechanismInfo {
 ///
 /// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Prepared {
+pub(crate) struct Prepared {
     /// The case reference (name and sha256 recorded in summary.json).
     pub case: Case,
     /// What is integrated.
@@ -245,13 +245,13 @@ fn scene_error(case: &Case, error: lash_model::SceneError) -> Error {
 impl Prepared {
     /// Loads a case reference (a scene path or `testset:NAME`), relative paths taken from
     /// `base_dir` or the working directory.
-    pub fn load_spec(spec: &str, base_dir: Option<&Path>) -> Result<Prepared, Error> {
+    pub(crate) fn load_spec(spec: &str, base_dir: Option<&Path>) -> Result<Prepared, Error> {
         Prepared::load(Case::load(spec, base_dir)?)
     }
 
     /// Checks the case: parses and validates the scene and assembles its mechanism once
     /// (scene errors are input errors, exit code 2).
-    pub fn load(case: Case) -> Result<Prepared, Error> {
+    pub(crate) fn load(case: Case) -> Result<Prepared, Error> {
         match &case.source {
             CaseSource::BuiltIn(name) => {
                 let name = testset::NAMES
@@ -282,7 +282,7 @@ impl Prepared {
 
     /// A case whose scene was built or modified in code (a sweep point), recorded under the
     /// base case's name and hash.
-    pub fn with_scene(case: Case, scene: Scene) -> Result<Prepared, Error> {
+    pub(crate) fn with_scene(case: Case, scene: Scene) -> Result<Prepared, Error> {
         let mech = Mechanism::from_scene(&scene).map_err(|e| scene_error(&case, e))?;
         let info = mechanism_info(&scene, &mech);
         Ok(Prepared {
@@ -293,7 +293,7 @@ impl Prepared {
     }
 
     /// The scene, for mechanism cases.
-    pub fn scene(&self) -> Option<&Scene> {
+    pub(crate) fn scene(&self) -> Option<&Scene> {
         match &self.model {
             Model::Mechanism(s) => Some(s),
             Model::TestSet(_) => None,
@@ -301,7 +301,7 @@ impl Prepared {
     }
 
     /// The test problem, for built-in cases.
-    pub fn test_problem(&self) -> Option<testset::TestProblem> {
+    pub(crate) fn test_problem(&self) -> Option<testset::TestProblem> {
         match self.model {
             Model::TestSet(n) => testset::by_name(n),
             Model::Mechanism(_) => None,
@@ -309,7 +309,7 @@ impl Prepared {
     }
 
     /// State dimension.
-    pub fn dim(&self) -> usize {
+    pub(crate) fn dim(&self) -> usize {
         match (&self.info, self.test_problem()) {
             (Some(i), _) => i.dim,
             (None, Some(p)) => p.y0.len(),
@@ -319,7 +319,7 @@ impl Prepared {
 
     /// Names of the state components (`<body>.x`, … for a scene; `y0`, `y1`, … for a test
     /// problem).
-    pub fn state_names(&self) -> Vec<String> {
+    pub(crate) fn state_names(&self) -> Vec<String> {
         match &self.info {
             Some(i) => i.state_names.clone(),
             None => (0..self.dim()).map(|i| format!("y{i}")).collect(),
@@ -327,7 +327,7 @@ impl Prepared {
     }
 
     /// The time span of a run, with an optional end-time override (mechanisms only).
-    pub fn t_span(&self, t_end: Option<f64>) -> Result<(f64, f64), Error> {
+    pub(crate) fn t_span(&self, t_end: Option<f64>) -> Result<(f64, f64), Error> {
         match (&self.info, self.test_problem()) {
             (Some(i), _) => {
                 let te = t_end.unwrap_or(i.t_end);
@@ -361,7 +361,7 @@ impl Prepared {
     }
 
     /// The default absolute tolerance for relative tolerance `rtol` (module doc).
-    pub fn default_atol(&self, rtol: f64) -> Atol {
+    pub(crate) fn default_atol(&self, rtol: f64) -> Atol {
         match (&self.info, self.test_problem()) {
             (Some(i), _) => {
                 let l = i.clearance_min.unwrap_or(DEFAULT_LENGTH_SCALE);
@@ -379,7 +379,7 @@ impl Prepared {
     }
 
     /// The default options of this case (module doc).
-    pub fn default_options(&self) -> SolverOptions {
+    pub(crate) fn default_options(&self) -> SolverOptions {
         match &self.info {
             Some(i) => {
                 let mut o = SolverOptions::with_method(DEFAULT_METHOD);
@@ -407,7 +407,7 @@ impl Prepared {
     /// The case's defaults with the solver choice laid over them: atol follows rtol unless
     /// the choice gives atol; a fixed-step method runs without event location, an adaptive
     /// one with it. Inconsistent options (an atol array of the wrong length) are usage errors.
-    pub fn options(&self, choice: &SolverChoice) -> Result<SolverOptions, Error> {
+    pub(crate) fn options(&self, choice: &SolverChoice) -> Result<SolverOptions, Error> {
         let base = self.default_options();
         let mut o = choice.apply(&base)?;
         self.finish_options(&mut o, choice.atol.is_some())?;
@@ -416,7 +416,7 @@ impl Prepared {
 
     /// Options for `method` at tolerance `rtol` (adaptive) or step `step` (fixed-step), the
     /// rest as the defaults: what compare and work-precision run.
-    pub fn options_for(
+    pub(crate) fn options_for(
         &self,
         method: Method,
         rtol: Option<f64>,
@@ -447,13 +447,13 @@ impl Prepared {
     }
 
     /// The crank period, if the scene has a crank driver.
-    pub fn period(&self) -> Option<f64> {
+    pub(crate) fn period(&self) -> Option<f64> {
         self.info.as_ref().and_then(|i| i.period)
     }
 
     /// The metrics window of a run ending at `t_end`: the last revolution, or the whole run
     /// when it is shorter or there is no crank driver.
-    pub fn metrics_window(&self, t_start: f64, t_end: f64) -> Window {
+    pub(crate) fn metrics_window(&self, t_start: f64, t_end: f64) -> Window {
         let span = t_end - t_start;
         let period = self.period().map_or(span, |t| t.min(span));
         Window { t_end, period }
@@ -516,15 +516,15 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
 /// Longest trajectory a run writes, rows: beyond it a run is refused (exit 2) and asks to be
 /// thinned. At the press's 47 columns a row is about 1 KB of CSV, so this is about 100 GB, a
 /// file no script reads whole.
-pub const MAX_TRAJECTORY_ROWS: u64 = 100_000_000;
+pub(crate) const MAX_TRAJECTORY_ROWS: u64 = 100_000_000;
 
 /// The steps the f64 time axis must resolve: 16 ε |t| (the smallest step the solvers take at
 /// time t, `lash_solver` step floor) must stay below this fraction of the shortest time the
 /// run must resolve (module doc, "Checks before a run").
-pub const TIME_RESOLUTION: f64 = 1e-3;
+pub(crate) const TIME_RESOLUTION: f64 = 1e-3;
 
 /// Default trajectory rows per crank revolution.
-pub const SAMPLES_PER_REVOLUTION: usize = 2000;
+pub(crate) const SAMPLES_PER_REVOLUTION: usize = 2000;
 
 /// What to run and what to record.
 ///
@@ -538,7 +538,7 @@ pub const SAMPLES_PER_REVOLUTION: usize = 2000;
 ///
 /// Source: docs/outputs.md (`trajectory.csv`, `metrics`, `energy`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct RunRequest {
+pub(crate) struct RunRequest {
     /// Solver options (from [`Prepared::options`]). Their `max_wall_time` counts from the
     /// start of the integration unless `deadline` is given.
     pub opts: SolverOptions,
@@ -568,7 +568,7 @@ pub struct RunRequest {
 impl RunRequest {
     /// A request with these options and the defaults: the scene's end time, the default
     /// trajectory grid, no extra times, energy on, every event kept, no deadline.
-    pub fn new(opts: SolverOptions) -> RunRequest {
+    pub(crate) fn new(opts: SolverOptions) -> RunRequest {
         RunRequest {
             opts,
             t_end: None,
@@ -597,35 +597,30 @@ pub struct RunResult {
     /// problems).
     pub summary: Summary,
     /// Samples on the 2001-point metrics grid (empty for test problems).
-    pub window: Vec<Sample>,
-    /// The trajectory's rows ([`simulate`]); empty when they went to a sink
-    /// ([`simulate_into`]).
+    pub(crate) window: Vec<Sample>,
+    /// The trajectory's rows (`simulate`); empty when they went to a sink
+    /// (`simulate_into`).
     pub trajectory: Columns,
     /// Rows of the trajectory, wherever they went.
     pub trajectory_rows: usize,
     /// Samples at the extra times.
-    pub extra: Vec<Sample>,
+    pub(crate) extra: Vec<Sample>,
     /// States at the extra times.
-    pub extra_states: Solution,
+    pub(crate) extra_states: Solution,
     /// Events: located ones, or crossings at the step ends of a run without location (all of
-    /// them, or those of the metrics window: [`RunRequest::keep_events`]).
+    /// them, or those of the metrics window: `RunRequest::keep_events`).
     pub events: Vec<EventRecord>,
-    /// Energy totals over the whole run (mechanisms with `energy`).
-    pub energy: Option<EnergyTotals>,
+    /// Each event function's kind and element, by [`EventRecord::index`]
+    /// (`MechanismInfo::event_names`; empty for a test problem).
+    pub event_names: Vec<(&'static str, String)>,
     /// The closed-form ideal slider-crank of the scene, if it is one.
-    pub ideal: Option<IdealSliderCrank>,
-    /// The metrics window.
-    pub metrics_window: Option<Window>,
-    /// Power evaluations spent on the energy quadrature.
-    pub energy_evals: usize,
-    /// Output evaluations spent on the extrema over the dense output, and their searches.
-    pub peak_evals: (usize, usize),
+    pub(crate) ideal: Option<IdealSliderCrank>,
 }
 
 impl RunResult {
     /// Writes the figures, trajectory.csv (from the collected rows; none when they went to a
     /// sink) and summary.json into `dir` (report::write_run: summary last).
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         let traj = (self.trajectory.header().is_some()).then_some(&self.trajectory);
         report::write_run(
             dir,
@@ -640,7 +635,7 @@ impl RunResult {
 }
 
 /// Uniform grid of `n ≥ 2` points over [a, b], both ends exact.
-pub fn uniform_grid(a: f64, b: f64, n: usize) -> Vec<f64> {
+pub(crate) fn uniform_grid(a: f64, b: f64, n: usize) -> Vec<f64> {
     let g = Grid::uniform(a, b, n.max(2));
     (0..g.n).map(|i| g.time(i)).collect()
 }
@@ -686,7 +681,7 @@ impl Grid {
 
 /// Runs a case, keeping the trajectory's rows in memory ([`RunResult::trajectory`]). Solver
 /// failures are `Error::Solver` (exit 3); nothing is written.
-pub fn simulate(p: &Prepared, req: &RunRequest) -> Result<RunResult, Error> {
+pub(crate) fn simulate(p: &Prepared, req: &RunRequest) -> Result<RunResult, Error> {
     let mut rows = Columns::new();
     let mut r = simulate_into(p, req, &mut rows)?;
     r.trajectory = rows;
@@ -696,7 +691,7 @@ pub fn simulate(p: &Prepared, req: &RunRequest) -> Result<RunResult, Error> {
 /// Runs a case, pushing the trajectory's rows into `sink` as the run goes (module doc);
 /// memory does not grow with the run's length unless the sink keeps the rows. On a solver
 /// failure (`Error::Solver`, exit 3) the sink holds the rows up to it, and has been finished.
-pub fn simulate_into(
+pub(crate) fn simulate_into(
     p: &Prepared,
     req: &RunRequest,
     sink: &mut dyn TrajectorySink,
@@ -1147,18 +1142,15 @@ fn simulate_testset(
         extra: Vec::new(),
         extra_states,
         events: Vec::new(),
-        energy: None,
+        event_names: Vec::new(),
         ideal: None,
-        metrics_window: None,
-        energy_evals: 0,
-        peak_evals: (0, 0),
     })
 }
 
 /// The role-based view of one mechanism evaluation: maps `Mechanism::outputs` to a metrics
 /// [`Sample`] through the scene's roles (slider, crank driver, clearance joint), with the ideal
 /// closed-form slider acceleration beside. Used by every command that samples a run.
-pub struct Sampler<'a> {
+pub(crate) struct Sampler<'a> {
     mech: &'a Mechanism,
     ideal: Option<IdealSliderCrank>,
     clearance_index: Option<usize>,
@@ -1167,7 +1159,7 @@ pub struct Sampler<'a> {
 
 impl<'a> Sampler<'a> {
     /// The sampler of `mech`, built from `scene` (the scene the mechanism was made from).
-    pub fn new(mech: &'a Mechanism, scene: &Scene) -> Sampler<'a> {
+    pub(crate) fn new(mech: &'a Mechanism, scene: &Scene) -> Sampler<'a> {
         let roles = mech.roles();
         let driver_pos = roles.crank_driver.map(|j| {
             scene.joints[..j]
@@ -1184,12 +1176,12 @@ impl<'a> Sampler<'a> {
     }
 
     /// One sample at (t, y).
-    pub fn sample(&self, t: f64, y: &[f64]) -> Sample {
+    pub(crate) fn sample(&self, t: f64, y: &[f64]) -> Sample {
         self.of_outputs(t, &self.mech.outputs(t, y))
     }
 
     /// The sample of one evaluation `o` at time t.
-    pub fn of_outputs(&self, t: f64, o: &Outputs) -> Sample {
+    pub(crate) fn of_outputs(&self, t: f64, o: &Outputs) -> Sample {
         let c = self.clearance_index.and_then(|k| o.clearance.get(k));
         let ideal_a = match (&self.ideal, o.crank_angle, o.slider_a) {
             (Some(i), Some(phi), Some(_)) => Some(i.a_at(i.theta_of_crank_angle(phi))),
@@ -1217,7 +1209,7 @@ impl<'a> Sampler<'a> {
     }
 
     /// Which fixed trajectory columns ([`crate::report::trajectory::COLUMNS`]) this mechanism fills.
-    pub fn fixed_present(&self) -> [bool; 13] {
+    pub(crate) fn fixed_present(&self) -> [bool; 13] {
         let roles = self.mech.roles();
         let (crank, slider, joint) = (
             roles.crank_body.is_some(),
@@ -1579,7 +1571,6 @@ fn simulate_mechanism(
         }
         None => None,
     };
-    let energy_evals = obs.quad.as_ref().map_or(0, |q| q.evals);
     let metrics = metrics::compute(
         &obs.window,
         window,
@@ -1598,11 +1589,8 @@ fn simulate_mechanism(
         extra: std::mem::take(&mut obs.extra),
         extra_states,
         events: std::mem::take(&mut obs.events),
-        energy,
+        event_names: info.event_names.clone(),
         ideal: obs.sampler.ideal,
-        metrics_window: Some(window),
-        energy_evals,
-        peak_evals: (obs.peaks.evals, obs.peaks.refinements),
     })
 }
 
@@ -1623,7 +1611,7 @@ fn simulate_mechanism(
 /// Source: Boole's rule and Richardson extrapolation of Simpson's rule (Davis & Rabinowitz,
 /// Methods of Numerical Integration, §2.2, §6.3).
 #[derive(Clone, Debug)]
-pub struct Quadrature {
+pub(crate) struct Quadrature {
     fixed: bool,
     max_panel: f64,
     group: Vec<(f64, [f64; 4])>,
@@ -1638,7 +1626,7 @@ pub struct Quadrature {
 impl Quadrature {
     /// Starts at (t0, P(t0)); `fixed` groups equal steps; a step longer than `max_panel`
     /// (> 0, may be ∞) is split into panels no longer than it.
-    pub fn new(fixed: bool, max_panel: f64, t0: f64, p0: [f64; 4]) -> Quadrature {
+    pub(crate) fn new(fixed: bool, max_panel: f64, t0: f64, p0: [f64; 4]) -> Quadrature {
         Quadrature {
             fixed,
             max_panel,
@@ -1658,7 +1646,7 @@ impl Quadrature {
 
     /// Adds the accepted step [ta, tb]; `cut` when it ended at an event; `node(t)` evaluates
     /// the power on the step's dense output.
-    pub fn step(
+    pub(crate) fn step(
         &mut self,
         ta: f64,
         tb: f64,
@@ -1759,7 +1747,7 @@ impl Quadrature {
     }
 
     /// Integrates what is left at the end of the run.
-    pub fn finish(&mut self) {
+    pub(crate) fn finish(&mut self) {
         self.flush();
     }
 }

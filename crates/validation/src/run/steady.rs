@@ -50,7 +50,8 @@ pub struct UntilPeriodic {
 
 impl UntilPeriodic {
     /// `tol` with the default cap.
-    pub fn new(tol: f64) -> UntilPeriodic {
+    #[cfg(test)]
+    pub(crate) fn new(tol: f64) -> UntilPeriodic {
         UntilPeriodic {
             tol,
             max_revolutions: DEFAULT_MAX_REVOLUTIONS,
@@ -58,7 +59,7 @@ impl UntilPeriodic {
     }
 
     /// Usage errors: tol not finite and > 0, a cap below [`MIN_REVOLUTIONS`].
-    pub fn validate(&self) -> Result<(), Error> {
+    pub(crate) fn validate(&self) -> Result<(), Error> {
         if !(self.tol.is_finite() && self.tol > 0.0) {
             return Err(Error::Usage(format!(
                 "--until-periodic must be a finite number > 0 (units of the clearance), got {}",
@@ -98,12 +99,12 @@ pub struct Settled {
 
 impl Settled {
     /// d_K, the change in the last revolution.
-    pub fn last_change(&self) -> f64 {
+    pub(crate) fn last_change(&self) -> f64 {
         self.section_changes.last().copied().unwrap_or(f64::NAN)
     }
 
     /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         if self.settled {
             format!(
                 "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
@@ -128,7 +129,11 @@ impl Settled {
 /// The settling pass (module doc): integrates `p` with `opts` revolution by revolution from
 /// its start until the section settles or the cap. Errors: a case without a crank driver or a
 /// clearance joint ([`Error::Usage`]), a bad request, solver failures.
-pub fn settle(p: &Prepared, opts: &SolverOptions, until: &UntilPeriodic) -> Result<Settled, Error> {
+pub(crate) fn settle(
+    p: &Prepared,
+    opts: &SolverOptions,
+    until: &UntilPeriodic,
+) -> Result<Settled, Error> {
     until.validate()?;
     let (info, scene) = match (&p.info, &p.model) {
         (Some(i), Model::Mechanism(s)) => (i, s),

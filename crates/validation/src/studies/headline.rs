@@ -33,7 +33,7 @@ use lash_solver::Method;
 use crate::compare::reference::{self as compare, Compared, ErrorNorms, ErrorWindow, Reference};
 use crate::compare::workprecision::fmt_num;
 use crate::error::Error;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::Progress;
 use crate::report::metrics::{Metrics, Sample};
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
 use crate::run::simulate::{Prepared, RunResult};
@@ -47,7 +47,7 @@ use crate::store::io::{self, OutDir, Written};
 ///
 /// Source: module doc (steps: crates/model/tests/press_cases.rs).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HeadlineCase {
+pub(crate) struct HeadlineCase {
     /// File stem in `cases/press/`.
     pub stem: &'static str,
     /// Short label.
@@ -59,7 +59,7 @@ pub struct HeadlineCase {
 }
 
 /// The three cases.
-pub const CASES: [HeadlineCase; 3] = [
+pub(crate) const CASES: [HeadlineCase; 3] = [
     HeadlineCase {
         stem: "ideal_150rpm",
         label: "ideal",
@@ -81,12 +81,13 @@ pub const CASES: [HeadlineCase; 3] = [
 ];
 
 /// Tolerances tried, loosest first, to match RK4's accuracy.
-pub const MATCH_TOLERANCES: [f64; 9] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11];
+pub(crate) const MATCH_TOLERANCES: [f64; 9] =
+    [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11];
 
 /// The workspace root: the working directory if it holds `cases/press`, else the source tree
 /// this binary was built from (two levels above the validation crate), else the working
 /// directory.
-pub fn workspace_root() -> PathBuf {
+pub(crate) fn workspace_root() -> PathBuf {
     let cwd = PathBuf::from(".");
     if cwd.join("cases/press").is_dir() {
         return cwd;
@@ -376,17 +377,11 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
     Ok(out)
 }
 
-/// Runs the default comparison and writes `out` (default `validation/reports/default` under
-/// the workspace root); reports nothing. See [`run_with_progress`].
-pub fn run(out: Option<PathBuf>) -> Result<Headline, Error> {
-    run_with_progress(out, &NoProgress).map(|w| w.result)
-}
-
 /// Runs the default comparison, noting each case as it starts (`running STEM …`), and writes
 /// `out` (default `validation/reports/default` under the workspace root): README.md (the
 /// table, [`Headline::to_markdown`]), default.json, the figures and per case the reference
 /// run's files. Returns the table, the directory and the files written.
-pub fn run_with_progress(
+pub(crate) fn run_with_progress(
     out: Option<PathBuf>,
     progress: &dyn Progress,
 ) -> Result<Written<Headline>, Error> {
@@ -437,15 +432,4 @@ fn default_run_file(name: &str, is_dir: bool) -> bool {
         || ["slider_acceleration", "orbits"]
             .iter()
             .any(|f| name == format!("{f}.svg") || name == format!("{f}.png"))
-}
-
-/// The comparison table of [`Headline::to_markdown`] (its first table: header, rule and one
-/// row per run), the one README.md shows.
-pub fn comparison_table(markdown: &str) -> Vec<String> {
-    markdown
-        .lines()
-        .skip_while(|l| !l.starts_with("| case | method |"))
-        .take_while(|l| l.starts_with('|'))
-        .map(str::to_string)
-        .collect()
 }

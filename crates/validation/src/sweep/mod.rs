@@ -41,13 +41,13 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::error::Error;
-use crate::progress::{self, NoProgress, Progress};
+use crate::progress::{self, Progress};
 use crate::run::case::{sha256_hex, Case};
 use crate::store::claim;
 use crate::store::io;
 
 /// Name of the result file of a point.
-pub const RESULT_FILE: &str = "result.json";
+pub(crate) const RESULT_FILE: &str = "result.json";
 
 /// A slice of a grid for one machine of a job array.
 ///
@@ -66,10 +66,10 @@ pub struct Shard {
 
 impl Shard {
     /// The whole grid (0/1).
-    pub const ALL: Shard = Shard { index: 0, count: 1 };
+    pub(crate) const ALL: Shard = Shard { index: 0, count: 1 };
 
     /// Whether the point with this index belongs to the shard.
-    pub fn contains(&self, point_index: usize) -> bool {
+    pub(crate) fn contains(&self, point_index: usize) -> bool {
         point_index % self.count == self.index
     }
 }
@@ -103,7 +103,7 @@ impl fmt::Display for Shard {
 /// Source: docs/outputs.md ("Sweeps": the sweep file).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SweepFile {
+pub(crate) struct SweepFile {
     /// The base case: a scene file (relative to the sweep file) or `testset:NAME`.
     pub case: String,
     /// Crank speeds, rpm; each > 0.
@@ -190,19 +190,19 @@ const PARAM_COLUMNS: [&str; 10] = [
 impl PointParams {
     /// The canonical JSON text: keys sorted at every level, no whitespace, absent parameters
     /// left out, numbers in serde_json's shortest round-trip form.
-    pub fn canonical_json(&self) -> String {
+    pub(crate) fn canonical_json(&self) -> String {
         let v = serde_json::to_value(self).unwrap_or(Value::Null);
         canonical(&v)
     }
 
     /// The stable id: the first 16 hex digits of sha256 of [`PointParams::canonical_json`].
-    pub fn id(&self) -> String {
+    pub(crate) fn id(&self) -> String {
         sha256_hex(self.canonical_json().as_bytes())[..16].to_string()
     }
 }
 
 /// Serialises a JSON value with object keys sorted at every level.
-pub fn canonical(v: &Value) -> String {
+pub(crate) fn canonical(v: &Value) -> String {
     match v {
         Value::Object(m) => {
             let mut keys: Vec<&String> = m.keys().collect();
@@ -246,7 +246,7 @@ pub struct SweepPoint {
 ///
 /// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug)]
-pub struct SweepSpec {
+pub(crate) struct SweepSpec {
     /// The parsed file.
     pub file: SweepFile,
     /// The base case.
@@ -255,7 +255,7 @@ pub struct SweepSpec {
 
 impl SweepSpec {
     /// Reads and checks a sweep file; the base case is resolved relative to its directory.
-    pub fn load(path: &Path) -> Result<SweepSpec, Error> {
+    pub(crate) fn load(path: &Path) -> Result<SweepSpec, Error> {
         if !path.is_file() {
             return Err(Error::Input(format!(
                 "sweep file {} not found",
@@ -270,14 +270,14 @@ impl SweepSpec {
     }
 
     /// Checks a parsed sweep file, resolving the base case relative to `base_dir`.
-    pub fn new(file: SweepFile, base_dir: Option<&Path>) -> Result<SweepSpec, Error> {
+    pub(crate) fn new(file: SweepFile, base_dir: Option<&Path>) -> Result<SweepSpec, Error> {
         check_file(&file)?;
         let case = Case::load(&file.case, base_dir)?;
         Ok(SweepSpec { file, case })
     }
 
     /// The grid, in its fixed order (see the module doc).
-    pub fn points(&self) -> Result<Vec<SweepPoint>, Error> {
+    pub(crate) fn points(&self) -> Result<Vec<SweepPoint>, Error> {
         let f = &self.file;
         let opt = |l: &Option<Vec<f64>>| -> Vec<Option<f64>> {
             match l {
@@ -474,7 +474,7 @@ fn check_file(f: &SweepFile) -> Result<(), Error> {
 /// A parameter the scene cannot take (no crank driver, no clearance joint, no film) is an
 /// input error; the scene is validated again when the point's mechanism is built.
 /// Source: docs/outputs.md ("Scene roles"), docs/scene-format.md.
-pub fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
+pub(crate) fn apply_params(scene: &mut Scene, p: &PointParams) -> Result<(), Error> {
     let bad = |m: &str| Err(Error::Input(format!("sweep: {m}")));
     if let Some(rpm) = p.speed_rpm {
         let Some(name) = scene.roles.crank_driver.clone() else {
@@ -593,7 +593,7 @@ fn flatten_into(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
 /// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum PointStatus {
+pub(crate) enum PointStatus {
     /// The runner returned results.
     Ok,
     /// The solver failed: a result too (a method that cannot do the point), not rerun.
@@ -608,7 +608,7 @@ pub enum PointStatus {
 ///
 /// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PointRecord {
+pub(crate) struct PointRecord {
     /// The point's id (its directory name).
     pub id: String,
     /// Its index in the grid.
@@ -631,7 +631,7 @@ pub struct PointRecord {
 ///
 /// Source: docs/outputs.md ("Sweeps": `--jobs`, `--shard`).
 #[derive(Clone, Debug)]
-pub struct SweepOptions {
+pub(crate) struct SweepOptions {
     /// Worker threads; None = one per core.
     pub jobs: Option<usize>,
     /// Which points.
@@ -647,7 +647,7 @@ impl Default for SweepOptions {
     }
 }
 
-/// What [`run_sweep`] did.
+/// What `run_sweep` did.
 ///
 /// ```text
 /// selected = skipped + ok + solver_failed + |failed| + |busy| + abandoned
@@ -678,7 +678,7 @@ pub struct SweepReport {
 impl SweepReport {
     /// Ok if no point failed unrecorded and no stop was requested; else the first failure's
     /// error kind with a message that counts them, or [`Error::Interrupted`] with the counts.
-    pub fn into_result(mut self) -> Result<SweepReport, Error> {
+    pub(crate) fn into_result(mut self) -> Result<SweepReport, Error> {
         if self.abandoned > 0 {
             let done = self.skipped + self.ok + self.solver_failed;
             return Err(Error::Interrupted(format!(
@@ -717,7 +717,7 @@ impl SweepReport {
 ///
 /// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq)]
-pub enum PointState {
+pub(crate) enum PointState {
     /// result.json names this point.
     Finished(Box<PointRecord>),
     /// No result.json.
@@ -727,7 +727,7 @@ pub enum PointState {
 }
 
 /// The state of the point with id `id` in `dir` (its directory).
-pub fn point_state(dir: &Path, id: &str) -> PointState {
+pub(crate) fn point_state(dir: &Path, id: &str) -> PointState {
     let p = dir.join(RESULT_FILE);
     let bytes = match std::fs::read(&p) {
         Ok(b) => b,
@@ -745,17 +745,9 @@ pub fn point_state(dir: &Path, id: &str) -> PointState {
     }
 }
 
-/// Whether the point's result file exists, parses and names this point.
-pub fn is_finished(root: &Path, point: &SweepPoint) -> bool {
-    matches!(
-        point_state(&root.join(&point.id), &point.id),
-        PointState::Finished(_)
-    )
-}
-
 /// Name of the grid's manifest in a sweep's output directory: every point (index, id,
 /// parameters), so that `merge` can name the points that have not finished.
-pub const MANIFEST_FILE: &str = "points.json";
+pub(crate) const MANIFEST_FILE: &str = "points.json";
 
 /// The content of OUT/points.json.
 ///
@@ -765,7 +757,7 @@ pub const MANIFEST_FILE: &str = "points.json";
 ///
 /// Source: docs/outputs.md ("Sweeps").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Manifest {
+pub(crate) struct Manifest {
     /// The grid's points.
     pub points: Vec<ManifestPoint>,
 }
@@ -774,7 +766,7 @@ pub struct Manifest {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ManifestPoint {
+pub(crate) struct ManifestPoint {
     /// Index in the grid.
     pub index: usize,
     /// Id (directory name).
@@ -786,22 +778,9 @@ pub struct ManifestPoint {
 /// Runs the points of `opts.shard` that have not finished, in parallel, each in its own
 /// directory `root/id` (created before `runner` is called and passed to it). A finished
 /// point's `result.json` is written atomically; a solver failure is recorded as finished; any
-/// other runner error leaves the point unfinished for a rerun. No progress reports (see
-/// [`run_sweep_with_progress`]).
-pub fn run_sweep<F>(
-    points: &[SweepPoint],
-    root: &Path,
-    opts: &SweepOptions,
-    runner: F,
-) -> Result<SweepReport, Error>
-where
-    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
-{
-    run_sweep_with_progress(points, root, opts, runner, &NoProgress)
-}
-
-/// [`run_sweep`], reporting to `progress`: `started` with the number of points to run, then
-/// `finished` (the point and its wall time) as each point ends, whatever its outcome.
+/// other runner error leaves the point unfinished for a rerun. `progress` gets `started` with
+/// the number of points to run, then `finished` (the point and its wall time) as each point
+/// ends, whatever its outcome.
 ///
 /// ```text
 /// root/points.json  the grid (atomically, every run)
@@ -812,7 +791,7 @@ where
 /// a stop requested while a point runs: the point's partial files are removed, its claim
 ///             released; the report counts it as abandoned
 /// ```
-pub fn run_sweep_with_progress<F>(
+pub(crate) fn run_sweep<F>(
     points: &[SweepPoint],
     root: &Path,
     opts: &SweepOptions,
@@ -1077,7 +1056,7 @@ pub struct MergedTable {
 /// subdirectories are points, or one point directory) and joins them. The points of the
 /// directories' manifests ([`MANIFEST_FILE`]) that have no result anywhere are listed as
 /// unfinished; result files that do not parse, or name another point, as corrupt.
-pub fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
+pub(crate) fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
     let mut records: BTreeMap<String, PointRecord> = BTreeMap::new();
     let mut expected: BTreeMap<String, ManifestPoint> = BTreeMap::new();
     let mut claims: BTreeMap<String, String> = BTreeMap::new();
@@ -1212,7 +1191,7 @@ impl MergedTable {
     /// The table with a row for every unfinished and corrupt point (status `unfinished` or
     /// `corrupt`, the reason in `error`, the parameters where a manifest knows them, no
     /// values), after the finished rows.
-    pub fn with_missing(mut self) -> MergedTable {
+    pub(crate) fn with_missing(mut self) -> MergedTable {
         let col = |n: &str| self.columns.iter().position(|c| c == n);
         let (st, er) = (col("status"), col("error"));
         let params: Vec<(usize, &str)> = PARAM_COLUMNS
@@ -1290,7 +1269,7 @@ fn cell(v: Option<&Value>) -> String {
 
 impl MergedTable {
     /// The table as CSV (RFC 4180 quoting).
-    pub fn to_csv(&self) -> String {
+    pub(crate) fn to_csv(&self) -> String {
         let q = |s: &str| {
             if s.contains([',', '"', '\n', '\r']) {
                 format!("\"{}\"", s.replace('"', "\"\""))
@@ -1308,7 +1287,7 @@ impl MergedTable {
     }
 
     /// The table as a GitHub-flavoured markdown table (`|` escaped).
-    pub fn to_markdown(&self) -> String {
+    pub(crate) fn to_markdown(&self) -> String {
         let esc = |s: &str| s.replace('|', "\\|").replace('\n', " ");
         let line = |r: &[String]| {
             let cells: Vec<String> = r.iter().map(|c| esc(c)).collect();
@@ -1324,7 +1303,7 @@ impl MergedTable {
 
     /// Writes `merged.csv` and `merged.md` atomically into `dir` (created if needed); returns
     /// their paths.
-    pub fn write(&self, dir: &Path) -> Result<(PathBuf, PathBuf), Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<(PathBuf, PathBuf), Error> {
         io::create_dir(dir)?;
         let csv = dir.join("merged.csv");
         let md = dir.join("merged.md");
@@ -1337,6 +1316,7 @@ impl MergedTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::progress::NoProgress;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     fn spec(dir: &Path, json: &str) -> Result<SweepSpec, Error> {
@@ -1484,7 +1464,14 @@ mod tests {
                 jobs: Some(2),
                 shard: Shard { index: i, count: 3 },
             };
-            let r = run_sweep(&pts, &root, &opts, |p, dir| fake(p, dir, &calls)).unwrap();
+            let r = run_sweep(
+                &pts,
+                &root,
+                &opts,
+                |p, dir| fake(p, dir, &calls),
+                &NoProgress,
+            )
+            .unwrap();
             let expect = (0..16).filter(|k| k % 3 == i).count();
             assert_eq!((r.selected, r.ok, r.skipped), (expect, expect, 0));
             roots.push(root);
@@ -1538,13 +1525,19 @@ mod tests {
             jobs: Some(1),
             ..Default::default()
         };
-        let r = run_sweep(&pts, &root, &opts, |p, dir| {
-            if calls.fetch_add(1, Ordering::SeqCst) >= k {
-                Err(Error::Internal("killed".into()))
-            } else {
-                fake(p, dir, &AtomicUsize::new(0))
-            }
-        })
+        let r = run_sweep(
+            &pts,
+            &root,
+            &opts,
+            |p, dir| {
+                if calls.fetch_add(1, Ordering::SeqCst) >= k {
+                    Err(Error::Internal("killed".into()))
+                } else {
+                    fake(p, dir, &AtomicUsize::new(0))
+                }
+            },
+            &NoProgress,
+        )
         .unwrap();
         assert_eq!((r.ok, r.failed.len()), (k, 16 - k));
         let t = merge(std::slice::from_ref(&root)).unwrap();
@@ -1562,7 +1555,14 @@ mod tests {
             jobs: Some(2),
             ..Default::default()
         };
-        let r = run_sweep(&pts, &root, &opts, |p, dir| fake(p, dir, &calls2)).unwrap();
+        let r = run_sweep(
+            &pts,
+            &root,
+            &opts,
+            |p, dir| fake(p, dir, &calls2),
+            &NoProgress,
+        )
+        .unwrap();
         assert_eq!((r.skipped, r.ok), (k, 16 - k));
         assert_eq!(calls2.load(Ordering::SeqCst), 16 - k);
         assert_eq!(merge(&[root]).unwrap().rows.len(), 16);
@@ -1583,9 +1583,9 @@ mod tests {
                 fake(p, dir, &AtomicUsize::new(0))
             }
         };
-        let r = run_sweep(&pts, &root, &SweepOptions::default(), runner).unwrap();
+        let r = run_sweep(&pts, &root, &SweepOptions::default(), runner, &NoProgress).unwrap();
         assert_eq!((r.ok, r.solver_failed), (12, 4));
-        let r = run_sweep(&pts, &root, &SweepOptions::default(), runner).unwrap();
+        let r = run_sweep(&pts, &root, &SweepOptions::default(), runner, &NoProgress).unwrap();
         assert_eq!((r.skipped, r.ok, r.solver_failed), (16, 0, 0));
         let t = merge(&[root]).unwrap();
         let st = t.columns.iter().position(|c| c == "status").unwrap();

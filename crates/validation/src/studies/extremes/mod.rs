@@ -78,26 +78,26 @@ use crate::store::cache::RunCache;
 use crate::store::io;
 
 /// Relative tolerances of the full matrix.
-pub const TOLERANCES: [f64; 6] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
+pub(crate) const TOLERANCES: [f64; 6] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
 /// Relative tolerances of the quick subset.
-pub const QUICK_TOLERANCES: [f64; 3] = [1e-3, 1e-6, 1e-9];
+pub(crate) const QUICK_TOLERANCES: [f64; 3] = [1e-3, 1e-6, 1e-9];
 /// Scenes of the quick subset: cheap corners (quick references) that still stress each
 /// family: hard contact, a film near ε = 1, a clearance 100 times smaller than the
 /// penetration.
-pub const QUICK_SCENES: [&str; 3] = [
+pub(crate) const QUICK_SCENES: [&str; 3] = [
     "dry_stiffness_1e14",
     "lubricated_eccentricity_0.999",
     "dry_clearance_1um",
 ];
 /// Budget of every run of the quick subset: the explicit methods on the film near ε = 1 are
 /// stability-bound and stop at the step budget.
-pub const QUICK_BUDGET: Budget = Budget {
+pub(crate) const QUICK_BUDGET: Budget = Budget {
     max_steps: 100_000,
     max_wall_time: 10.0,
 };
 /// The adaptive methods of the matrix, in the order of docs/outputs.md ("Method and controller
 /// names").
-pub const ADAPTIVE: [Method; 8] = [
+pub(crate) const ADAPTIVE: [Method; 8] = [
     Method::Bs32,
     Method::Dopri54,
     Method::Tsit54,
@@ -108,17 +108,17 @@ pub const ADAPTIVE: [Method; 8] = [
     Method::Rodas5p,
 ];
 /// Step budget of every matrix run (attempts).
-pub const MAX_STEPS: usize = 1_000_000;
+pub(crate) const MAX_STEPS: usize = 1_000_000;
 /// Wall-clock budget of every matrix run, s.
-pub const MAX_WALL_TIME: f64 = 20.0;
+pub(crate) const MAX_WALL_TIME: f64 = 20.0;
 /// The reference ladder of a dry scene: the first rtol at which both methods succeed.
-pub const REFERENCE_RTOLS_DRY: [f64; 4] = [1e-13, 1e-12, 1e-11, 1e-10];
+pub(crate) const REFERENCE_RTOLS_DRY: [f64; 4] = [1e-13, 1e-12, 1e-11, 1e-10];
 /// The reference ladder of a lubricated scene (module doc: why not 1e-13).
-pub const REFERENCE_RTOLS_LUBRICATED: [f64; 3] = [1e-12, 1e-11, 1e-10];
+pub(crate) const REFERENCE_RTOLS_LUBRICATED: [f64; 3] = [1e-12, 1e-11, 1e-10];
 /// Step budget of a reference run.
-pub const REFERENCE_MAX_STEPS: usize = 2_000_000;
+pub(crate) const REFERENCE_MAX_STEPS: usize = 2_000_000;
 /// Wall-clock budget of a reference run, s.
-pub const REFERENCE_MAX_WALL_TIME: f64 = 60.0;
+pub(crate) const REFERENCE_MAX_WALL_TIME: f64 = 60.0;
 
 /// The constant C of the promise e ≤ C · rtol^α + F · E_ref on a scene with a dry joint.
 ///
@@ -133,14 +133,14 @@ pub const REFERENCE_MAX_WALL_TIME: f64 = 60.0;
 /// global error of a dry scene lies decades further above rtol than that of a lubricated one.
 /// With this C the promise can fail for rtol ≤ 1e-7; at looser tolerances C·rtol exceeds any
 /// deviation the slider can have, and the check there is that the result is finite.
-pub const PROMISE_C_DRY: f64 = 2e5;
+pub(crate) const PROMISE_C_DRY: f64 = 2e5;
 /// The constant C of the promise on a scene whose clearance joints all have a film.
 ///
 /// ```text
 /// C_lub = 5e2
 /// ```
 /// Set by the rule of [`PROMISE_C_DRY`] (the largest measured value: BENCHMARKS.md, "Extremes").
-pub const PROMISE_C_LUBRICATED: f64 = 5e2;
+pub(crate) const PROMISE_C_LUBRICATED: f64 = 5e2;
 /// The constant C_rk4 of RK4's promise e(h) ≤ C_rk4 · e(h; h/2) + F · E_ref.
 ///
 /// ```text
@@ -150,7 +150,7 @@ pub const PROMISE_C_LUBRICATED: f64 = 5e2;
 /// event location on the non-smooth contact force does not converge at a clean order
 /// (BENCHMARKS.md (c)). Set by the rule of [`PROMISE_C_DRY`] (the largest measured value:
 /// BENCHMARKS.md, "Extremes").
-pub const PROMISE_C_RK4: f64 = 5.0;
+pub(crate) const PROMISE_C_RK4: f64 = 5.0;
 /// The factor F on the reference's error estimate E_ref in the promise: below E_ref an error
 /// cannot be told from the reference's own, so F = 1 is not fitted but the definition of the
 /// floor.
@@ -160,7 +160,7 @@ pub const PROMISE_C_RK4: f64 = 5.0;
 /// ```
 /// The runs whose error exceeds C·rtol^α exceed it by a small fraction of E_ref
 /// (BENCHMARKS.md, "Extremes").
-pub const PROMISE_F: f64 = 1.0;
+pub(crate) const PROMISE_F: f64 = 1.0;
 
 /// The exponent α of a method's tolerance proportionality (module doc).
 ///
@@ -168,7 +168,7 @@ pub const PROMISE_F: f64 = 1.0;
 /// bs32, dopri54, tsit54, dop853, rodas5p: 1;  trbdf2: 2/3;  esdirk34: 3/4;  bdf: 5/6
 /// ```
 /// Source: HNW I §II.4; diffsol's tableaus (TR-BDF2 order 2, ESDIRK3(4) order 3, BDF 1–5).
-pub fn alpha(m: Method) -> f64 {
+pub(crate) fn alpha(m: Method) -> f64 {
     match m {
         Method::Trbdf2 => 2.0 / 3.0,
         Method::Esdirk34 => 3.0 / 4.0,
@@ -208,7 +208,7 @@ impl ExtremeScene {
     }
 
     /// The case, as if loaded from `cases/extremes/STEM.json` (same name and hash).
-    pub fn prepared(&self) -> Result<Prepared, Error> {
+    pub(crate) fn prepared(&self) -> Result<Prepared, Error> {
         let text = self.json();
         let json = serde_json::from_str(&text)
             .map_err(|e| Error::Internal(format!("{}: {e}", self.stem)))?;
@@ -577,7 +577,7 @@ impl Default for Budget {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Plan {
+pub(crate) struct Plan {
     /// Scene stems, in catalogue order.
     pub scenes: Vec<String>,
     /// Relative tolerances of the adaptive methods.
@@ -590,7 +590,7 @@ pub struct Plan {
 
 impl Plan {
     /// The full matrix: every scene, [`TOLERANCES`].
-    pub fn full() -> Plan {
+    pub(crate) fn full() -> Plan {
         Plan {
             scenes: catalogue().iter().map(|s| s.stem.to_string()).collect(),
             tolerances: TOLERANCES.to_vec(),
@@ -600,7 +600,7 @@ impl Plan {
     }
 
     /// The quick subset: [`QUICK_SCENES`], [`QUICK_TOLERANCES`], [`QUICK_BUDGET`].
-    pub fn quick() -> Plan {
+    pub(crate) fn quick() -> Plan {
         Plan {
             scenes: QUICK_SCENES.iter().map(|s| s.to_string()).collect(),
             tolerances: QUICK_TOLERANCES.to_vec(),
@@ -641,7 +641,7 @@ pub enum Setting {
 
 impl Setting {
     /// The method.
-    pub fn method(&self) -> Method {
+    pub(crate) fn method(&self) -> Method {
         match self {
             Setting::Rk4Inside { .. } | Setting::Rk4Beyond { .. } => Method::Rk4,
             Setting::Adaptive { method, .. } => *method,
@@ -649,7 +649,7 @@ impl Setting {
     }
 
     /// The row label in the tables: `rk4`, `rk4 beyond`, or the method name.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self {
             Setting::Rk4Inside { .. } => "rk4".into(),
             Setting::Rk4Beyond { .. } => "rk4 beyond".into(),
@@ -687,7 +687,7 @@ pub enum FailureKind {
 
 impl FailureKind {
     /// Short name for the tables.
-    pub fn short(self) -> &'static str {
+    pub(crate) fn short(self) -> &'static str {
         match self {
             FailureKind::StepSizeTooSmall => "h-min",
             FailureKind::TooManySteps => "steps",
@@ -720,7 +720,7 @@ impl FailureKind {
 ///
 /// Source: module doc.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KnownFinding {
+pub(crate) struct KnownFinding {
     /// Scene stem.
     pub scene: &'static str,
     /// Method.
@@ -744,7 +744,7 @@ pub struct KnownFinding {
 /// converging at its nominal rate, dop853 because it is stability-bound and the passage
 /// amplifies the round-off of its many steps. The numbers: BENCHMARKS.md, "Extremes" → "What
 /// the matrix found".
-pub const KNOWN_FINDINGS: [KnownFinding; 2] = [
+pub(crate) const KNOWN_FINDINGS: [KnownFinding; 2] = [
     KnownFinding {
         scene: "lubricated_viscosity_10",
         method: Method::Rodas5p,
@@ -760,7 +760,7 @@ pub const KNOWN_FINDINGS: [KnownFinding; 2] = [
 ];
 
 /// The known finding that covers a run, if one does.
-pub fn known_finding(scene: &str, setting: &Setting) -> Option<&'static KnownFinding> {
+pub(crate) fn known_finding(scene: &str, setting: &Setting) -> Option<&'static KnownFinding> {
     let Setting::Adaptive { method, rtol } = *setting else {
         return None;
     };
@@ -788,7 +788,7 @@ pub enum Outcome {
         /// The promise.
         promise: f64,
     },
-    /// A result that breaks its promise, covered by [`KNOWN_FINDINGS`] (a finding, not a
+    /// A result that breaks its promise, covered by `KNOWN_FINDINGS` (a finding, not a
     /// failure).
     Known {
         /// e(run; ref).
@@ -835,7 +835,7 @@ impl Outcome {
     }
 
     /// Whether the outcome is a failure (neither allowed nor a known finding).
-    pub fn is_failure(&self) -> bool {
+    pub(crate) fn is_failure(&self) -> bool {
         !self.is_allowed() && !matches!(self, Outcome::Known { .. })
     }
 
@@ -935,7 +935,7 @@ pub struct SceneReport {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RowCount {
+pub(crate) struct RowCount {
     /// Row label (Setting::label).
     pub label: String,
     /// Runs.
@@ -962,27 +962,27 @@ pub struct RowCount {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Matrix {
     /// lash version.
-    pub version: String,
+    pub(crate) version: String,
     /// What ran.
-    pub plan: Plan,
+    pub(crate) plan: Plan,
     /// C of the promise on scenes with a dry joint.
-    pub promise_c_dry: f64,
+    pub(crate) promise_c_dry: f64,
     /// C of the promise on lubricated scenes.
-    pub promise_c_lubricated: f64,
+    pub(crate) promise_c_lubricated: f64,
     /// C_rk4 of RK4's promise.
-    pub promise_c_rk4: f64,
+    pub(crate) promise_c_rk4: f64,
     /// F of the reference floor.
-    pub promise_f: f64,
+    pub(crate) promise_f: f64,
     /// The scenes and their references.
-    pub scenes: Vec<SceneReport>,
+    pub(crate) scenes: Vec<SceneReport>,
     /// Every run.
-    pub cells: Vec<Cell>,
+    pub(crate) cells: Vec<Cell>,
     /// Counts per row.
-    pub counts: Vec<RowCount>,
+    pub(crate) counts: Vec<RowCount>,
     /// Runs whose outcome is a failure (not allowed, not a known finding).
-    pub failures: usize,
+    pub(crate) failures: usize,
     /// Wall time of the whole matrix, s.
-    pub wall_time_s: f64,
+    pub(crate) wall_time_s: f64,
 }
 
 /// The slider of a reference run on the error window: what the error of a run against it
@@ -994,7 +994,7 @@ pub struct Matrix {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ReferenceSlider {
+pub(crate) struct ReferenceSlider {
     /// Slider positions x*_k, m.
     pub x: Vec<f64>,
     /// Slider velocities v*_k, m/s.
@@ -1007,7 +1007,7 @@ pub struct ReferenceSlider {
 
 impl ReferenceSlider {
     /// The slider of `reference` (a run with samples on the window grid).
-    pub fn of(reference: &RunResult) -> Result<ReferenceSlider, Error> {
+    pub(crate) fn of(reference: &RunResult) -> Result<ReferenceSlider, Error> {
         let ideal = reference.ideal.ok_or_else(|| {
             Error::Internal("extremes: the scene is not a slider-crank with a closed form".into())
         })?;
@@ -1040,7 +1040,7 @@ impl ReferenceSlider {
     /// ```text
     /// e = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v )
     /// ```
-    pub fn error(&self, run: &RunResult) -> Result<f64, Error> {
+    pub(crate) fn error(&self, run: &RunResult) -> Result<f64, Error> {
         if run.extra.len() != self.x.len() || run.extra.is_empty() {
             return Err(Error::Internal(format!(
                 "extremes: {} samples against {} reference samples",
@@ -1077,7 +1077,7 @@ impl ReferenceSlider {
 /// e = max( max_k |x_k − x*_k| / s_x,  max_k |v_k − v*_k| / s_v ),  s_x = r,
 /// s_v = max(r ω, max_k |v*_k|)
 /// ```
-pub fn slider_error(run: &RunResult, reference: &RunResult) -> Result<f64, Error> {
+pub(crate) fn slider_error(run: &RunResult, reference: &RunResult) -> Result<f64, Error> {
     ReferenceSlider::of(reference)?.error(run)
 }
 
@@ -1175,20 +1175,20 @@ pub struct Ready {
     /// The catalogue entry.
     pub scene: ExtremeScene,
     /// The case.
-    pub prepared: Prepared,
+    pub(crate) prepared: Prepared,
     /// Window, reference and its agreement.
     pub report: SceneReport,
     /// The slider of the reference run (method A) on the window grid.
-    pub reference: ReferenceSlider,
+    pub(crate) reference: ReferenceSlider,
 }
 
 /// Whether a scene has a dry clearance joint (its promise uses [`PROMISE_C_DRY`]).
-pub fn is_dry(p: &Prepared) -> bool {
+pub(crate) fn is_dry(p: &Prepared) -> bool {
     p.info.as_ref().is_some_and(|i| i.has_dry_joint)
 }
 
 /// Reference methods and rtol ladder of a scene (module doc).
-pub fn reference_plan(p: &Prepared) -> (Method, Method, &'static [f64]) {
+pub(crate) fn reference_plan(p: &Prepared) -> (Method, Method, &'static [f64]) {
     if is_dry(p) {
         (Method::Rodas5p, Method::Dop853, &REFERENCE_RTOLS_DRY)
     } else {
@@ -1197,7 +1197,7 @@ pub fn reference_plan(p: &Prepared) -> (Method, Method, &'static [f64]) {
 }
 
 /// Prepares a scene: its case, error window and reference (the ladder of
-/// [`reference_plan`]); a reference that fails at every rung is the solver's error.
+/// `reference_plan`); a reference that fails at every rung is the solver's error.
 pub fn prepare(scene: ExtremeScene) -> Result<Ready, Error> {
     let p = scene.prepared()?;
     let (t0, t_end) = p.t_span(None)?;
@@ -1278,7 +1278,7 @@ pub fn prepare(scene: ExtremeScene) -> Result<Ready, Error> {
 }
 
 /// C of the promise of a scene: [`PROMISE_C_DRY`] or [`PROMISE_C_LUBRICATED`].
-pub fn promise_c(p: &Prepared) -> f64 {
+pub(crate) fn promise_c(p: &Prepared) -> f64 {
     if is_dry(p) {
         PROMISE_C_DRY
     } else {
@@ -1414,7 +1414,7 @@ pub fn run_cell(r: &Ready, setting: Setting, budget: &Budget) -> Cell {
 }
 
 /// The settings of one scene: RK4 inside and beyond, then every adaptive method × tolerance.
-pub fn settings(scene: &ExtremeScene, tolerances: &[f64]) -> Vec<Setting> {
+pub(crate) fn settings(scene: &ExtremeScene, tolerances: &[f64]) -> Vec<Setting> {
     let mut v = vec![
         Setting::Rk4Inside {
             h: scene.rk4_inside,
@@ -1431,11 +1431,6 @@ pub fn settings(scene: &ExtremeScene, tolerances: &[f64]) -> Vec<Setting> {
     v
 }
 
-/// Runs the matrix of `plan` ([`run_cached`] without a cache).
-pub fn run(plan: &Plan, progress: &dyn Progress) -> Result<Matrix, Error> {
-    run_cached(plan, None, progress)
-}
-
 /// What a scene's reference leaves for the cache: its report and its slider.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct CachedReference {
@@ -1449,7 +1444,7 @@ struct CachedReference {
 /// ([`crate::store::cache`]), every finished reference and run is stored there and one found there
 /// is not done again. A stop request (`lash_solver::interrupt`) abandons the work in flight
 /// and starts no other: [`Error::Interrupted`], with what is kept.
-pub fn run_cached(
+pub(crate) fn run_cached(
     plan: &Plan,
     cache: Option<&RunCache>,
     progress: &dyn Progress,
@@ -1697,12 +1692,12 @@ fn count_rows(cells: &[Cell]) -> Vec<RowCount> {
 
 impl Matrix {
     /// The failures, one line each.
-    pub fn failure_lines(&self) -> Vec<String> {
+    pub(crate) fn failure_lines(&self) -> Vec<String> {
         self.lines(|o| o.is_failure())
     }
 
     /// The known findings that occurred, one line each.
-    pub fn known_lines(&self) -> Vec<String> {
+    pub(crate) fn known_lines(&self) -> Vec<String> {
         self.lines(|o| matches!(o, Outcome::Known { .. }))
     }
 
@@ -1723,7 +1718,7 @@ impl Matrix {
     }
 
     /// The markdown report.
-    pub fn to_markdown(&self) -> String {
+    pub(crate) fn to_markdown(&self) -> String {
         let mut s = String::from("# Extremes matrix\n\n");
         s.push_str(&format!(
             "{} scenes × (rk4 inside and beyond its stability limit, {} adaptive methods × \
@@ -1866,7 +1861,7 @@ impl Matrix {
     }
 
     /// Writes extremes.md and extremes.json into `dir` (atomically); returns their paths.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         io::create_dir(dir)?;
         let md = dir.join("extremes.md");
         let js = dir.join("extremes.json");
@@ -1876,46 +1871,53 @@ impl Matrix {
     }
 }
 
-/// What `lash extremes` says about a matrix written to `md` and `json`: one line of counts per
-/// method, then the totals and the files.
-pub fn describe(m: &Matrix, md: &Path, json: &Path) -> String {
-    let mut s = String::new();
-    for c in &m.counts {
+impl Matrix {
+    /// What `lash extremes` says about a matrix written to `md` and `json`: one line of counts per
+    /// method, then the totals and the files.
+    pub fn describe(&self, md: &Path, json: &Path) -> String {
+        let mut s = String::new();
+        for c in &self.counts {
+            s.push_str(&format!(
+                "{:10} {:3} runs: {:3} agreed, {:3} typed errors, {} known findings, {} failures\n",
+                c.label,
+                c.runs,
+                c.agreed,
+                c.errored.values().sum::<usize>(),
+                c.known,
+                c.failures
+            ));
+        }
         s.push_str(&format!(
-            "{:10} {:3} runs: {:3} agreed, {:3} typed errors, {} known findings, {} failures\n",
-            c.label,
-            c.runs,
-            c.agreed,
-            c.errored.values().sum::<usize>(),
-            c.known,
-            c.failures
+            "{} runs in {:.1} s, {} known findings, {} failures; wrote {} and {}\n",
+            self.cells.len(),
+            self.wall_time_s,
+            self.cells
+                .iter()
+                .filter(|c| matches!(c.outcome, Outcome::Known { .. }))
+                .count(),
+            self.failures,
+            md.display(),
+            json.display()
         ));
+        s
     }
-    s.push_str(&format!(
-        "{} runs in {:.1} s, {} known findings, {} failures; wrote {} and {}\n",
-        m.cells.len(),
-        m.wall_time_s,
-        m.cells
-            .iter()
-            .filter(|c| matches!(c.outcome, Outcome::Known { .. }))
-            .count(),
-        m.failures,
-        md.display(),
-        json.display()
-    ));
-    s
 }
 
-/// Ok when no run of the matrix failed; else an internal error (a bug, exit code 1) that
-/// counts the failures and points to the report `md`, which lists them.
-pub fn check(m: &Matrix, md: &Path) -> Result<(), Error> {
-    if m.failures > 0 {
-        return Err(Error::Internal(format!(
-            "extremes: {} of {} runs failed: an outcome that is not allowed (listed in {})",
-            m.failures,
-            m.cells.len(),
-            md.display()
-        )));
+impl Matrix {
+    /// Ok when no run of the matrix failed; else an internal error (a bug, exit code 1) that
+    /// counts the failures and points to the report `md`, which lists them.
+    pub fn check(&self, md: &Path) -> Result<(), Error> {
+        if self.failures > 0 {
+            return Err(Error::Internal(format!(
+                "extremes: {} of {} runs failed: an outcome that is not allowed (listed in {})",
+                self.failures,
+                self.cells.len(),
+                md.display()
+            )));
+        }
+        Ok(())
     }
-    Ok(())
 }
+
+#[cfg(test)]
+mod tests;

@@ -29,61 +29,61 @@ use super::{CaseStats, Ensemble};
 use crate::error::Error;
 
 /// Dry cases of the speed study (0.1 mm), in increasing speed.
-pub const DRY_SPEEDS: [&str; 4] = [
+pub(crate) const DRY_SPEEDS: [&str; 4] = [
     "dry_120rpm_c0.1",
     "dry_150rpm_c0.1",
     "dry_180rpm_c0.1",
     "dry_200rpm_c0.1",
 ];
 /// Lubricated cases of the speed study (0.1 mm), in increasing speed.
-pub const LUB_SPEEDS: [&str; 4] = [
+pub(crate) const LUB_SPEEDS: [&str; 4] = [
     "lubricated_120rpm_c0.1",
     "lubricated_150rpm_c0.1",
     "lubricated_180rpm_c0.1",
     "lubricated_200rpm_c0.1",
 ];
 /// Dry cases of the clearance study (150 rpm), in increasing clearance.
-pub const DRY_CLEARANCES: [&str; 4] = [
+pub(crate) const DRY_CLEARANCES: [&str; 4] = [
     "dry_150rpm_c0.1",
     "dry_150rpm_c0.2",
     "dry_150rpm_c0.3",
     "dry_150rpm_c0.5",
 ];
 /// Lubricated cases of the clearance study (150 rpm), in increasing clearance.
-pub const LUB_CLEARANCES: [&str; 4] = [
+pub(crate) const LUB_CLEARANCES: [&str; 4] = [
     "lubricated_150rpm_c0.1",
     "lubricated_150rpm_c0.2",
     "lubricated_150rpm_c0.3",
     "lubricated_150rpm_c0.5",
 ];
 /// The ideal mechanism at the four speeds.
-pub const IDEALS: [&str; 4] = [
+pub(crate) const IDEALS: [&str; 4] = [
     "ideal_120rpm",
     "ideal_150rpm",
     "ideal_180rpm",
     "ideal_200rpm",
 ];
 /// Radial clearances of the clearance study, mm (the order of [`DRY_CLEARANCES`]).
-pub const CLEARANCES_MM: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
+pub(crate) const CLEARANCES_MM: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
 
 /// "Little effect" on the displacement: below this fraction of the stroke 2r.
-pub const LITTLE: f64 = 0.01;
+pub(crate) const LITTLE: f64 = 0.01;
 /// "Scarcely different" acceleration: max deviation below this fraction of the ideal peak.
-pub const SCARCELY: f64 = 0.01;
+pub(crate) const SCARCELY: f64 = 0.01;
 /// "Obvious" acceleration deviation: max deviation at least this fraction of the ideal peak.
-pub const OBVIOUS: f64 = 0.05;
+pub(crate) const OBVIOUS: f64 = 0.05;
 /// A 45° sector "fluctuates" when its max deviation exceeds this fraction of the ideal peak.
-pub const SECTOR_FLUCTUATION: f64 = 0.1;
+pub(crate) const SECTOR_FLUCTUATION: f64 = 0.1;
 /// "Near the boundary" of the clearance circle: ε_max at least this.
-pub const NEAR_BOUNDARY: f64 = 0.9;
+pub(crate) const NEAR_BOUNDARY: f64 = 0.9;
 /// "Not chaotic": the realisations' pointwise acceleration spread below this fraction of the
 /// ideal peak.
-pub const NOT_CHAOTIC: f64 = 1e-3;
+pub(crate) const NOT_CHAOTIC: f64 = 1e-3;
 /// "Periodic": max |e_k − e_{k−1}| / c between the last two revolutions below this.
-pub const PERIODIC: f64 = 0.05;
+pub(crate) const PERIODIC: f64 = 0.05;
 /// "Grows markedly" (P16): the RMS deviation at 0.5 mm at least this multiple of that at
 /// 0.3 mm.
-pub const MARKED_GROWTH: f64 = 1.25;
+pub(crate) const MARKED_GROWTH: f64 = 1.25;
 
 /// The thresholds the claims are judged with (the module doc says what each means).
 ///
@@ -98,7 +98,7 @@ pub const MARKED_GROWTH: f64 = 1.25;
 ///
 /// Source: this module (the constants above).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Thresholds {
+pub(crate) struct Thresholds {
     /// [`LITTLE`].
     pub little: f64,
     /// [`SCARCELY`].
@@ -117,7 +117,7 @@ pub struct Thresholds {
 
 impl Thresholds {
     /// The study's thresholds (the constants of this module).
-    pub fn paper() -> Thresholds {
+    pub(crate) fn paper() -> Thresholds {
         Thresholds {
             little: LITTLE,
             scarcely: SCARCELY,
@@ -131,10 +131,10 @@ impl Thresholds {
 }
 
 /// Suffix of a case name under which [`Cases`] holds the case's runs until periodic.
-pub const STEADY_SUFFIX: &str = "@steady_state";
+pub(crate) const STEADY_SUFFIX: &str = "@steady_state";
 
 /// The name of a case's runs until periodic in [`Cases`].
-pub fn at_steady_state(case: &str) -> String {
+pub(crate) fn at_steady_state(case: &str) -> String {
     format!("{case}{STEADY_SUFFIX}")
 }
 
@@ -147,7 +147,7 @@ pub fn at_steady_state(case: &str) -> String {
 ///
 /// Source: docs/outputs.md (`metrics`); this module's [`super::Deviations`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Quantity {
+pub(crate) enum Quantity {
     /// `slider_acc_rms_dev_ideal`, m/s².
     RmsDev,
     /// `eps_max`.
@@ -189,7 +189,7 @@ pub enum Quantity {
 
 impl Quantity {
     /// Name in the report and study.json.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Quantity::RmsDev => "slider_acc_rms_dev_ideal",
             Quantity::EpsMax => "eps_max",
@@ -213,7 +213,7 @@ impl Quantity {
     }
 
     /// The value for one realisation (None when the case lacks it, e.g. ε of the ideal one).
-    pub fn of(self, s: &CaseStats) -> Option<f64> {
+    pub(crate) fn of(self, s: &CaseStats) -> Option<f64> {
         let (m, d) = (&s.metrics, &s.dev);
         match self {
             Quantity::RmsDev => m.slider_acc_rms_dev_ideal,
@@ -257,7 +257,7 @@ pub enum Verdict {
 
 impl Verdict {
     /// HOLDS for true.
-    pub fn of(b: bool) -> Verdict {
+    pub(crate) fn of(b: bool) -> Verdict {
         if b {
             Verdict::Holds
         } else {
@@ -353,7 +353,7 @@ pub struct Claim {
 /// ```
 ///
 /// Source: [`super::Ensemble`].
-pub type Cases = BTreeMap<String, Ensemble>;
+pub(crate) type Cases = BTreeMap<String, Ensemble>;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Pick {
@@ -486,11 +486,6 @@ impl View<'_> {
             });
         }
     }
-}
-
-/// True when every element exceeds the one before it.
-pub fn strictly_increasing(v: &[f64]) -> bool {
-    v.windows(2).all(|w| w[1] > w[0])
 }
 
 fn span(v: &[f64]) -> f64 {
@@ -939,19 +934,20 @@ const DEFS: &[Def] = &[
 ];
 
 /// Number of claims [`evaluate`] returns.
-pub fn count() -> usize {
+#[cfg(test)]
+pub(crate) fn count() -> usize {
     DEFS.len()
 }
 
 /// Decides every claim from the runs: the verdict on the ensemble means, and the number of
 /// realisations on which the criterion holds. Errors ([`Error::Internal`]): a case missing, a
 /// statistic missing or non-finite.
-pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
+pub(crate) fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
     evaluate_with(cases, &Thresholds::paper())
 }
 
 /// [`evaluate`] with other thresholds.
-pub fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error> {
+pub(crate) fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error> {
     let n = cases.values().map(|e| e.members.len()).max().unwrap_or(0);
     if n == 0 {
         return Err(Error::Internal(
@@ -1409,13 +1405,5 @@ mod tests {
         });
         assert!(evaluate(&cases).is_err());
         assert!(evaluate(&Cases::new()).is_err());
-    }
-
-    #[test]
-    fn strictly_increasing_is_strict() {
-        assert!(strictly_increasing(&[1.0, 2.0, 3.0]));
-        assert!(!strictly_increasing(&[1.0, 2.0, 2.0]));
-        assert!(!strictly_increasing(&[1.0, 3.0, 2.0]));
-        assert!(strictly_increasing(&[1.0]));
     }
 }

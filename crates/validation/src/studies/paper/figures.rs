@@ -297,13 +297,17 @@ fn render(dir: &Path, job: &Job) -> Result<FigureRecord, Error> {
 }
 
 /// Number of figures [`write`] draws (each an SVG and a PNG).
-pub fn count() -> usize {
+#[cfg(test)]
+pub(crate) fn count() -> usize {
     SETS.len() * (3 + 4 + 4)
 }
 
 /// Draws every figure into `dir` (which must exist), in parallel; returns their records in
 /// figure order.
-pub fn write(dir: &Path, curves: &BTreeMap<String, Curves>) -> Result<Vec<FigureRecord>, Error> {
+pub(super) fn write(
+    dir: &Path,
+    curves: &BTreeMap<String, Curves>,
+) -> Result<Vec<FigureRecord>, Error> {
     let jobs = jobs(curves)?;
     let mut recs: Vec<FigureRecord> = jobs
         .par_iter()

@@ -17,7 +17,7 @@ use super::{CaseResult, CaseStats, Ensemble, Kind, Setting, StudyResult};
 use crate::report::metrics::Metrics;
 
 /// Text for a table cell: `|` escaped.
-pub fn cell(s: &str) -> String {
+pub(crate) fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
@@ -25,7 +25,7 @@ pub fn cell(s: &str) -> String {
 type Stat = fn(&CaseStats) -> Option<f64>;
 
 /// A number with four significant digits, plain or scientific.
-pub fn sig(v: f64) -> String {
+pub(crate) fn sig(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }
@@ -418,7 +418,7 @@ fn convergence(out: &mut String, r: &StudyResult) {
 }
 
 /// The whole report.
-pub fn report(r: &StudyResult) -> String {
+pub(crate) fn report(r: &StudyResult) -> String {
     let mut out = String::new();
     let p = &r.plan;
     let _ = writeln!(out, "# The paper's case study (§4) with lash\n");

@@ -31,9 +31,9 @@
 //!
 //! Source: the paper's §4 and Figures 5–16; docs/model.md §5, §6, §9; docs/outputs.md (`metrics`).
 
-pub mod claims;
+pub(crate) mod claims;
 mod figures;
-pub mod markdown;
+pub(crate) mod markdown;
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -47,7 +47,7 @@ use lash_solver::{Atol, Method, SolverOptions, Stats};
 use rayon::prelude::*;
 
 use crate::error::Error;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::Progress;
 use crate::report::metrics::{self, Metrics, Sample};
 use crate::run::case::Case;
 use crate::run::simulate::{simulate, Prepared, RunRequest, DEFAULT_MAX_STEPS};
@@ -55,27 +55,27 @@ use crate::run::steady::UntilPeriodic;
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io;
 
-pub use claims::{Claim, Number, Origin, Quantity, Verdict};
+pub(crate) use claims::{Claim, Origin, Verdict};
 
 /// File name of the markdown report.
-pub const REPORT_FILE: &str = "report.md";
+pub(crate) const REPORT_FILE: &str = "report.md";
 /// File name of the machine-readable results.
-pub const JSON_FILE: &str = "study.json";
+pub(crate) const JSON_FILE: &str = "study.json";
 /// Folder of the figures inside the output directory.
-pub const FIGURES_DIR: &str = "figures";
+pub(crate) const FIGURES_DIR: &str = "figures";
 
 /// Tolerance of the study's runs until periodic, units of c: 5 × tighter than the claim's
 /// "periodic" threshold [`claims::PERIODIC`].
-pub const STEADY_TOL: f64 = 1e-2;
+pub(crate) const STEADY_TOL: f64 = 1e-2;
 /// Cap on the revolutions of the study's runs until periodic.
-pub const STEADY_MAX_REVOLUTIONS: usize = 40;
+pub(crate) const STEADY_MAX_REVOLUTIONS: usize = 40;
 
 /// Half-width of the windows around the dead centres, degrees of crank angle.
-pub const DEAD_CENTRE_WINDOW_DEG: f64 = 15.0;
+pub(crate) const DEAD_CENTRE_WINDOW_DEG: f64 = 15.0;
 
 /// The 18 cases of the study: the speed and clearance studies, dry then lubricated, then the
 /// ideal mechanism.
-pub fn case_names() -> Vec<&'static str> {
+pub(crate) fn case_names() -> Vec<&'static str> {
     let mut v: Vec<&str> = Vec::new();
     for set in [
         &claims::DRY_SPEEDS[..],
@@ -87,11 +87,6 @@ pub fn case_names() -> Vec<&'static str> {
         v.extend_from_slice(set);
     }
     v
-}
-
-/// Number of figures the study draws (each an SVG and a PNG in `figures/`).
-pub fn figure_count() -> usize {
-    figures::count()
 }
 
 /// Solver settings of one study run.
@@ -196,12 +191,12 @@ pub enum Setting {
 
 impl Setting {
     /// All three, study first.
-    pub const ALL: [Setting; 3] = [Setting::Study, Setting::Reference, Setting::Loose];
+    pub(crate) const ALL: [Setting; 3] = [Setting::Study, Setting::Reference, Setting::Loose];
 }
 
 impl Plan {
     /// The solver settings of `which`.
-    pub fn get(&self, which: Setting) -> Settings {
+    pub(crate) fn get(&self, which: Setting) -> Settings {
         match which {
             Setting::Study => self.settings,
             Setting::Reference => self.reference,
@@ -370,14 +365,14 @@ pub struct CaseResult {
     pub steady: Option<SteadyRuns>,
 }
 
-/// A case's realisations run until periodic ([`crate::run::steady`]) at the three settings.
+/// A case's realisations run until periodic (`crate::run::steady`) at the three settings.
 ///
 /// ```text
 /// run until |s_k − s_{k−1}| < tol·c (section once per revolution), at most max_revolutions;
 /// statistics of the last revolution, as for the two-revolution runs
 /// ```
 ///
-/// Source: [`crate::run::steady`].
+/// Source: `crate::run::steady`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SteadyRuns {
     /// The request.
@@ -445,7 +440,7 @@ pub struct StudyResult {
     pub version: String,
     /// What was run.
     pub plan: Plan,
-    /// The cases, in the order of [`case_names`].
+    /// The cases, in the order of `case_names`.
     pub cases: Vec<CaseResult>,
     /// The claims judged on the study's settings.
     pub claims: Vec<Claim>,
@@ -467,9 +462,16 @@ impl StudyResult {
         self.cases.iter().find(|c| c.name == name)
     }
 
+    /// The claims judged again on the statistics stored here at one of the settings (what
+    /// `claims`, `reference_claims` and `loose_claims` hold, recomputed: a check that every
+    /// verdict follows from the stored numbers). Errors: a case or a statistic missing.
+    pub fn judge(&self, which: Setting) -> Result<Vec<Claim>, Error> {
+        claims::evaluate(&self.ensembles(which))
+    }
+
     /// The ensembles at one of the settings, by case name; the steady-state runs under
     /// [`claims::at_steady_state`] of the name.
-    pub fn ensembles(&self, which: Setting) -> claims::Cases {
+    pub(crate) fn ensembles(&self, which: Setting) -> claims::Cases {
         let mut m: claims::Cases = self
             .cases
             .iter()
@@ -632,7 +634,7 @@ fn relative_rms(q: &[f64], qi: &[f64]) -> f64 {
 /// The [`Deviations`] of the last revolution `last` (with `previous`, the revolution before
 /// it on the same phases) from the ideal mechanism `ideal`. Errors ([`Error::Internal`]): a
 /// missing slider or crank column, different lengths.
-pub fn deviations(
+pub(crate) fn deviations(
     last: &[Sample],
     previous: &[Sample],
     ideal: &IdealSliderCrank,
@@ -967,7 +969,7 @@ pub(crate) fn run_jobs(
 }
 
 /// Runs every case of the study under `plan` (in parallel) and judges the claims. Figures
-/// are not drawn; see [`paper`]. Returns the result and the curves of the paper's
+/// are not drawn; see [`run_and_write_with`]. Returns the result and the curves of the paper's
 /// realisations. Every finished run is stored in `cache` and a run found there is not done
 /// again; `progress` gets one item per run done. A stop request (`lash_solver::interrupt`)
 /// abandons the runs in flight and starts no other: [`Error::Interrupted`], with what is
@@ -1125,15 +1127,8 @@ fn run_plan(
     Ok((result, all_curves))
 }
 
-/// Runs the study with `plan` and writes `out/figures/*`, `out/report.md` and (last)
-/// `out/study.json`, each atomically. Nothing is written if a run fails but the finished runs
-/// in `out/cache/` ([`crate::store::cache`]), from which a rerun resumes.
-pub fn run_and_write(plan: &Plan, out: &Path) -> Result<StudyResult, Error> {
-    run_and_write_with(plan, out, &NoProgress)
-}
-
 /// [`run_and_write`], reporting each run to `progress`.
-pub fn run_and_write_with(
+pub(crate) fn run_and_write_with(
     plan: &Plan,
     out: &Path,
     progress: &dyn Progress,
@@ -1155,36 +1150,33 @@ pub fn run_and_write_with(
     Ok(result)
 }
 
-/// `lash study paper [--out DIR]`: runs the paper's §4 (see the module doc) and writes the
-/// figures, the report and study.json into `out` ([`describe_paper`] says it in one line).
-pub fn paper(out: &Path, progress: &dyn Progress) -> Result<StudyResult, Error> {
-    run_and_write_with(&Plan::paper(), out, progress)
-}
-
-/// One line of results of the paper's study written to `out`: cases, realisations, times,
-/// how many of the paper's claims hold, where the report is.
-pub fn describe_paper(r: &StudyResult, out: &Path) -> String {
-    let paper: Vec<&Claim> = r
-        .claims
-        .iter()
-        .filter(|c| c.origin == Origin::Paper)
-        .collect();
-    let holding = paper.iter().filter(|c| c.verdict == Verdict::Holds).count();
-    format!(
-        "study paper: {} cases × {} realisations, runs {:.1} s, figures {:.1} s; {} of {} paper claims hold; report {}",
-        r.cases.len(),
-        r.plan.realisations,
-        r.timing.runs_s,
-        r.timing.figures_s,
-        holding,
-        paper.len(),
-        out.join(REPORT_FILE).display()
-    )
+impl StudyResult {
+    /// One line of results of the paper's study written to `out`: cases, realisations, times,
+    /// how many of the paper's claims hold, where the report is.
+    pub fn describe(&self, out: &Path) -> String {
+        let paper: Vec<&Claim> = self
+            .claims
+            .iter()
+            .filter(|c| c.origin == Origin::Paper)
+            .collect();
+        let holding = paper.iter().filter(|c| c.verdict == Verdict::Holds).count();
+        format!(
+            "study paper: {} cases × {} realisations, runs {:.1} s, figures {:.1} s; {} of {} paper claims hold; report {}",
+            self.cases.len(),
+            self.plan.realisations,
+            self.timing.runs_s,
+            self.timing.figures_s,
+            holding,
+            paper.len(),
+            out.join(REPORT_FILE).display()
+        )
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::progress::NoProgress;
 
     const RPM: f64 = 150.0;
 
@@ -1413,7 +1405,7 @@ mod tests {
         let mut plan = Plan::paper();
         plan.settings.rtol = 0.0; // refused by the solver's option check
         plan.realisations = 1;
-        let e = run_and_write(&plan, &out).unwrap_err();
+        let e = run_and_write_with(&plan, &out, &NoProgress).unwrap_err();
         assert_eq!(e.kind(), crate::ErrorKind::Solver, "{e}");
         // Only the cache of the runs that finished (at the other settings) may be there.
         for f in [JSON_FILE, REPORT_FILE, FIGURES_DIR] {
@@ -1430,7 +1422,9 @@ mod tests {
         plan = Plan::paper();
         plan.realisations = 0;
         assert_eq!(
-            run_and_write(&plan, &out).unwrap_err().kind(),
+            run_and_write_with(&plan, &out, &NoProgress)
+                .unwrap_err()
+                .kind(),
             crate::ErrorKind::BadInput
         );
         assert!(!out.exists());
@@ -1449,6 +1443,6 @@ mod tests {
         sorted.sort();
         sorted.dedup();
         assert_eq!(sorted.len(), 18);
-        assert_eq!(figure_count(), 44);
+        assert_eq!(figures::count(), 44);
     }
 }

@@ -1,15 +1,13 @@
-//! The extremes matrix (`lash_validation::studies::extremes`): the scene files, the scene that drives
+//! The extremes matrix (`crate::studies::extremes`): the scene files, the scene that drives
 //! the film to ε ≈ 0.999, the quick subset of the matrix (default run) and the full matrix
 //! (ignored: `cargo test --release -p lash-validation --test extremes -- --ignored`, or
 //! `lash extremes`).
 
 use std::path::PathBuf;
 
+use crate::studies::extremes::{self, catalogue, FailureKind, Matrix, Outcome, Plan, Setting};
 use lash_model::scene::JointSpec;
 use lash_model::{Mechanism, Scene};
-use lash_validation::studies::extremes::{
-    self, catalogue, FailureKind, Matrix, Outcome, Plan, Setting,
-};
 
 fn cases_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/extremes")
@@ -129,7 +127,7 @@ fn check(m: &Matrix) {
 
 #[test]
 fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::quick(), &lash_validation::NoProgress).unwrap();
+    let m = extremes::run_cached(&Plan::quick(), None, &crate::NoProgress).unwrap();
     check(&m);
     // The known findings are not in the quick scenes: here every result meets its promise.
     assert!(m.known_lines().is_empty(), "{:?}", m.known_lines());
@@ -146,7 +144,7 @@ fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
 #[ignore = "the full matrix: 15 scenes × 50 runs, several minutes in release; `lash extremes` \
             runs the same and writes its report (BENCHMARKS.md, Extremes)"]
 fn full_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::full(), &lash_validation::NoProgress).unwrap();
+    let m = extremes::run_cached(&Plan::full(), None, &crate::NoProgress).unwrap();
     eprintln!("{}", m.to_markdown());
     check(&m);
 }

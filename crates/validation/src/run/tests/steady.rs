@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::run::simulate::Prepared;
-use lash_validation::run::steady::{settle, UntilPeriodic};
-use lash_validation::{ErrorKind, NoProgress};
+use crate::commands::{self, RunOptions};
+use crate::run::simulate::Prepared;
+use crate::run::steady::{settle, UntilPeriodic};
+use crate::{ErrorKind, NoProgress};
 
 fn press(stem: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -4,14 +4,14 @@
 
 use std::path::PathBuf;
 
+use crate::report::metrics::EventQuantity;
+use crate::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
+use crate::run::case::Case;
+use crate::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
+use crate::{Error, ErrorKind};
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;
-use lash_validation::report::metrics::EventQuantity;
-use lash_validation::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
-use lash_validation::run::case::Case;
-use lash_validation::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
-use lash_validation::{Error, ErrorKind};
 
 fn case(stem: &str) -> Prepared {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -147,12 +147,7 @@ fn dry_press_contact_onsets_match_a_tight_reference() {
     let reference = run(&p, Method::Dop853, 1e-12, Some(t_rev));
     let ref_on = onsets(&reference, 0.0, t_rev);
     assert!(ref_on.len() >= 20, "{}", ref_on.len());
-    let r = run(
-        &p,
-        lash_validation::run::simulate::DEFAULT_METHOD,
-        1e-10,
-        Some(t_rev),
-    );
+    let r = run(&p, crate::run::simulate::DEFAULT_METHOD, 1e-10, Some(t_rev));
     let on = onsets(&r, 0.0, t_rev);
     assert_eq!(on.len(), ref_on.len(), "{on:?}\n{ref_on:?}");
     for (a, b) in on.iter().zip(&ref_on).take(ref_on.len() / 2) {
@@ -232,7 +227,7 @@ fn hires_reference_error_at_rtol_1e8() {
 fn catalogue_case_prepares_the_scene_of_its_file() {
     // Case::catalogue builds the scene in code; the file in cases/press/ was written from the
     // same generator, so both prepare to the same scene and mechanism facts.
-    use lash_validation::run::case::Case;
+    use crate::run::case::Case;
     let name = "lubricated_150rpm_c0.2";
     let from_code = Prepared::load(Case::catalogue(name).unwrap()).unwrap();
     let from_file = case(name);
@@ -290,12 +285,7 @@ impl TrajectorySink for MaxOf {
 #[test]
 fn the_pendulums_peak_contact_force_is_the_true_peak() {
     let p = prepared("pendulum", &readme_pendulum());
-    let r = run(
-        &p,
-        lash_validation::run::simulate::DEFAULT_METHOD,
-        1e-8,
-        None,
-    );
+    let r = run(&p, crate::run::simulate::DEFAULT_METHOD, 1e-8, None);
     let m = r.summary.metrics.as_ref().unwrap();
     let peak = m.contact_force_max.unwrap();
     let mut req = RunRequest::new(
