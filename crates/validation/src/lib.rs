@@ -58,13 +58,13 @@ pub use compare::{
 pub use diagnostics::{poincare::PoincareResult, stiffness::StiffnessResult};
 pub use report::{
     metrics::{Energy, EventQuantity, EventRecord, JointMetrics, Metrics},
-    summary::Summary,
+    summary::{Settled, Summary},
     trajectory::{Columns, Header},
 };
 pub use run::{
     case::Case,
-    simulate::RunResult,
-    steady::{Settled, UntilPeriodic, DEFAULT_MAX_REVOLUTIONS, MIN_REVOLUTIONS},
+    result::RunResult,
+    steady::{UntilPeriodic, DEFAULT_MAX_REVOLUTIONS, MIN_REVOLUTIONS},
 };
 pub use studies::{
     headline::{CaseReport, Headline},

@@ -50,7 +50,10 @@ use crate::report::summary::RunHeader;
 use crate::report::trajectory::{CsvFile, PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
 use crate::run::case::Case;
 use crate::run::files::{self as report, Failure, FAILURE_FILE};
-use crate::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::{simulate, simulate_into};
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io::{OutDir, Written};
 use crate::studies::extremes::{self, Matrix};
@@ -183,7 +186,14 @@ fn run_request(
     case: Case,
     o: &RunOptions,
     deadline: Option<Instant>,
-) -> Result<(Prepared, RunRequest, Option<crate::run::steady::Settled>), Error> {
+) -> Result<
+    (
+        Prepared,
+        RunRequest,
+        Option<crate::report::summary::Settled>,
+    ),
+    Error,
+> {
     o.solver.apply(&SolverOptions::default())?;
     let prepared = Prepared::load(case)?;
     let opts = prepared.options(&o.solver)?;

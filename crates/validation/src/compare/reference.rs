@@ -30,7 +30,10 @@ use lash_solver::{ControllerKind, Method};
 use crate::compare::workprecision::fmt_num;
 use crate::error::{Error, OptionError};
 use crate::report::metrics::{EventQuantity, Sample, GRID_POINTS};
-use crate::run::simulate::{simulate, uniform_grid, Prepared, RunRequest, RunResult};
+use crate::run::plan::{uniform_grid, RunRequest};
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::simulate;
 use crate::store::io;
 
 /// Relative tolerance of reference runs.

@@ -48,7 +48,8 @@ use crate::progress::Progress;
 use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::report::summary::RunHeader;
 use crate::report::trajectory::fmt_num;
-use crate::run::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
+use crate::run::prepare::{Model, Prepared, DEFAULT_LENGTH_SCALE};
+use crate::run::sample::Sampler;
 use crate::store::io;
 
 /// Default number of revolutions.

@@ -50,7 +50,9 @@ use crate::progress::Progress;
 use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::report::summary::RunHeader;
 use crate::report::trajectory::fmt_num;
-use crate::run::simulate::{uniform_grid, Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
+use crate::run::plan::uniform_grid;
+use crate::run::prepare::{Model, Prepared, DEFAULT_LENGTH_SCALE};
+use crate::run::sample::Sampler;
 use crate::store::io;
 
 /// Default number of sample points along the run (both ends included): every 0.72° of crank

@@ -5,7 +5,7 @@
 
 use crate::diagnostics::poincare::{self, Chaos, PoincareSettings};
 use crate::diagnostics::stiffness::{measure_limit, sample_along};
-use crate::run::simulate::Prepared;
+use crate::run::prepare::Prepared;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_solver::analysis::stiffness::{Rk4ProbeOptions, StiffnessOptions};
 use lash_solver::{Method, OdeSystem, SolverOptions};

@@ -134,9 +134,9 @@ pub struct Summary {
     /// Error against the reference solution (built-in test problems).
     pub reference_error: Option<f64>,
     /// How a run until periodic ended (`--until-periodic`; absent otherwise): revolutions,
-    /// whether the section settled, its change per revolution (crate::run::steady).
+    /// whether the section settled, its change per revolution (`run::steady`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub until_periodic: Option<crate::run::steady::Settled>,
+    pub until_periodic: Option<Settled>,
 }
 
 impl Summary {
@@ -221,6 +221,57 @@ impl Summary {
         let p = dir.join(SUMMARY_FILE);
         io::write_json_atomic(&p, self)?;
         Ok(p)
+    }
+}
+
+/// How a run until periodic ended.
+///
+/// ```text
+/// revolutions = K;  settled ⇔ d_K < tol;  section_changes = [d_1, …, d_K]
+/// ```
+///
+/// Source: docs/outputs.md (`until_periodic` of summary.json); the run until periodic is
+/// `run::steady`'s.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Settled {
+    /// The request.
+    pub tol: f64,
+    /// The cap of the request.
+    pub max_revolutions: usize,
+    /// Revolutions run, K.
+    pub revolutions: usize,
+    /// Whether the section moved by less than tol·c in revolution K.
+    pub settled: bool,
+    /// d_k = |s_k − s_{k−1}| / c for k = 1..=K.
+    pub section_changes: Vec<f64>,
+}
+
+impl Settled {
+    /// d_K, the change in the last revolution.
+    pub(crate) fn last_change(&self) -> f64 {
+        self.section_changes.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
+    pub(crate) fn describe(&self) -> String {
+        if self.settled {
+            format!(
+                "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
+                 the last, below {:e} c)",
+                self.revolutions,
+                self.last_change(),
+                self.tol
+            )
+        } else {
+            format!(
+                "until periodic: not settled within {} revolutions (the section moved {:.2e} c \
+                 in the last, tolerance {:e} c); metrics are those of revolution {}",
+                self.max_revolutions,
+                self.last_change(),
+                self.tol,
+                self.revolutions
+            )
+        }
     }
 }
 

@@ -2,9 +2,17 @@
 //! and the files of one run.
 
 pub(crate) mod case;
+pub(crate) mod drive;
 pub(crate) mod files;
+pub(crate) mod mechanism;
+pub(crate) mod plan;
+pub(crate) mod prepare;
+pub(crate) mod quadrature;
+pub(crate) mod result;
+pub(crate) mod sample;
 pub(crate) mod simulate;
 pub(crate) mod steady;
+pub(crate) mod testset;
 
 #[cfg(test)]
 mod tests;

@@ -23,7 +23,9 @@ use lash_model::Mechanism;
 use lash_solver::{Problem, SolverOptions, StepOutcome};
 
 use crate::error::Error;
-use crate::run::simulate::{Model, Prepared, Sampler};
+use crate::run::prepare::{Model, Prepared};
+use crate::run::sample::Sampler;
+use crate::report::summary::Settled;
 
 /// Fewest revolutions of a run until periodic: the metrics need a last revolution and the
 /// periodicity check a revolution before it.
@@ -73,56 +75,6 @@ impl UntilPeriodic {
             )));
         }
         Ok(())
-    }
-}
-
-/// How a run until periodic ended.
-///
-/// ```text
-/// revolutions = K;  settled ⇔ d_K < tol;  section_changes = [d_1, …, d_K]
-/// ```
-///
-/// Source: this module.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Settled {
-    /// The request.
-    pub tol: f64,
-    /// The cap of the request.
-    pub max_revolutions: usize,
-    /// Revolutions run, K.
-    pub revolutions: usize,
-    /// Whether the section moved by less than tol·c in revolution K.
-    pub settled: bool,
-    /// d_k = |s_k − s_{k−1}| / c for k = 1..=K.
-    pub section_changes: Vec<f64>,
-}
-
-impl Settled {
-    /// d_K, the change in the last revolution.
-    pub(crate) fn last_change(&self) -> f64 {
-        self.section_changes.last().copied().unwrap_or(f64::NAN)
-    }
-
-    /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
-    pub(crate) fn describe(&self) -> String {
-        if self.settled {
-            format!(
-                "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
-                 the last, below {:e} c)",
-                self.revolutions,
-                self.last_change(),
-                self.tol
-            )
-        } else {
-            format!(
-                "until periodic: not settled within {} revolutions (the section moved {:.2e} c \
-                 in the last, tolerance {:e} c); metrics are those of revolution {}",
-                self.max_revolutions,
-                self.last_change(),
-                self.tol,
-                self.revolutions
-            )
-        }
     }
 }
 

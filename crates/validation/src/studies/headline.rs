@@ -36,7 +36,8 @@ use crate::error::Error;
 use crate::progress::Progress;
 use crate::report::metrics::{Metrics, Sample};
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
-use crate::run::simulate::{Prepared, RunResult};
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
 use crate::store::io::{self, OutDir, Written};
 
 /// One case of the default run.

@@ -7,8 +7,11 @@ use std::path::PathBuf;
 use crate::report::metrics::EventQuantity;
 use crate::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
 use crate::run::case::Case;
-use crate::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
-use crate::{Error, ErrorKind};
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::{simulate, simulate_into};
+use crate::error::{Error, ErrorKind};
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;
@@ -147,7 +150,7 @@ fn dry_press_contact_onsets_match_a_tight_reference() {
     let reference = run(&p, Method::Dop853, 1e-12, Some(t_rev));
     let ref_on = onsets(&reference, 0.0, t_rev);
     assert!(ref_on.len() >= 20, "{}", ref_on.len());
-    let r = run(&p, crate::run::simulate::DEFAULT_METHOD, 1e-10, Some(t_rev));
+    let r = run(&p, crate::run::prepare::DEFAULT_METHOD, 1e-10, Some(t_rev));
     let on = onsets(&r, 0.0, t_rev);
     assert_eq!(on.len(), ref_on.len(), "{on:?}\n{ref_on:?}");
     for (a, b) in on.iter().zip(&ref_on).take(ref_on.len() / 2) {
@@ -285,7 +288,7 @@ impl TrajectorySink for MaxOf {
 #[test]
 fn the_pendulums_peak_contact_force_is_the_true_peak() {
     let p = prepared("pendulum", &readme_pendulum());
-    let r = run(&p, crate::run::simulate::DEFAULT_METHOD, 1e-8, None);
+    let r = run(&p, crate::run::prepare::DEFAULT_METHOD, 1e-8, None);
     let m = r.summary.metrics.as_ref().unwrap();
     let peak = m.contact_force_max.unwrap();
     let mut req = RunRequest::new(

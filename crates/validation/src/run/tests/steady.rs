@@ -4,9 +4,10 @@
 use std::path::PathBuf;
 
 use crate::commands::{self, RunOptions};
-use crate::run::simulate::Prepared;
+use crate::run::prepare::Prepared;
 use crate::run::steady::{settle, UntilPeriodic};
-use crate::{ErrorKind, NoProgress};
+use crate::error::ErrorKind;
+use crate::progress::NoProgress;
 
 fn press(stem: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

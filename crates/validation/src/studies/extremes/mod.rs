@@ -73,7 +73,10 @@ use crate::compare::workprecision::fmt_num;
 use crate::error::Error;
 use crate::progress::Progress;
 use crate::run::case::{sha256_hex, Case, CaseSource};
-use crate::run::simulate::{simulate, Prepared, RunRequest, RunResult};
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::simulate;
 use crate::store::cache::RunCache;
 use crate::store::io;
 
