@@ -86,7 +86,9 @@ pub mod study {
 /// (the scene catalogue, a scene's reference, one cell's run and its outcome).
 pub mod extremes {
     pub use crate::studies::extremes::{
-        catalogue, prepare, run_cell, Budget, Cell, ExtremeScene, FailureKind, Matrix, Outcome,
-        Ready, SceneReport, Setting,
+        catalogue::{catalogue, ExtremeScene},
+        outcome::{Cell, FailureKind, Matrix, Outcome, SceneReport},
+        plan::{Budget, Setting},
+        runner::{prepare, run_cell, Ready},
     };
 }

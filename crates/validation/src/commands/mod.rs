@@ -56,7 +56,8 @@ use crate::run::result::RunResult;
 use crate::run::simulate::{simulate, simulate_into};
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io::{OutDir, Written};
-use crate::studies::extremes::{self, Matrix};
+use crate::studies::extremes::outcome::Matrix;
+use crate::studies::extremes::{self};
 use crate::studies::headline::{self, Headline};
 use crate::studies::paper::{self as study, StudyResult};
 use crate::sweep::{self, MergedTable, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
@@ -749,14 +750,14 @@ pub struct ExtremesOptions {
 
 /// Runs the extremes matrix (or its quick subset) and writes extremes.md and extremes.json
 /// (in that order in `files`); each reference and run is an item of `progress`. Finished
-/// references and runs are kept in DIR/cache/ and reused by a rerun (`extremes::run_cached`).
+/// references and runs are kept in DIR/cache/ and reused by a rerun (`extremes::runner::run_cached`).
 /// A run that ended in an outcome that is not allowed is in the result, not an error: see
 /// [`Matrix::check`].
 pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<Matrix>, Error> {
     let mut plan = if o.quick {
-        extremes::Plan::quick()
+        extremes::plan::Plan::quick()
     } else {
-        extremes::Plan::full()
+        extremes::plan::Plan::full()
     };
     if let Some(n) = o.max_steps {
         plan.budget.max_steps = n;
@@ -793,7 +794,7 @@ pub fn extremes(o: &ExtremesOptions, progress: &dyn Progress) -> Result<Written<
     });
     crate::store::claim::remove_dead_temporaries(&out);
     let cache = RunCache::new(&out.join(CACHE_DIR));
-    let m = extremes::run_cached(&plan, Some(&cache), progress)?;
+    let m = extremes::runner::run_cached(&plan, Some(&cache), progress)?;
     let files = m.write(&out)?;
     Ok(Written {
         result: m,

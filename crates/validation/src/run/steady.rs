@@ -23,9 +23,9 @@ use lash_model::Mechanism;
 use lash_solver::{Problem, SolverOptions, StepOutcome};
 
 use crate::error::Error;
+use crate::report::summary::Settled;
 use crate::run::prepare::{Model, Prepared};
 use crate::run::sample::Sampler;
-use crate::report::summary::Settled;
 
 /// Fewest revolutions of a run until periodic: the metrics need a last revolution and the
 /// periodicity check a revolution before it.

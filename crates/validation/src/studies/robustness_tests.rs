@@ -6,10 +6,10 @@
 
 use std::sync::Mutex;
 
+use crate::progress::Progress;
 use crate::studies::paper::claims::{Thresholds, Verdict};
 use crate::studies::paper::Plan;
 use crate::studies::robustness::{self, ClaimRobustness, Variant};
-use crate::progress::Progress;
 
 fn quick_plan() -> Plan {
     let mut p = Plan::paper();

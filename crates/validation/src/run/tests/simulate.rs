@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::error::{Error, ErrorKind};
 use crate::report::metrics::EventQuantity;
 use crate::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
 use crate::run::case::Case;
@@ -11,7 +12,6 @@ use crate::run::plan::RunRequest;
 use crate::run::prepare::Prepared;
 use crate::run::result::RunResult;
 use crate::run::simulate::{simulate, simulate_into};
-use crate::error::{Error, ErrorKind};
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;

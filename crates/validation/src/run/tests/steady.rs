@@ -4,10 +4,10 @@
 use std::path::PathBuf;
 
 use crate::commands::{self, RunOptions};
-use crate::run::prepare::Prepared;
-use crate::run::steady::{settle, UntilPeriodic};
 use crate::error::ErrorKind;
 use crate::progress::NoProgress;
+use crate::run::prepare::Prepared;
+use crate::run::steady::{settle, UntilPeriodic};
 
 fn press(stem: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
