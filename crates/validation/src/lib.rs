@@ -75,10 +75,11 @@ pub use sweep::{MergedTable, PointResult, Shard, SweepPoint, SweepReport};
 /// The paper's study (`study_paper`): its plan, its result as study.json holds it, and the
 /// claims judged on it.
 pub mod study {
-    pub use crate::studies::paper::claims::{Claim, Number, Origin, Verdict};
     pub use crate::studies::paper::{
-        CaseResult, CaseStats, Deviations, Ensemble, FigureRecord, Kind, Plan, Setting, Settings,
-        SolverRecord, SteadyRuns, StudyResult, Timing,
+        claims::{Claim, Number, Origin, Verdict},
+        plan::{Plan, Setting, Settings},
+        result::{CaseResult, FigureRecord, Kind, SolverRecord, SteadyRuns, StudyResult, Timing},
+        stats::{CaseStats, Deviations, Ensemble},
     };
 }
 

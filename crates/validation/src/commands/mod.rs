@@ -59,7 +59,11 @@ use crate::store::io::{OutDir, Written};
 use crate::studies::extremes::outcome::Matrix;
 use crate::studies::extremes::{self};
 use crate::studies::headline::{self, Headline};
-use crate::studies::paper::{self as study, StudyResult};
+use crate::studies::paper::plan::Plan as StudyPlan;
+use crate::studies::paper::result::StudyResult;
+use crate::studies::paper::result::JSON_FILE;
+use crate::studies::paper::result::REPORT_FILE;
+use crate::studies::paper::runner::run_and_write_with;
 use crate::sweep::{self, MergedTable, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
 
 /// The default run (module `headline`): the 150 rpm press, ideal vs dry vs lubricated, RK4
@@ -273,7 +277,7 @@ pub struct StudyOptions {
     pub robustness: bool,
     /// What to run; None = the paper's plan ([`study::Plan::paper`](crate::study::Plan::paper)):
     /// a library caller may run fewer realisations or other tolerances.
-    pub plan: Option<study::Plan>,
+    pub plan: Option<StudyPlan>,
 }
 
 /// Runs the paper's study (module `study`): figures, report.md and study.json in the output
@@ -287,9 +291,9 @@ pub fn study_paper(
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let plan = o.plan.unwrap_or_else(study::Plan::paper);
-    let r = study::run_and_write_with(&plan, &out, progress)?;
-    let files = vec![out.join(study::REPORT_FILE), out.join(study::JSON_FILE)];
+    let plan = o.plan.unwrap_or_else(StudyPlan::paper);
+    let r = run_and_write_with(&plan, &out, progress)?;
+    let files = vec![out.join(REPORT_FILE), out.join(JSON_FILE)];
     Ok(Written {
         result: r,
         dir: out,
@@ -307,7 +311,7 @@ pub fn study_robustness(
         .out
         .clone()
         .unwrap_or_else(|| default_out("study", "paper"));
-    let plan = o.plan.unwrap_or_else(study::Plan::paper);
+    let plan = o.plan.unwrap_or_else(StudyPlan::paper);
     let r = crate::studies::robustness::run_and_write(
         &plan,
         &crate::studies::robustness::variants(),

@@ -35,9 +35,11 @@ use crate::progress::Progress;
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io;
 use crate::studies::paper::claims::{self, Cases, Claim, Number, Thresholds, Verdict};
-use crate::studies::paper::{
-    case_names, kind_of, run_jobs, spread, Ensemble, Job, JobOut, Kind, Plan, Setting,
-};
+use crate::studies::paper::plan::{case_names, Plan, Setting};
+use crate::studies::paper::result::Kind;
+use crate::studies::paper::runner::Job;
+use crate::studies::paper::runner::{kind_of, run_jobs, spread, JobOut};
+use crate::studies::paper::stats::Ensemble;
 
 /// File name of the robustness table (markdown).
 pub(crate) const MD_FILE: &str = "robustness.md";
@@ -275,7 +277,9 @@ pub(crate) fn run_variants(
             };
             let steady = Some(plan.steady);
             let lengths: Vec<Option<_>> = match v.length() {
-                RunLength::Study if claims::LUB_CLEARANCES.contains(name) => vec![None, steady],
+                RunLength::Study if crate::studies::paper::plan::LUB_CLEARANCES.contains(name) => {
+                    vec![None, steady]
+                }
                 RunLength::SteadyState if kind != Kind::Ideal => vec![steady],
                 _ => vec![None],
             };
@@ -485,7 +489,7 @@ pub(crate) fn markdown(r: &RobustnessResult) -> String {
         th.not_chaotic,
         th.periodic,
         th.marked_growth,
-        claims::SECTOR_FLUCTUATION
+        crate::studies::paper::stats::SECTOR_FLUCTUATION
     ));
     s.push_str(
         "Each cell: ✓ holds / ✗ does not hold, and the verdict's relative margin (the \

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 
 use crate::progress::Progress;
 use crate::studies::paper::claims::{Thresholds, Verdict};
-use crate::studies::paper::Plan;
+use crate::studies::paper::plan::Plan;
 use crate::studies::robustness::{self, ClaimRobustness, Variant};
 
 fn quick_plan() -> Plan {

@@ -25,46 +25,14 @@
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 
-use super::{CaseStats, Ensemble};
 use crate::error::Error;
-
-/// Dry cases of the speed study (0.1 mm), in increasing speed.
-pub(crate) const DRY_SPEEDS: [&str; 4] = [
-    "dry_120rpm_c0.1",
-    "dry_150rpm_c0.1",
-    "dry_180rpm_c0.1",
-    "dry_200rpm_c0.1",
-];
-/// Lubricated cases of the speed study (0.1 mm), in increasing speed.
-pub(crate) const LUB_SPEEDS: [&str; 4] = [
-    "lubricated_120rpm_c0.1",
-    "lubricated_150rpm_c0.1",
-    "lubricated_180rpm_c0.1",
-    "lubricated_200rpm_c0.1",
-];
-/// Dry cases of the clearance study (150 rpm), in increasing clearance.
-pub(crate) const DRY_CLEARANCES: [&str; 4] = [
-    "dry_150rpm_c0.1",
-    "dry_150rpm_c0.2",
-    "dry_150rpm_c0.3",
-    "dry_150rpm_c0.5",
-];
-/// Lubricated cases of the clearance study (150 rpm), in increasing clearance.
-pub(crate) const LUB_CLEARANCES: [&str; 4] = [
-    "lubricated_150rpm_c0.1",
-    "lubricated_150rpm_c0.2",
-    "lubricated_150rpm_c0.3",
-    "lubricated_150rpm_c0.5",
-];
-/// The ideal mechanism at the four speeds.
-pub(crate) const IDEALS: [&str; 4] = [
-    "ideal_120rpm",
-    "ideal_150rpm",
-    "ideal_180rpm",
-    "ideal_200rpm",
-];
-/// Radial clearances of the clearance study, mm (the order of [`DRY_CLEARANCES`]).
-pub(crate) const CLEARANCES_MM: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
+use crate::studies::paper::plan::CLEARANCES_MM;
+use crate::studies::paper::plan::DRY_CLEARANCES;
+use crate::studies::paper::plan::DRY_SPEEDS;
+use crate::studies::paper::plan::IDEALS;
+use crate::studies::paper::plan::LUB_CLEARANCES;
+use crate::studies::paper::plan::LUB_SPEEDS;
+use crate::studies::paper::stats::{CaseStats, Ensemble};
 
 /// "Little effect" on the displacement: below this fraction of the stroke 2r.
 pub(crate) const LITTLE: f64 = 0.01;
@@ -72,8 +40,6 @@ pub(crate) const LITTLE: f64 = 0.01;
 pub(crate) const SCARCELY: f64 = 0.01;
 /// "Obvious" acceleration deviation: max deviation at least this fraction of the ideal peak.
 pub(crate) const OBVIOUS: f64 = 0.05;
-/// A 45° sector "fluctuates" when its max deviation exceeds this fraction of the ideal peak.
-pub(crate) const SECTOR_FLUCTUATION: f64 = 0.1;
 /// "Near the boundary" of the clearance circle: ε_max at least this.
 pub(crate) const NEAR_BOUNDARY: f64 = 0.9;
 /// "Not chaotic": the realisations' pointwise acceleration spread below this fraction of the
@@ -93,8 +59,8 @@ pub(crate) const MARKED_GROWTH: f64 = 1.25;
 /// marked growth × 1.25
 /// ```
 ///
-/// The 10 % of a "fluctuating" sector ([`SECTOR_FLUCTUATION`]) is applied when the runs'
-/// statistics are made, not here.
+/// The 10 % of a "fluctuating" sector (`stats::SECTOR_FLUCTUATION`) is applied when the
+/// runs' statistics are made, not here.
 ///
 /// Source: this module (the constants above).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -1003,7 +969,7 @@ pub(crate) fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>
 mod tests {
     use super::*;
     use crate::report::metrics::Metrics;
-    use crate::studies::paper::{CaseStats, Deviations, Ensemble};
+    use crate::studies::paper::stats::{CaseStats, Deviations, Ensemble};
 
     /// Statistics of one realisation with the given values (everything else neutral).
     #[derive(Clone, Copy)]

@@ -19,10 +19,11 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use super::claims::{DRY_CLEARANCES, DRY_SPEEDS, LUB_CLEARANCES, LUB_SPEEDS};
-use super::{Curves, FigureRecord};
 use crate::error::Error;
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
+use crate::studies::paper::plan::{DRY_CLEARANCES, DRY_SPEEDS, LUB_CLEARANCES, LUB_SPEEDS};
+use crate::studies::paper::result::FigureRecord;
+use crate::studies::paper::stats::Curves;
 
 struct Set {
     first_figure: u32,

@@ -12,9 +12,11 @@
 
 use std::fmt::Write as _;
 
-use super::claims::{self, Claim, Origin};
-use super::{CaseResult, CaseStats, Ensemble, Kind, Setting, StudyResult};
 use crate::report::metrics::Metrics;
+use crate::studies::paper::claims::{self, Claim, Origin};
+use crate::studies::paper::plan::Setting;
+use crate::studies::paper::result::{CaseResult, Kind, StudyResult};
+use crate::studies::paper::stats::{CaseStats, Ensemble};
 
 /// Text for a table cell: `|` escaped.
 pub(crate) fn cell(s: &str) -> String {
@@ -479,11 +481,11 @@ pub(crate) fn report(r: &StudyResult) -> String {
         100.0 * claims::LITTLE,
         100.0 * claims::SCARCELY,
         100.0 * claims::OBVIOUS,
-        100.0 * claims::SECTOR_FLUCTUATION,
+        100.0 * crate::studies::paper::stats::SECTOR_FLUCTUATION,
         claims::NEAR_BOUNDARY,
         100.0 * claims::NOT_CHAOTIC,
         claims::PERIODIC,
-        super::DEAD_CENTRE_WINDOW_DEG
+        crate::studies::paper::plan::DEAD_CENTRE_WINDOW_DEG
     );
 
     let _ = writeln!(out, "## Verdicts\n");
@@ -552,8 +554,8 @@ pub(crate) fn report(r: &StudyResult) -> String {
          RMS(q_ideal − mean), `fluctuation_sectors` = 45° sectors with max |ẍ − ẍ_ideal| > {1} % \
          of the ideal peak, `contact_fraction` = share of the revolution with δ > 0, \
          `orbit_closure` = max |e(t) − e(t − T)|/c.\n",
-        super::DEAD_CENTRE_WINDOW_DEG,
-        100.0 * claims::SECTOR_FLUCTUATION
+        crate::studies::paper::plan::DEAD_CENTRE_WINDOW_DEG,
+        100.0 * crate::studies::paper::stats::SECTOR_FLUCTUATION
     );
     deviations_table(&mut out, r);
 
