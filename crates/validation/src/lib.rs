@@ -70,7 +70,11 @@ pub use studies::{
     headline::{CaseReport, Headline},
     robustness::RobustnessResult,
 };
-pub use sweep::{MergedTable, PointResult, Shard, SweepPoint, SweepReport};
+pub use sweep::{
+    merge::MergedTable,
+    runner::{PointResult, SweepReport},
+    spec::{Shard, SweepPoint},
+};
 
 /// The paper's study (`study_paper`): its plan, its result as study.json holds it, and the
 /// claims judged on it.

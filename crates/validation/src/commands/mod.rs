@@ -64,7 +64,9 @@ use crate::studies::paper::result::StudyResult;
 use crate::studies::paper::result::JSON_FILE;
 use crate::studies::paper::result::REPORT_FILE;
 use crate::studies::paper::runner::run_and_write_with;
-use crate::sweep::{self, MergedTable, PointResult, Shard, SweepOptions, SweepPoint, SweepReport};
+use crate::sweep::merge::MergedTable;
+use crate::sweep::runner::{PointResult, SweepOptions, SweepReport};
+use crate::sweep::spec::{Shard, SweepPoint};
 
 /// The default run (module `headline`): the 150 rpm press, ideal vs dry vs lubricated, RK4
 /// against the best adaptive method; notes each case as it starts.
@@ -845,7 +847,7 @@ pub struct SweepOutcome {
 /// Runs a sweep of scene runs (`sweep_point`): loads and checks the sweep file and its base
 /// case, then [`sweep_with`].
 pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
-    let spec = sweep::SweepSpec::load(&o.file)?;
+    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
     spec.points()?;
     let base = Prepared::load(spec.case.clone())?;
     sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
@@ -863,7 +865,7 @@ pub fn sweep_with<F>(
 where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
 {
-    let spec = sweep::SweepSpec::load(&o.file)?;
+    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
     let points = spec.points()?;
     let out = o.out.clone().unwrap_or_else(|| {
         let stem = o
@@ -877,7 +879,8 @@ where
         jobs: o.jobs,
         shard: o.shard.unwrap_or(Shard::ALL),
     };
-    let report = sweep::run_sweep(&points, &out, &opts, runner, progress)?.into_result()?;
+    let report =
+        crate::sweep::runner::run_sweep(&points, &out, &opts, runner, progress)?.into_result()?;
     Ok(SweepOutcome {
         report,
         shard: opts.shard,
@@ -887,7 +890,7 @@ where
 }
 
 /// The point runner of a sweep: the base case with the point's physical parameters laid over
-/// its scene ([`sweep::apply_params`]) and its solver choice over the case's defaults;
+/// its scene ([`crate::sweep::spec::apply_params`]) and its solver choice over the case's defaults;
 /// writes DIR/summary.json and returns the summary, flattened, for the merged table. A
 /// solver failure is returned as such (the sweep records it as a finished point).
 pub(crate) fn sweep_point(
@@ -903,7 +906,7 @@ pub(crate) fn sweep_point(
     let prepared = match base.scene() {
         Some(scene) if physical => {
             let mut s = scene.clone();
-            sweep::apply_params(&mut s, pp)?;
+            crate::sweep::spec::apply_params(&mut s, pp)?;
             Prepared::with_scene(base.case.clone(), s)?
         }
         None if physical => {
@@ -988,7 +991,7 @@ pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
         return Err(Error::Usage("merge: no directory to merge".into()));
     };
     let out = o.out.clone().unwrap_or_else(|| first.clone());
-    let table = sweep::merge(&o.dirs)?;
+    let table = crate::sweep::merge::merge(&o.dirs)?;
     let complete = table.unfinished.is_empty() && table.corrupt.is_empty();
     if !complete && !o.allow_partial {
         return Err(OptionError::new("allow_partial")

@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use serde_json::Value;
 
 use crate::error::Error;
 use crate::run::case::sha256_hex;
@@ -84,7 +85,7 @@ impl RunCache {
             "inputs": serde_json::to_value(inputs)
                 .map_err(|e| Error::Internal(format!("cache key of {kind}: {e}")))?,
         });
-        Ok(sha256_hex(crate::sweep::canonical(&v).as_bytes()))
+        Ok(sha256_hex(canonical(&v).as_bytes()))
     }
 
     fn path(&self, key: &str) -> PathBuf {
@@ -110,6 +111,27 @@ impl RunCache {
         let bytes = serde_json::to_vec(&Entry { key, value })
             .map_err(|e| Error::Internal(format!("cache {}: {e}", path.display())))?;
         io::write_atomic(&path, &bytes)
+    }
+}
+
+/// Serialises a JSON value with object keys sorted at every level: the form that is hashed
+/// for cache keys and sweep point ids.
+pub(crate) fn canonical(v: &Value) -> String {
+    match v {
+        Value::Object(m) => {
+            let mut keys: Vec<&String> = m.keys().collect();
+            keys.sort();
+            let parts: Vec<String> = keys
+                .into_iter()
+                .map(|k| format!("{}:{}", Value::String(k.clone()), canonical(&m[k])))
+                .collect();
+            format!("{{{}}}", parts.join(","))
+        }
+        Value::Array(a) => {
+            let parts: Vec<String> = a.iter().map(canonical).collect();
+            format!("[{}]", parts.join(","))
+        }
+        other => other.to_string(),
     }
 }
 
