@@ -55,7 +55,7 @@ pub use compare::{
     reference::{Compared, Comparison, ErrorNorms, ErrorWindow},
     workprecision::{WorkPrecisionPlan, WpTable},
 };
-pub use diagnostics::{poincare::PoincareResult, stiffness::StiffnessResult};
+pub use diagnostics::{poincare::PoincareResult, stiffness::report::StiffnessResult};
 pub use report::{
     metrics::{Energy, EventQuantity, EventRecord, JointMetrics, Metrics},
     summary::{Settled, Summary},

@@ -40,9 +40,9 @@ use crate::compare::reference::{
 };
 use crate::compare::workprecision::{WorkPrecisionPlan, WpRun, WpTable, DEFAULT_TARGETS};
 use crate::diagnostics::poincare::{self, PoincareResult, PoincareSettings};
-use crate::diagnostics::stiffness::{
-    self as stiffness_cmd, StiffnessResult, StiffnessSettings, DEFAULT_SAMPLES,
-};
+use crate::diagnostics::stiffness::report::StiffnessResult;
+use crate::diagnostics::stiffness::sample::StiffnessSettings;
+use crate::diagnostics::stiffness::sample::DEFAULT_SAMPLES;
 use crate::error::{Error, Message, OptionError};
 use crate::options::SolverChoice;
 use crate::progress::Progress;
@@ -665,7 +665,7 @@ pub fn stiffness(
         measure: o.measure,
         ..Default::default()
     };
-    let r = stiffness_cmd::analyse(&prepared, &opts, &settings, progress)?;
+    let r = crate::diagnostics::stiffness::analyse::analyse(&prepared, &opts, &settings, progress)?;
     let files = r.write(&out)?;
     Ok(Written {
         result: r,

@@ -41,7 +41,7 @@ use lash_solver::analysis::lyapunov::{
 };
 use lash_solver::SolverOptions;
 
-use crate::diagnostics::stiffness::analysis_error;
+use crate::diagnostics::stiffness::sample::analysis_error;
 use crate::error::{Error, OptionError};
 use crate::options::SolverChoice;
 use crate::progress::Progress;

@@ -4,7 +4,7 @@
 //! the built binary: `crates/cli/tests/diagnostics.rs`.)
 
 use crate::diagnostics::poincare::{self, Chaos, PoincareSettings};
-use crate::diagnostics::stiffness::{measure_limit, sample_along};
+use crate::diagnostics::stiffness::sample::{measure_limit, sample_along};
 use crate::run::prepare::Prepared;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_solver::analysis::stiffness::{Rk4ProbeOptions, StiffnessOptions};
