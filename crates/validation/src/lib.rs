@@ -40,10 +40,11 @@ mod studies;
 mod sweep;
 
 pub use commands::{
-    compare, default_run, describe_run, extremes, merge, poincare, run, run_in_memory, stiffness,
-    study_paper, study_robustness, sweep, sweep_with, work_precision, CompareOptions,
-    ExtremesOptions, MergeOptions, Merged, PoincareOptions, RunOptions, StiffnessOptions,
-    StudyOptions, SweepOutcome, SweepRunOptions, WorkPrecisionOptions, WorkPrecisionResult,
+    compare::{compare, work_precision, CompareOptions, WorkPrecisionOptions, WorkPrecisionResult},
+    diagnose::{poincare, stiffness, PoincareOptions, StiffnessOptions},
+    run::{default_run, describe_run, run, run_in_memory, RunOptions},
+    study::{extremes, study_paper, study_robustness, ExtremesOptions, StudyOptions},
+    sweep::{merge, sweep, sweep_with, MergeOptions, Merged, SweepOutcome, SweepRunOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};
 pub use options::{SolverChoice, RTOL_MIN};

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::commands::{self, RunOptions};
+use crate::commands::run::{self as commands, RunOptions};
 use crate::error::ErrorKind;
 use crate::progress::NoProgress;
 use crate::run::prepare::Prepared;
