@@ -93,9 +93,7 @@ fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         e @ Error::Io { .. } => PyOSError::new_err(e.to_string()),
         // A stop requested through lash_solver's interrupt flag: what Ctrl-C is in Python.
         e @ Error::Interrupted(_) => PyKeyboardInterrupt::new_err(e.to_string()),
-        e @ (Error::NotYetAvailable(_) | Error::Internal(_)) => {
-            PyRuntimeError::new_err(e.to_string())
-        }
+        e @ Error::Internal(_) => PyRuntimeError::new_err(e.to_string()),
     }
 }
 

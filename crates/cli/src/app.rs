@@ -13,9 +13,7 @@
 //!                   scene's assembly and initial check, one factorisation of a large system)
 //! ```
 //!
-//! Source: docs/outputs.md ("Exit codes of `lash`"). Commands whose engine (the model, the
-//! adaptive and stiff solvers) is not wired in yet check all their input and then fail with
-//! [`Error::NotYetAvailable`].
+//! Source: docs/outputs.md ("Exit codes of `lash`").
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};

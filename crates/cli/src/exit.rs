@@ -2,9 +2,10 @@
 //!
 //! ```text
 //! exit code = 0  success
-//!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Io)
+//!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Scene,
+//!                                         Io)
 //!             3  the solver failed       (ErrorKind::Solver)
-//!             1  a bug                   (ErrorKind::Bug: NotYetAvailable, Internal; a panic)
+//!             1  a bug                   (ErrorKind::Bug: Internal; a panic)
 //!           130  interrupted             (ErrorKind::Interrupted: SIGINT or SIGTERM; the item
 //!                                         in flight abandoned, what had finished kept)
 //! ```
@@ -100,7 +101,6 @@ mod tests {
         assert!(io.to_string().starts_with("a/b: "));
         let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
         assert_eq!(s.exit_code(), 3);
-        assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
         assert_eq!(Error::Internal("x".into()).exit_code(), 1);
         let i = Error::from(SolveError::Interrupted {
             t: 0.5,

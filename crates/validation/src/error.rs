@@ -1,9 +1,9 @@
 //! The errors of the engine and the kind of each.
 //!
 //! ```text
-//! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Io)
+//! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Scene, Io)
 //!        Solver    the solver failed               (Solver)
-//!        Bug       an internal inconsistency       (NotYetAvailable, Internal)
+//!        Bug       a broken invariant              (Internal)
 //!        Interrupted  a stop was requested (SIGINT, SIGTERM)   (Interrupted)
 //! ```
 //!
@@ -24,7 +24,7 @@ use lash_solver::SolveError;
 ///
 /// ```text
 /// Error → kind:  Usage | Option | Input | Scene | Io → BadInput,  Solver → Solver,
-///                NotYetAvailable | Internal → Bug,  Interrupted → Interrupted
+///                Internal → Bug,  Interrupted → Interrupted
 /// SolveError::Interrupted → Error::Interrupted (From), every other SolveError → Error::Solver
 /// ```
 ///
@@ -70,10 +70,7 @@ pub enum Error {
     /// flight was abandoned, what had finished is kept; the message says what and where.
     #[error("interrupted: {0}")]
     Interrupted(String),
-    /// The command exists but its engine (the model, a solver) is not wired in yet.
-    #[error("{0} is not yet available in this build")]
-    NotYetAvailable(String),
-    /// An internal inconsistency: a bug.
+    /// A broken invariant of the engine: a bug (never a consequence of the input).
     #[error("internal error: {0}")]
     Internal(String),
 }
@@ -91,7 +88,7 @@ pub enum ErrorKind {
     BadInput,
     /// The solver failed.
     Solver,
-    /// A bug: an internal inconsistency, or an engine not built yet.
+    /// A bug: a broken invariant of the engine.
     Bug,
     /// A stop was requested (SIGINT, SIGTERM) and the work abandoned.
     Interrupted,
@@ -107,7 +104,7 @@ impl Error {
             | Error::Scene { .. }
             | Error::Io { .. } => ErrorKind::BadInput,
             Error::Solver(_) => ErrorKind::Solver,
-            Error::NotYetAvailable(_) | Error::Internal(_) => ErrorKind::Bug,
+            Error::Internal(_) => ErrorKind::Bug,
             Error::Interrupted(_) => ErrorKind::Interrupted,
         }
     }
@@ -305,10 +302,6 @@ mod tests {
         assert!(io.to_string().starts_with("a/b: "));
         let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
         assert_eq!(s.kind(), ErrorKind::Solver);
-        assert_eq!(
-            Error::NotYetAvailable("lash run".into()).kind(),
-            ErrorKind::Bug
-        );
         assert_eq!(Error::Internal("x".into()).kind(), ErrorKind::Bug);
         assert_eq!(
             Error::from(OptionError::leading("t_end", " must be > 0")).kind(),

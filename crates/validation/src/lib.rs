@@ -64,6 +64,7 @@ pub use report::{
 };
 pub use run::{
     case::Case,
+    press::{NotAPressCase, PressCase},
     result::RunResult,
     steady::{UntilPeriodic, DEFAULT_MAX_REVOLUTIONS, MIN_REVOLUTIONS},
 };
@@ -80,10 +81,11 @@ pub use sweep::{
 /// The paper's study (`study_paper`): its plan, its result as study.json holds it, and the
 /// claims judged on it.
 pub mod study {
+    pub use crate::run::press::Kind;
     pub use crate::studies::paper::{
         claims::{Claim, Number, Origin, Verdict},
         plan::{Plan, Setting, Settings},
-        result::{CaseResult, FigureRecord, Kind, SolverRecord, SteadyRuns, StudyResult, Timing},
+        result::{CaseResult, FigureRecord, SolverRecord, SteadyRuns, StudyResult, Timing},
         stats::{CaseStats, Deviations, Ensemble},
     };
 }

@@ -10,6 +10,7 @@ use lash_solver::{SolveError, SolverOptions};
 
 use crate::commands::default_out;
 use crate::error::Error;
+use crate::error::OptionError;
 use crate::options::SolverChoice;
 use crate::progress::Progress;
 use crate::report::summary::RunHeader;
@@ -162,9 +163,12 @@ fn run_request(
     let settled = match &o.until_periodic {
         Some(u) => {
             if o.t_end.is_some() {
-                return Err(Error::Usage(
-                    "--until-periodic decides the end time: give it or --t-end, not both".into(),
-                ));
+                return Err(OptionError::new("until_periodic")
+                    .name("until_periodic")
+                    .text(" decides the end time: give it or ")
+                    .name("t_end")
+                    .text(", not both")
+                    .into());
             }
             Some(crate::run::steady::settle(&prepared, &opts, u)?)
         }

@@ -48,6 +48,7 @@ use crate::progress::Progress;
 use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::report::summary::RunHeader;
 use crate::report::trajectory::fmt_num;
+use crate::run::prepare::scene_error;
 use crate::run::prepare::{Model, Prepared, DEFAULT_LENGTH_SCALE};
 use crate::run::sample::Sampler;
 use crate::store::io;
@@ -333,7 +334,7 @@ pub(crate) fn lyapunov(
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
-    let build = || Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()));
+    let build = || Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e));
     let (a, b) = (build()?, build()?);
     let y0 = a.initial_state();
     let w = weights(p);
@@ -430,7 +431,7 @@ pub(crate) fn section(
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
-    let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
+    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
     let sampler = Sampler::new(&mech, scene);
     let y0 = mech.initial_state();
     let clock = Instant::now();

@@ -7,6 +7,7 @@ pub(crate) mod files;
 pub(crate) mod mechanism;
 pub(crate) mod plan;
 pub(crate) mod prepare;
+pub(crate) mod press;
 pub(crate) mod quadrature;
 pub(crate) mod result;
 pub(crate) mod sample;

@@ -163,7 +163,7 @@ pub(crate) struct Prepared {
 fn case_label(case: &Case) -> String {
     match &case.source {
         CaseSource::File { path, .. } => path.display().to_string(),
-        CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => case.name.clone(),
+        CaseSource::BuiltIn(_) | CaseSource::Press(_) => case.name.clone(),
     }
 }
 
@@ -208,11 +208,8 @@ impl Prepared {
                 let scene = Scene::from_json_str(text).map_err(|e| scene_error(&case, e))?;
                 Prepared::with_scene(case, scene)
             }
-            CaseSource::Catalogue(name) => {
-                let scene = lash_model::cases::press_catalogue()
-                    .into_iter()
-                    .find_map(|(n, s)| (&n == name).then_some(s))
-                    .ok_or_else(|| case_error(&case, "not in the press catalogue"))?;
+            CaseSource::Press(press) => {
+                let scene = press.scene();
                 Prepared::with_scene(case, scene)
             }
         }

@@ -22,8 +22,9 @@
 use lash_model::Mechanism;
 use lash_solver::{Problem, SolverOptions, StepOutcome};
 
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::report::summary::Settled;
+use crate::run::prepare::scene_error;
 use crate::run::prepare::{Model, Prepared};
 use crate::run::sample::Sampler;
 
@@ -60,19 +61,28 @@ impl UntilPeriodic {
         }
     }
 
-    /// Usage errors: tol not finite and > 0, a cap below [`MIN_REVOLUTIONS`].
+    /// Option errors (`until_periodic`, `max_revolutions`): tol not finite and > 0, a cap below
+    /// [`MIN_REVOLUTIONS`].
     pub(crate) fn validate(&self) -> Result<(), Error> {
         if !(self.tol.is_finite() && self.tol > 0.0) {
-            return Err(Error::Usage(format!(
-                "--until-periodic must be a finite number > 0 (units of the clearance), got {}",
-                self.tol
-            )));
+            return Err(OptionError::leading(
+                "until_periodic",
+                format!(
+                    " must be a finite number > 0 (units of the clearance), got {}",
+                    self.tol
+                ),
+            )
+            .into());
         }
         if self.max_revolutions < MIN_REVOLUTIONS {
-            return Err(Error::Usage(format!(
-                "--max-revolutions must be at least {MIN_REVOLUTIONS}, got {}",
-                self.max_revolutions
-            )));
+            return Err(OptionError::leading(
+                "max_revolutions",
+                format!(
+                    " must be at least {MIN_REVOLUTIONS}, got {}",
+                    self.max_revolutions
+                ),
+            )
+            .into());
         }
         Ok(())
     }
@@ -80,7 +90,7 @@ impl UntilPeriodic {
 
 /// The settling pass (module doc): integrates `p` with `opts` revolution by revolution from
 /// its start until the section settles or the cap. Errors: a case without a crank driver or a
-/// clearance joint ([`Error::Usage`]), a bad request, solver failures.
+/// clearance joint ([`Error::Option`] on `until_periodic`), a bad request, solver failures.
 pub(crate) fn settle(
     p: &Prepared,
     opts: &SolverOptions,
@@ -90,28 +100,39 @@ pub(crate) fn settle(
     let (info, scene) = match (&p.info, &p.model) {
         (Some(i), Model::Mechanism(s)) => (i, s),
         _ => {
-            return Err(Error::Usage(format!(
-                "--until-periodic needs a scene with a crank driver and a clearance joint; {} \
-                 is a test problem",
-                p.case.name
-            )))
+            return Err(OptionError::leading(
+                "until_periodic",
+                format!(
+                    " needs a scene with a crank driver and a clearance joint; {} is a test \
+                     problem",
+                    p.case.name
+                ),
+            )
+            .into())
         }
     };
     let period = info.period.ok_or_else(|| {
-        Error::Usage(format!(
-            "--until-periodic needs a crank driver (the section is taken once per revolution), \
-             and {} has none",
-            p.case.name
+        Error::from(OptionError::leading(
+            "until_periodic",
+            format!(
+                " needs a crank driver (the section is taken once per revolution), and {} has \
+                 none",
+                p.case.name
+            ),
         ))
     })?;
     if info.joint.is_none() {
-        return Err(Error::Usage(format!(
-            "--until-periodic needs a clearance joint (its section decides the steady state), \
-             and {} has none",
-            p.case.name
-        )));
+        return Err(OptionError::leading(
+            "until_periodic",
+            format!(
+                " needs a clearance joint (its section decides the steady state), and {} has \
+                 none",
+                p.case.name
+            ),
+        )
+        .into());
     }
-    let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
+    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
     let sampler = Sampler::new(&mech, scene);
     let section = |t: f64, y: &[f64]| -> Result<[f64; 2], Error> {
         let s = sampler.sample(t, y);

@@ -37,24 +37,24 @@ use crate::progress::Progress;
 use crate::report::metrics::{Metrics, Sample};
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
 use crate::run::prepare::Prepared;
+use crate::run::press::PressCase;
 use crate::run::result::RunResult;
 use crate::store::io::{self, OutDir, Written};
 
 /// One case of the default run.
 ///
 /// ```text
-/// (file stem in cases/press, label, the paper's RK4 step, the best adaptive method)
+/// (press case: file stem in cases/press and the paper's RK4 step, label, the best adaptive
+/// method)
 /// ```
 ///
-/// Source: module doc (steps: crates/model/tests/press_cases.rs).
+/// Source: module doc (RK4 steps: `PressCase::rk4_step`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct HeadlineCase {
-    /// File stem in `cases/press/`.
-    pub stem: &'static str,
+    /// The press case (its file in `cases/press/`, its RK4 step: the largest stable one).
+    pub case: PressCase,
     /// Short label.
     pub label: &'static str,
-    /// The paper's RK4 step: the largest stable one, s.
-    pub rk4_step: f64,
     /// The best adaptive method for this case (lash work-precision).
     pub method: Method,
 }
@@ -62,21 +62,18 @@ pub(crate) struct HeadlineCase {
 /// The three cases.
 pub(crate) const CASES: [HeadlineCase; 3] = [
     HeadlineCase {
-        stem: "ideal_150rpm",
+        case: PressCase::ideal(150),
         label: "ideal",
-        rk4_step: 1e-3,
         method: Method::Dop853,
     },
     HeadlineCase {
-        stem: "dry_150rpm_c0.1",
+        case: PressCase::dry(150, 100),
         label: "dry",
-        rk4_step: 2e-4,
         method: Method::Tsit54,
     },
     HeadlineCase {
-        stem: "lubricated_150rpm_c0.1",
+        case: PressCase::lubricated(150, 100),
         label: "lubricated",
-        rk4_step: 2e-6,
         method: Method::Bdf,
     },
 ];
@@ -147,10 +144,17 @@ pub struct Headline {
 }
 
 fn run_case(root: &Path, c: &HeadlineCase) -> Result<(CaseReport, RunResult, Prepared), Error> {
-    let path = root.join("cases/press").join(format!("{}.json", c.stem));
+    let path = root.join("cases/press").join(format!("{}.json", c.case));
     let p = Prepared::load_spec(&path.to_string_lossy(), None)?;
     let reference = Reference::compute(&p, None)?;
-    let (rk4, _) = compare::compare_one(&p, &reference, Method::Rk4, None, Some(c.rk4_step), None)?;
+    let (rk4, _) = compare::compare_one(
+        &p,
+        &reference,
+        Method::Rk4,
+        None,
+        Some(c.case.rk4_step()),
+        None,
+    )?;
     let target = rk4.error.unwrap_or(f64::INFINITY);
     let mut best: Option<Compared> = None;
     let mut matched = false;
@@ -392,7 +396,7 @@ pub(crate) fn run_with_progress(
     let mut cases = Vec::new();
     let mut runs = Vec::new();
     for c in &CASES {
-        progress.note(&format!("running {} …", c.stem).into());
+        progress.note(&format!("running {} …", c.case).into());
         let (report, run, _) = run_case(&root, c)?;
         cases.push(report);
         runs.push((*c, run));
@@ -402,7 +406,7 @@ pub(crate) fn run_with_progress(
     let dir = out_dir.path().to_path_buf();
     let mut written = figures(&dir, &runs)?;
     for (c, r) in &runs {
-        written.extend(r.write(&dir.join(c.stem))?);
+        written.extend(r.write(&dir.join(c.case.to_string()))?);
     }
     let mut h = Headline {
         cases,
@@ -427,7 +431,7 @@ pub(crate) fn run_with_progress(
 /// replace): README.md, default.json, the figures, one directory per case.
 fn default_run_file(name: &str, is_dir: bool) -> bool {
     if is_dir {
-        return CASES.iter().any(|c| c.stem == name);
+        return CASES.iter().any(|c| c.case.to_string() == name);
     }
     ["README.md", "default.json"].contains(&name)
         || ["slider_acceleration", "orbits"]

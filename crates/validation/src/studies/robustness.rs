@@ -32,13 +32,13 @@ use lash_model::Scene;
 
 use crate::error::Error;
 use crate::progress::Progress;
+use crate::run::press::{Kind, RunKey};
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io;
 use crate::studies::paper::claims::{self, Cases, Claim, Number, Thresholds, Verdict};
-use crate::studies::paper::plan::{case_names, Plan, Setting};
-use crate::studies::paper::result::Kind;
+use crate::studies::paper::plan::{study_cases, Plan, Setting, LUB_CLEARANCES};
 use crate::studies::paper::runner::Job;
-use crate::studies::paper::runner::{kind_of, run_jobs, spread, JobOut};
+use crate::studies::paper::runner::{run_jobs, spread, JobOut};
 use crate::studies::paper::stats::Ensemble;
 
 /// File name of the robustness table (markdown).
@@ -257,19 +257,14 @@ pub(crate) fn run_variants(
     if plan.realisations == 0 {
         return Err(Error::Usage("study: at least one realisation".into()));
     }
-    let catalogue: BTreeMap<String, Scene> =
-        lash_model::cases::press_catalogue().into_iter().collect();
-    let names = case_names();
+    let names = study_cases();
     let mut jobs = Vec::new();
     // (variant, case, steady) of each job.
     let mut tags = Vec::new();
     for (vi, v) in variants.iter().enumerate() {
-        for (i, name) in names.iter().enumerate() {
-            let base = catalogue.get(*name).ok_or_else(|| {
-                Error::Internal(format!("study: case {name} is not in the catalogue"))
-            })?;
-            let scene = v.apply(base);
-            let kind = kind_of(name);
+        for (i, &name) in names.iter().enumerate() {
+            let scene = v.apply(&name.scene());
+            let kind = name.kind();
             let members = if kind == Kind::Ideal {
                 1
             } else {
@@ -277,7 +272,7 @@ pub(crate) fn run_variants(
             };
             let steady = Some(plan.steady);
             let lengths: Vec<Option<_>> = match v.length() {
-                RunLength::Study if crate::studies::paper::plan::LUB_CLEARANCES.contains(name) => {
+                RunLength::Study if LUB_CLEARANCES.contains(&name) => {
                     vec![None, steady]
                 }
                 RunLength::SteadyState if kind != Kind::Ideal => vec![steady],
@@ -287,7 +282,7 @@ pub(crate) fn run_variants(
                 for member in 0..members {
                     jobs.push(Job {
                         case: i,
-                        name,
+                        press: name,
                         scene: scene.clone(),
                         setting: Setting::Study,
                         member,
@@ -302,7 +297,7 @@ pub(crate) fn run_variants(
     let mut all = Vec::new();
     for (vi, v) in variants.iter().enumerate() {
         let mut cases = Cases::new();
-        for (i, name) in names.iter().enumerate() {
+        for (i, &name) in names.iter().enumerate() {
             let ensemble = |steady: bool| {
                 let mut m: Vec<(usize, &JobOut)> = jobs
                     .iter()
@@ -320,12 +315,12 @@ pub(crate) fn run_variants(
             let (two, steady) = (ensemble(false), ensemble(true));
             match (v.length(), two, steady) {
                 (RunLength::SteadyState, _, Some(s)) => {
-                    cases.insert(name.to_string(), s);
+                    cases.insert(RunKey::runs(name), s);
                 }
                 (_, Some(t), s) => {
-                    cases.insert(name.to_string(), t);
+                    cases.insert(RunKey::runs(name), t);
                     if let Some(s) = s {
-                        cases.insert(claims::at_steady_state(name), s);
+                        cases.insert(RunKey::steady_state(name), s);
                     }
                 }
                 _ => {
@@ -446,7 +441,7 @@ impl RobustnessResult {
             .map(|d| d.id.as_str())
             .collect();
         format!(
-            "study paper --robustness: {} variants, {} distinct runs, {:.1} s; {} of {} claims robust, fragile: {}; table {}",
+            "study paper (robustness): {} variants, {} distinct runs, {:.1} s; {} of {} claims robust, fragile: {}; table {}",
             self.variants.len(),
             self.runs,
             self.timing_s,

@@ -183,7 +183,6 @@ impl SweepReport {
             Error::Usage(_) => Error::Usage(msg),
             Error::Option(o) => Error::Option(o.prefixed(head)),
             Error::Input(_) | Error::Scene { .. } | Error::Io { .. } => Error::Input(msg),
-            Error::NotYetAvailable(_) => Error::NotYetAvailable(msg),
             Error::Solver(_) | Error::Internal(_) => Error::Internal(msg),
             Error::Interrupted(_) => Error::Interrupted(msg),
         })

@@ -22,6 +22,7 @@ use crate::diagnostics::stiffness::sample::MIN_SAMPLES;
 use crate::error::{Error, OptionError};
 use crate::progress::Progress;
 use crate::run::plan::uniform_grid;
+use crate::run::prepare::scene_error;
 use crate::run::prepare::{Model, Prepared};
 use crate::run::sample::Sampler;
 
@@ -72,7 +73,7 @@ pub(crate) fn analyse(
     };
     let (sampled, measurement, analytic) = match &p.model {
         Model::Mechanism(scene) => {
-            let build = || Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()));
+            let build = || Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e));
             let mech = build()?;
             let sampler = Sampler::new(&mech, scene);
             let y0 = mech.initial_state();
@@ -136,7 +137,7 @@ where
     if !settings.measure {
         return Ok(Measurement {
             limit: None,
-            note: Some("not measured (--no-measure)".into()),
+            note: Some("not measured (measure off)".into()),
             brackets: 0,
             wall_time_s: 0.0,
         });

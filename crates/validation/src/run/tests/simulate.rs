@@ -227,12 +227,13 @@ fn hires_reference_error_at_rtol_1e8() {
 }
 
 #[test]
-fn catalogue_case_prepares_the_scene_of_its_file() {
-    // Case::catalogue builds the scene in code; the file in cases/press/ was written from the
+fn press_case_prepares_the_scene_of_its_file() {
+    // Case::press builds the scene in code; the file in cases/press/ was written from the
     // same generator, so both prepare to the same scene and mechanism facts.
     use crate::run::case::Case;
+    use crate::run::press::PressCase;
     let name = "lubricated_150rpm_c0.2";
-    let from_code = Prepared::load(Case::catalogue(name).unwrap()).unwrap();
+    let from_code = Prepared::load(Case::press(PressCase::lubricated(150, 200))).unwrap();
     let from_file = case(name);
     assert_eq!(from_code.scene(), from_file.scene());
     assert_eq!(from_code.info, from_file.info);

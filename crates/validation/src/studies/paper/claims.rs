@@ -26,6 +26,7 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 use crate::error::Error;
+use crate::run::press::{PressCase, RunKey};
 use crate::studies::paper::plan::CLEARANCES_MM;
 use crate::studies::paper::plan::DRY_CLEARANCES;
 use crate::studies::paper::plan::DRY_SPEEDS;
@@ -94,14 +95,6 @@ impl Thresholds {
             marked_growth: MARKED_GROWTH,
         }
     }
-}
-
-/// Suffix of a case name under which [`Cases`] holds the case's runs until periodic.
-pub(crate) const STEADY_SUFFIX: &str = "@steady_state";
-
-/// The name of a case's runs until periodic in [`Cases`].
-pub(crate) fn at_steady_state(case: &str) -> String {
-    format!("{case}{STEADY_SUFFIX}")
 }
 
 /// A statistic of one realisation of one case that a claim reads.
@@ -312,14 +305,14 @@ pub struct Claim {
     pub realisations: usize,
 }
 
-/// The runs by case name.
+/// The runs of each case (its plan's runs, and its runs until periodic where it has them).
 ///
 /// ```text
-/// case name → Ensemble { members[k] = statistics of realisation k, acc_spread }
+/// (case, variant) → Ensemble { members[k] = statistics of realisation k, acc_spread }
 /// ```
 ///
-/// Source: [`super::Ensemble`].
-pub(crate) type Cases = BTreeMap<String, Ensemble>;
+/// Source: `stats::Ensemble`; `run::press::RunKey`.
+pub(crate) type Cases = BTreeMap<RunKey, Ensemble>;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Pick {
@@ -380,19 +373,20 @@ impl View<'_> {
     }
 
     /// The case's runs until periodic when there are any, else its own runs.
-    fn periodic_case(&self, case: &str) -> String {
-        let s = at_steady_state(case);
+    fn periodic_case(&self, case: PressCase) -> RunKey {
+        let s = RunKey::steady_state(case);
         if self.cases.contains_key(&s) {
             s
         } else {
-            case.to_string()
+            RunKey::runs(case)
         }
     }
 
-    fn get(&self, case: &str, q: Quantity) -> Result<f64, Error> {
+    fn get(&self, case: impl Into<RunKey>, q: Quantity) -> Result<f64, Error> {
+        let case: RunKey = case.into();
         let e = self
             .cases
-            .get(case)
+            .get(&case)
             .ok_or_else(|| Error::Internal(format!("study: no runs of case {case}")))?;
         if e.members.is_empty() {
             return Err(Error::Internal(format!("study: case {case} has no runs")));
@@ -437,8 +431,8 @@ impl View<'_> {
         Ok(value)
     }
 
-    fn all(&self, cases: &[&str], q: Quantity) -> Result<Vec<f64>, Error> {
-        cases.iter().map(|c| self.get(c, q)).collect()
+    fn all(&self, cases: &[PressCase], q: Quantity) -> Result<Vec<f64>, Error> {
+        cases.iter().map(|&c| self.get(c, q)).collect()
     }
 
     /// Records a derived number (ratio, threshold) in the mean view.
@@ -834,9 +828,9 @@ const DEFS: &[Def] = &[
         criterion: "max |e(t) − e(t − T)| / c over the last revolution < 0.05 at every clearance (lubricated, 150 rpm), judged at steady state: each realisation runs until its once-per-revolution section moves by less than 0.01 c (at most 40 revolutions).",
         note: "The journal starts centred (docs/model.md §6) and sinks into the film over many revolutions; after two revolutions the gap is a transient that has not settled, which is why the claim is judged at steady state.",
         eval: |v| {
-            let cases: Vec<String> = LUB_CLEARANCES.iter().map(|c| v.periodic_case(c)).collect();
+            let cases: Vec<RunKey> = LUB_CLEARANCES.iter().map(|&c| v.periodic_case(c)).collect();
             let mut ok = true;
-            for c in &cases {
+            for &c in &cases {
                 ok &= v.less(v.get(c, Quantity::OrbitClosure)?, v.th.periodic);
             }
             Ok(ok)
@@ -969,6 +963,7 @@ pub(crate) fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>
 mod tests {
     use super::*;
     use crate::report::metrics::Metrics;
+    use crate::run::press::Kind;
     use crate::studies::paper::stats::{CaseStats, Deviations, Ensemble};
 
     /// Statistics of one realisation with the given values (everything else neutral).
@@ -1061,10 +1056,10 @@ mod tests {
     /// A table on which every claim holds, two identical realisations per clearance case.
     fn paper_like() -> Cases {
         let mut c = Cases::new();
-        let mut put = |name: &str, s: S, spread: f64| {
-            let n = if name.starts_with("ideal") { 1 } else { 2 };
+        let mut put = |case: PressCase, s: S, spread: f64| {
+            let n = if case.kind() == Kind::Ideal { 1 } else { 2 };
             c.insert(
-                name.to_string(),
+                RunKey::runs(case),
                 Ensemble {
                     members: vec![stats(s); n],
                     acc_spread: spread,
@@ -1074,7 +1069,7 @@ mod tests {
         for (i, name) in DRY_SPEEDS.iter().enumerate() {
             let k = i as f64;
             put(
-                name,
+                *name,
                 S {
                     rms: 1.0 + k,
                     eps: Some(2.0 + 0.1 * k),
@@ -1098,7 +1093,7 @@ mod tests {
                 (5e-4, 0.05, 5.0, 0.3, 1.5e-4),
             ][j];
             put(
-                name,
+                *name,
                 S {
                     rms,
                     x_dev: x,
@@ -1113,7 +1108,7 @@ mod tests {
         }
         for (i, name) in LUB_SPEEDS.iter().enumerate() {
             put(
-                name,
+                *name,
                 S {
                     peak: 2.5 + i as f64,
                     ..LUB
@@ -1124,7 +1119,7 @@ mod tests {
         for (j, name) in LUB_CLEARANCES.iter().enumerate().skip(1) {
             let (a_dev, eps) = [(0.0, 0.0), (0.01, 0.6), (0.02, 0.85), (0.3, 0.95)][j];
             put(
-                name,
+                *name,
                 S {
                     a_dev,
                     eps: Some(eps),
@@ -1158,8 +1153,13 @@ mod tests {
     }
 
     /// Applies `f` to every realisation of `case`.
-    fn set(cases: &mut Cases, case: &str, f: impl Fn(&mut CaseStats)) {
-        for m in cases.get_mut(case).unwrap().members.iter_mut() {
+    fn set(cases: &mut Cases, case: PressCase, f: impl Fn(&mut CaseStats)) {
+        for m in cases
+            .get_mut(&RunKey::runs(case))
+            .unwrap()
+            .members
+            .iter_mut()
+        {
             f(m);
         }
     }
@@ -1184,120 +1184,140 @@ mod tests {
     /// One change per claim that breaks exactly the property the claim asserts.
     const BREAKERS: &[Mutation] = &[
         ("P1", |c| {
-            set(c, "dry_200rpm_c0.1", |s| s.dev.x_dev_max = 3.1e-4)
+            set(c, PressCase::dry(200, 100), |s| s.dev.x_dev_max = 3.1e-4)
         }), // > 1 % of 0.03 m
         ("P2", |c| {
-            set(c, "dry_180rpm_c0.1", |s| s.dev.x_dev_bdc = 1.35e-4)
+            set(c, PressCase::dry(180, 100), |s| s.dev.x_dev_bdc = 1.35e-4)
         }), // > 200 rpm's 1.3e-4
         ("P3", |c| {
-            set(c, "dry_120rpm_c0.1", |s| s.dev.v_dev_rel = 0.95)
+            set(c, PressCase::dry(120, 100), |s| s.dev.v_dev_rel = 0.95)
         }),
         ("P4", |c| {
-            set(c, "dry_150rpm_c0.1", |s| s.dev.fluctuation_sectors = 7)
+            set(c, PressCase::dry(150, 100), |s| {
+                s.dev.fluctuation_sectors = 7
+            })
         }),
         ("P5", |c| {
-            set(c, "dry_200rpm_c0.1", |s| {
+            set(c, PressCase::dry(200, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.0)
             })
         }),
         ("P6", |c| {
-            set(c, "dry_120rpm_c0.1", |s| s.dev.a_dev_dead_centres = 5.0)
+            set(c, PressCase::dry(120, 100), |s| {
+                s.dev.a_dev_dead_centres = 5.0
+            })
         }),
         ("P7", |c| {
-            set(c, "dry_200rpm_c0.1", |s| s.dev.contact_fraction = Some(0.7))
+            set(c, PressCase::dry(200, 100), |s| {
+                s.dev.contact_fraction = Some(0.7)
+            })
         }),
         ("P8", |c| {
-            set(c, "dry_180rpm_c0.1", |s| {
+            set(c, PressCase::dry(180, 100), |s| {
                 s.metrics.penetration_max = Some(1.1e-4)
             })
         }),
         ("P9", |c| {
-            set(c, "lubricated_180rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(180, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.5)
             })
         }),
         ("P10", |c| {
-            set(c, "lubricated_120rpm_c0.1", |s| s.dev.x_dev_bdc = 1e-4)
+            set(c, PressCase::lubricated(120, 100), |s| {
+                s.dev.x_dev_bdc = 1e-4
+            })
         }),
         ("P11", |c| {
-            set(c, "lubricated_200rpm_c0.1", |s| s.dev.v_dev_max = 0.05)
+            set(c, PressCase::lubricated(200, 100), |s| {
+                s.dev.v_dev_max = 0.05
+            })
         }),
         ("P12", |c| {
-            set(c, "lubricated_200rpm_c0.1", |s| s.dev.a_dev_max = 0.06)
+            set(c, PressCase::lubricated(200, 100), |s| {
+                s.dev.a_dev_max = 0.06
+            })
         }), // 1 % of 5.5 = 0.055
         ("P13", |c| {
-            set(c, "lubricated_120rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(120, 100), |s| {
                 s.metrics.eps_max = Some(1.0)
             })
         }),
         ("P14", |c| {
-            set(c, "dry_150rpm_c0.3", |s| s.dev.x_dev_max = 1.5e-4)
+            set(c, PressCase::dry(150, 300), |s| s.dev.x_dev_max = 1.5e-4)
         }),
         ("P15", |c| {
-            set(c, "dry_150rpm_c0.5", |s| s.dev.v_dev_max = 0.035)
+            set(c, PressCase::dry(150, 500), |s| s.dev.v_dev_max = 0.035)
         }),
         ("P16", |c| {
             // 3.7 / 3.0 < 1.25 although the curve still steepens: (3.7−3)/0.2 > (3−2)/0.2.
-            set(c, "dry_150rpm_c0.5", |s| {
+            set(c, PressCase::dry(150, 500), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.7)
             })
         }),
         ("P17", |c| {
-            set(c, "dry_150rpm_c0.3", |s| {
+            set(c, PressCase::dry(150, 300), |s| {
                 s.dev.contact_fraction = Some(0.56)
             })
         }),
         ("P18", |c| {
-            set(c, "dry_150rpm_c0.5", |s| {
+            set(c, PressCase::dry(150, 500), |s| {
                 s.metrics.penetration_max = Some(1.3e-4)
             })
         }),
         ("P19", |c| {
-            set(c, "lubricated_150rpm_c0.3", |s| s.dev.x_dev_max = 4e-4)
+            set(c, PressCase::lubricated(150, 300), |s| {
+                s.dev.x_dev_max = 4e-4
+            })
         }),
         ("P20", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| {
+            set(c, PressCase::lubricated(150, 500), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(6.0)
             })
         }),
         ("P21", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| s.dev.a_dev_max = 0.19)
+            set(c, PressCase::lubricated(150, 500), |s| {
+                s.dev.a_dev_max = 0.19
+            })
         }), // < 5 % of 3.86
         ("P22", |c| {
-            set(c, "lubricated_150rpm_c0.2", |s| {
+            set(c, PressCase::lubricated(150, 200), |s| {
                 s.metrics.eps_max = Some(0.9)
             })
         }),
         ("P23", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| {
+            set(c, PressCase::lubricated(150, 500), |s| {
                 s.metrics.eps_max = Some(1.01)
             })
         }),
         ("P24", |c| {
-            c.get_mut("lubricated_150rpm_c0.3").unwrap().acc_spread = 4e-3
+            c.get_mut(&RunKey::runs(PressCase::lubricated(150, 300)))
+                .unwrap()
+                .acc_spread = 4e-3
         }),
         ("P25", |c| {
-            set(c, "lubricated_150rpm_c0.2", |s| {
+            set(c, PressCase::lubricated(150, 200), |s| {
                 s.dev.orbit_closure = Some(0.05)
             })
         }),
         ("M1", |c| {
-            set(c, "ideal_180rpm", |s| {
+            set(c, PressCase::ideal(180), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(1e-5)
             })
         }),
         ("M2", |c| {
-            set(c, "dry_150rpm_c0.1", |s| {
+            set(c, PressCase::dry(150, 100), |s| {
                 s.metrics.contact_force_max = Some(2.9e4)
             })
         }),
         ("M3", |c| {
-            set(c, "lubricated_150rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(150, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(2e-3)
             })
         }),
         ("M4", |c| {
-            c.get_mut("dry_150rpm_c0.1").unwrap().acc_spread = 1e-2
+            c.get_mut(&RunKey::runs(PressCase::dry(150, 100)))
+                .unwrap()
+                .acc_spread = 1e-2
         }),
     ];
 
@@ -1326,7 +1346,9 @@ mod tests {
         // P5 at 200 rpm: realisation 0 has RMS 5 (> 180 rpm's 3), realisation 1 has 2.5 (< 3).
         // Mean 3.75 > 3: HOLDS on the means, 1 of 2 realisations.
         let mut cases = paper_like();
-        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        let e = cases
+            .get_mut(&RunKey::runs(PressCase::dry(200, 100)))
+            .unwrap();
         e.members[0].metrics.slider_acc_rms_dev_ideal = Some(5.0);
         e.members[1].metrics.slider_acc_rms_dev_ideal = Some(2.5);
         assert_eq!(verdict(&cases, "P5"), (Verdict::Holds, 1, 2));
@@ -1342,7 +1364,9 @@ mod tests {
             .unwrap();
         assert_eq!((n.value, n.min, n.max), (3.75, Some(2.5), Some(5.0)));
         // Mean 2.9 < 3: DOES NOT HOLD although realisation 0 still satisfies it.
-        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        let e = cases
+            .get_mut(&RunKey::runs(PressCase::dry(200, 100)))
+            .unwrap();
         e.members[1].metrics.slider_acc_rms_dev_ideal = Some(0.8);
         assert_eq!(verdict(&cases, "P5"), (Verdict::DoesNotHold, 1, 2));
     }
@@ -1350,7 +1374,7 @@ mod tests {
     #[test]
     fn missing_data_is_an_error_not_a_verdict() {
         let mut cases = paper_like();
-        cases.remove("lubricated_150rpm_c0.5");
+        cases.remove(&RunKey::runs(PressCase::lubricated(150, 500)));
         let e = evaluate(&cases).unwrap_err();
         assert!(
             e.to_string()
@@ -1358,7 +1382,7 @@ mod tests {
             "{e}"
         );
         let mut cases = paper_like();
-        set(&mut cases, "dry_120rpm_c0.1", |s| {
+        set(&mut cases, PressCase::dry(120, 100), |s| {
             s.metrics.penetration_max = None
         });
         assert!(evaluate(&cases)
@@ -1366,7 +1390,7 @@ mod tests {
             .to_string()
             .contains("dry_120rpm_c0.1 has no penetration_max"));
         let mut cases = paper_like();
-        set(&mut cases, "dry_120rpm_c0.1", |s| {
+        set(&mut cases, PressCase::dry(120, 100), |s| {
             s.dev.x_dev_max = f64::NAN
         });
         assert!(evaluate(&cases).is_err());

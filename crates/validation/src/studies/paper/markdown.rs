@@ -13,9 +13,10 @@
 use std::fmt::Write as _;
 
 use crate::report::metrics::Metrics;
+use crate::run::press::Kind;
 use crate::studies::paper::claims::{self, Claim, Origin};
 use crate::studies::paper::plan::Setting;
-use crate::studies::paper::result::{CaseResult, Kind, StudyResult};
+use crate::studies::paper::result::{CaseResult, StudyResult};
 use crate::studies::paper::stats::{CaseStats, Ensemble};
 
 /// Text for a table cell: `|` escaped.

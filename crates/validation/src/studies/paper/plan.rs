@@ -6,42 +6,43 @@
 use lash_solver::{Atol, Method, SolverOptions};
 
 use crate::run::prepare::DEFAULT_MAX_STEPS;
+use crate::run::press::PressCase;
 use crate::run::steady::UntilPeriodic;
 
 /// Dry cases of the speed study (0.1 mm), in increasing speed.
-pub(crate) const DRY_SPEEDS: [&str; 4] = [
-    "dry_120rpm_c0.1",
-    "dry_150rpm_c0.1",
-    "dry_180rpm_c0.1",
-    "dry_200rpm_c0.1",
+pub(crate) const DRY_SPEEDS: [PressCase; 4] = [
+    PressCase::dry(120, 100),
+    PressCase::dry(150, 100),
+    PressCase::dry(180, 100),
+    PressCase::dry(200, 100),
 ];
 /// Lubricated cases of the speed study (0.1 mm), in increasing speed.
-pub(crate) const LUB_SPEEDS: [&str; 4] = [
-    "lubricated_120rpm_c0.1",
-    "lubricated_150rpm_c0.1",
-    "lubricated_180rpm_c0.1",
-    "lubricated_200rpm_c0.1",
+pub(crate) const LUB_SPEEDS: [PressCase; 4] = [
+    PressCase::lubricated(120, 100),
+    PressCase::lubricated(150, 100),
+    PressCase::lubricated(180, 100),
+    PressCase::lubricated(200, 100),
 ];
 /// Dry cases of the clearance study (150 rpm), in increasing clearance.
-pub(crate) const DRY_CLEARANCES: [&str; 4] = [
-    "dry_150rpm_c0.1",
-    "dry_150rpm_c0.2",
-    "dry_150rpm_c0.3",
-    "dry_150rpm_c0.5",
+pub(crate) const DRY_CLEARANCES: [PressCase; 4] = [
+    PressCase::dry(150, 100),
+    PressCase::dry(150, 200),
+    PressCase::dry(150, 300),
+    PressCase::dry(150, 500),
 ];
 /// Lubricated cases of the clearance study (150 rpm), in increasing clearance.
-pub(crate) const LUB_CLEARANCES: [&str; 4] = [
-    "lubricated_150rpm_c0.1",
-    "lubricated_150rpm_c0.2",
-    "lubricated_150rpm_c0.3",
-    "lubricated_150rpm_c0.5",
+pub(crate) const LUB_CLEARANCES: [PressCase; 4] = [
+    PressCase::lubricated(150, 100),
+    PressCase::lubricated(150, 200),
+    PressCase::lubricated(150, 300),
+    PressCase::lubricated(150, 500),
 ];
 /// The ideal mechanism at the four speeds.
-pub(crate) const IDEALS: [&str; 4] = [
-    "ideal_120rpm",
-    "ideal_150rpm",
-    "ideal_180rpm",
-    "ideal_200rpm",
+pub(crate) const IDEALS: [PressCase; 4] = [
+    PressCase::ideal(120),
+    PressCase::ideal(150),
+    PressCase::ideal(180),
+    PressCase::ideal(200),
 ];
 /// Radial clearances of the clearance study, mm (the order of [`DRY_CLEARANCES`]).
 pub(crate) const CLEARANCES_MM: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
@@ -57,8 +58,8 @@ pub(crate) const DEAD_CENTRE_WINDOW_DEG: f64 = 15.0;
 
 /// The 18 cases of the study: the speed and clearance studies, dry then lubricated, then the
 /// ideal mechanism.
-pub(crate) fn case_names() -> Vec<&'static str> {
-    let mut v: Vec<&str> = Vec::new();
+pub(crate) fn study_cases() -> Vec<PressCase> {
+    let mut v = Vec::new();
     for set in [
         &DRY_SPEEDS[..],
         &DRY_CLEARANCES[1..],

@@ -8,6 +8,7 @@ use std::path::Path;
 use lash_solver::Stats;
 
 use crate::error::Error;
+use crate::run::press::{Kind, PressCase, RunKey};
 use crate::run::steady::UntilPeriodic;
 use crate::studies::paper::claims;
 use crate::studies::paper::claims::Claim;
@@ -53,24 +54,6 @@ pub struct SolverRecord {
     pub wall_time_s: f64,
     /// Wall time of every run of this case (all realisations, both settings), s.
     pub total_wall_time_s: f64,
-}
-
-/// The joint of a study case.
-///
-/// ```text
-/// Dry (IMPACT + Coulomb) | Lubricated (long Gümbel film + contact) | Ideal (pin)
-/// ```
-///
-/// Source: docs/model.md §3–§5.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    /// Dry clearance joint.
-    Dry,
-    /// Lubricated clearance joint.
-    Lubricated,
-    /// Ideal revolute joint.
-    Ideal,
 }
 
 /// Everything measured for one case.
@@ -208,28 +191,30 @@ impl StudyResult {
     /// `claims`, `reference_claims` and `loose_claims` hold, recomputed: a check that every
     /// verdict follows from the stored numbers). Errors: a case or a statistic missing.
     pub fn judge(&self, which: Setting) -> Result<Vec<Claim>, Error> {
-        claims::evaluate(&self.ensembles(which))
+        claims::evaluate(&self.ensembles(which)?)
     }
 
-    /// The ensembles at one of the settings, by case name; the steady-state runs under
-    /// [`claims::at_steady_state`] of the name.
-    pub(crate) fn ensembles(&self, which: Setting) -> claims::Cases {
-        let mut m: claims::Cases = self
-            .cases
-            .iter()
-            .map(|c| (c.name.clone(), c.ensemble(which).clone()))
-            .collect();
+    /// The ensembles at one of the settings, by press case (each name parsed back: a case
+    /// that is not a press case is an input error); the steady-state runs under the case's
+    /// `RunKey::steady_state`.
+    pub(crate) fn ensembles(&self, which: Setting) -> Result<claims::Cases, Error> {
+        let mut m = claims::Cases::new();
         for c in &self.cases {
+            let case: PressCase = c
+                .name
+                .parse()
+                .map_err(|e| Error::Input(format!("study: {e}")))?;
+            m.insert(RunKey::runs(case), c.ensemble(which).clone());
             if let Some(st) = &c.steady {
                 let e = match which {
                     Setting::Study => &st.study,
                     Setting::Reference => &st.reference,
                     Setting::Loose => &st.loose,
                 };
-                m.insert(claims::at_steady_state(&c.name), e.clone());
+                m.insert(RunKey::steady_state(case), e.clone());
             }
         }
-        m
+        Ok(m)
     }
 }
 

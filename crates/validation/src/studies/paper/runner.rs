@@ -20,6 +20,8 @@ use crate::report::metrics::{self, Metrics, Sample};
 use crate::run::case::Case;
 use crate::run::plan::RunRequest;
 use crate::run::prepare::Prepared;
+use crate::run::press::Kind;
+use crate::run::press::PressCase;
 use crate::run::simulate::simulate;
 use crate::run::steady::UntilPeriodic;
 use crate::store::cache::{RunCache, CACHE_DIR};
@@ -27,12 +29,11 @@ use crate::store::io;
 use crate::studies::paper::claims;
 use crate::studies::paper::figures;
 use crate::studies::paper::markdown;
-use crate::studies::paper::plan::case_names;
 use crate::studies::paper::plan::Plan;
 use crate::studies::paper::plan::Setting;
 use crate::studies::paper::plan::Settings;
+use crate::studies::paper::plan::{study_cases, LUB_CLEARANCES};
 use crate::studies::paper::result::CaseResult;
-use crate::studies::paper::result::Kind;
 use crate::studies::paper::result::SolverRecord;
 use crate::studies::paper::result::SteadyRuns;
 use crate::studies::paper::result::StudyResult;
@@ -76,16 +77,17 @@ pub(crate) struct Run {
     pub(crate) settled: Option<bool>,
 }
 
-/// Runs the press scene `scene` (the catalogue case `name`, or one of its realisations) over
+/// Runs the press scene `scene` (of the press case `case`, or one of its realisations) over
 /// its span through [`simulate`], or with `until` until its orbit settles
 /// ([`crate::run::steady`]); samples its last two revolutions.
 pub(crate) fn run_case(
-    name: &str,
+    case: PressCase,
     scene: &Scene,
     settings: &Settings,
     until: Option<&UntilPeriodic>,
 ) -> Result<Run, Error> {
-    let p = Prepared::with_scene(Case::catalogue(name)?, scene.clone())?;
+    let name = case;
+    let p = Prepared::with_scene(Case::press(case), scene.clone())?;
     let info = p
         .info
         .as_ref()
@@ -159,9 +161,10 @@ pub(crate) fn realisation(scene: &Scene, k: usize, step_rad: f64) -> Scene {
     s
 }
 
-pub(crate) struct Job<'a> {
+pub(crate) struct Job {
     pub(crate) case: usize,
-    pub(crate) name: &'a str,
+    /// The press case.
+    pub(crate) press: PressCase,
     /// The case's scene (before the realisation's crank phase).
     pub(crate) scene: Scene,
     pub(crate) setting: Setting,
@@ -183,14 +186,14 @@ pub(crate) struct JobOut {
     pub(crate) length: (usize, Option<bool>),
 }
 
-fn run_job(job: &Job<'_>, plan: &Plan) -> Result<JobOut, Error> {
+fn run_job(job: &Job, plan: &Plan) -> Result<JobOut, Error> {
     let settings = plan.get(job.setting);
     let scene = realisation(&job.scene, job.member, plan.phase_step_rad);
-    let r = run_case(job.name, &scene, &settings, job.until.as_ref())?;
+    let r = run_case(job.press, &scene, &settings, job.until.as_ref())?;
     let ideal = r.ideal.ok_or_else(|| {
         Error::Input(format!(
             "case {}: not an in-line slider-crank with slider and crank_driver roles",
-            job.name
+            job.press
         ))
     })?;
     let dev = deviations(&r.last, &r.previous, &ideal)?;
@@ -224,20 +227,10 @@ pub(crate) fn spread(accs: &[&Vec<f64>]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-pub(crate) fn kind_of(name: &str) -> Kind {
-    if name.starts_with("dry") {
-        Kind::Dry
-    } else if name.starts_with("lubricated") {
-        Kind::Lubricated
-    } else {
-        Kind::Ideal
-    }
-}
-
 /// The inputs a job's result depends on (its cache key, with the build: [`crate::store::cache`]).
 #[derive(serde::Serialize)]
 struct JobKey<'a> {
-    case: &'a str,
+    case: String,
     setting: Setting,
     member: usize,
     scene: &'a Scene,
@@ -252,7 +245,7 @@ struct JobKey<'a> {
 /// (`lash_solver::interrupt`) abandons the runs in flight and starts no other:
 /// [`Error::Interrupted`], with what is kept. `what` names the command in notes.
 pub(crate) fn run_jobs(
-    jobs: &[Job<'_>],
+    jobs: &[Job],
     plan: &Plan,
     cache: &RunCache,
     progress: &dyn Progress,
@@ -265,7 +258,7 @@ pub(crate) fn run_jobs(
             cache.key(
                 "study run",
                 &JobKey {
-                    case: j.name,
+                    case: j.press.to_string(),
                     setting: j.setting,
                     member: j.member,
                     scene: &scene,
@@ -315,7 +308,7 @@ pub(crate) fn run_jobs(
             progress.finished(
                 &format!(
                     "{} {:?} realisation {}{length}",
-                    j.name, j.setting, j.member
+                    j.press, j.setting, j.member
                 )
                 .to_lowercase(),
                 clock.elapsed().as_secs_f64(),
@@ -362,37 +355,28 @@ fn run_plan(
     plan: &Plan,
     cache: &RunCache,
     progress: &dyn Progress,
-) -> Result<(StudyResult, BTreeMap<String, Curves>), Error> {
+) -> Result<(StudyResult, BTreeMap<PressCase, Curves>), Error> {
     if plan.realisations == 0 {
         return Err(Error::Usage("study: at least one realisation".into()));
     }
-    let catalogue: BTreeMap<String, Scene> =
-        lash_model::cases::press_catalogue().into_iter().collect();
-    let names = case_names();
-    let scenes: Vec<&Scene> = names
-        .iter()
-        .map(|n| {
-            catalogue
-                .get(*n)
-                .ok_or_else(|| Error::Internal(format!("study: case {n} is not in the catalogue")))
-        })
-        .collect::<Result<_, _>>()?;
+    let names = study_cases();
     let mut jobs = Vec::new();
-    for (i, name) in names.iter().enumerate() {
-        let members = if kind_of(name) == Kind::Ideal {
+    for (i, &name) in names.iter().enumerate() {
+        let scene = name.scene();
+        let members = if name.kind() == Kind::Ideal {
             1
         } else {
             plan.realisations
         };
-        // The periodicity claims are judged at steady state (crate::studies::paper::plan::LUB_CLEARANCES).
-        let steady = crate::studies::paper::plan::LUB_CLEARANCES.contains(name);
+        // The periodicity claims are judged at steady state (plan::LUB_CLEARANCES).
+        let steady = LUB_CLEARANCES.contains(&name);
         for setting in Setting::ALL {
             for until in std::iter::once(None).chain(steady.then_some(Some(plan.steady))) {
                 for member in 0..members {
                     jobs.push(Job {
                         case: i,
-                        name,
-                        scene: scenes[i].clone(),
+                        press: name,
+                        scene: scene.clone(),
                         setting,
                         member,
                         until,
@@ -402,17 +386,12 @@ fn run_plan(
         }
     }
     // Longest jobs (dry, reference) first so that the threads finish together.
-    jobs.sort_by_key(|j| {
-        (
-            kind_of(j.name) != Kind::Dry,
-            j.setting != Setting::Reference,
-        )
-    });
+    jobs.sort_by_key(|j| (j.press.kind() != Kind::Dry, j.setting != Setting::Reference));
     let (outs, _) = run_jobs(&jobs, plan, cache, progress, "study")?;
 
     let mut cases = Vec::new();
     let mut all_curves = BTreeMap::new();
-    for (i, name) in names.iter().enumerate() {
+    for (i, &name) in names.iter().enumerate() {
         let group = |setting: Setting| {
             let mut v: Vec<(usize, &JobOut)> = jobs
                 .iter()
@@ -440,7 +419,7 @@ fn run_plan(
             .map(|(_, o)| o.solver.2)
             .sum();
         if let Some(c) = &nominal.curves {
-            all_curves.insert(name.to_string(), c.clone());
+            all_curves.insert(name, c.clone());
         }
         let acc_tolerance_diff =
             max_abs(nominal.acc.iter().zip(&refr[0].1.acc).map(|(a, b)| a - b));
@@ -470,7 +449,7 @@ fn run_plan(
             steady,
             acc_tolerance_diff,
             name: name.to_string(),
-            kind: kind_of(name),
+            kind: name.kind(),
             rpm: nominal.meta.0,
             clearance_m: nominal.meta.1,
             study: ensemble(&study),
@@ -500,9 +479,9 @@ fn run_plan(
             threads: rayon::current_num_threads(),
         },
     };
-    result.claims = claims::evaluate(&result.ensembles(Setting::Study))?;
-    result.reference_claims = claims::evaluate(&result.ensembles(Setting::Reference))?;
-    result.loose_claims = claims::evaluate(&result.ensembles(Setting::Loose))?;
+    result.claims = claims::evaluate(&result.ensembles(Setting::Study)?)?;
+    result.reference_claims = claims::evaluate(&result.ensembles(Setting::Reference)?)?;
+    result.loose_claims = claims::evaluate(&result.ensembles(Setting::Loose)?)?;
     result.verdicts_agree = result
         .claims
         .iter()

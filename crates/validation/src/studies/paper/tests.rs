@@ -15,6 +15,7 @@ use super::result::*;
 use super::runner::*;
 use super::stats::*;
 use crate::progress::NoProgress;
+use crate::run::press::PressCase;
 use crate::studies::paper::runner::realisation;
 
 const RPM: f64 = 150.0;
@@ -189,8 +190,7 @@ fn spread_is_the_largest_pointwise_range() {
 
 #[test]
 fn realisations_move_only_the_crank_phase() {
-    let cat: BTreeMap<String, Scene> = lash_model::cases::press_catalogue().into_iter().collect();
-    let s = &cat["dry_150rpm_c0.1"];
+    let s = &PressCase::dry(150, 100).scene();
     let r = realisation(s, 3, 1e-6);
     let theta0 = |s: &Scene| {
         s.joints
@@ -217,14 +217,8 @@ fn ideal_run_reproduces_the_closed_form() {
     // docs/model.md §5: ẍ(θ = 0) = −r ω² (1 + r/l) = −3.85972 m/s² at 150 rpm; the last grid
     // point is θ = 4π. The run's RMS deviation from the closed form is the integration
     // error, far below the 1e-6 relative that M1 asks for.
-    let cat: BTreeMap<String, Scene> = lash_model::cases::press_catalogue().into_iter().collect();
-    let r = run_case(
-        "ideal_150rpm",
-        &cat["ideal_150rpm"],
-        &Plan::paper().settings,
-        None,
-    )
-    .unwrap();
+    let case = PressCase::ideal(150);
+    let r = run_case(case, &case.scene(), &Plan::paper().settings, None).unwrap();
     assert_eq!((r.last.len(), r.previous.len()), (2001, 2001));
     assert_eq!(r.last[0].t, r.previous[2000].t);
     let m = &r.metrics;
@@ -269,11 +263,12 @@ fn a_failing_study_writes_nothing() {
 
 #[test]
 fn the_study_has_the_papers_eighteen_cases() {
-    let names = case_names();
+    let names = study_cases();
     assert_eq!(names.len(), 18);
+    // Every case is a scene of cases/press, written by the model's generator.
     let cat: BTreeMap<String, Scene> = lash_model::cases::press_catalogue().into_iter().collect();
     for n in &names {
-        assert!(cat.contains_key(*n), "{n}");
+        assert!(cat.contains_key(&n.to_string()), "{n}");
     }
     let mut sorted = names.clone();
     sorted.sort();
