@@ -31,7 +31,7 @@
 //!                interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot hide
 //!                inside a step, and the contacts and flights of the dry press are longer
 //!                than that (BENCHMARKS.md, "Defaults of a run"); a step over a whole contact
-//!                would miss both its onset and its loss (tests/simulate.rs checks the onset
+//!                would miss both its onset and its loss (run/tests/simulate.rs checks the onset
 //!                count against a reference).
 //! max_steps      50 000 000
 //! divergence     1e6: a state component (m, rad, m/s, rad/s) beyond 1e6 in magnitude is

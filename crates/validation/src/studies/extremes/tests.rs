@@ -1,6 +1,6 @@
 //! The extremes matrix (`crate::studies::extremes`): the scene files, the scene that drives
 //! the film to ε ≈ 0.999, the quick subset of the matrix (default run) and the full matrix
-//! (ignored: `cargo test --release -p lash-validation --test extremes -- --ignored`, or
+//! (ignored: `cargo test --release -p lash-validation --lib full_matrix -- --ignored`, or
 //! `lash extremes`).
 
 use std::path::PathBuf;
