@@ -5,7 +5,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
-use lash_validation::study::{CaseStats, Claim, Kind, Setting, StudyResult, Verdict};
+use lash_validation::study::{
+    CaseResult, CaseStats, Claim, Ensemble, Kind, Setting, StudyResult, Verdict,
+};
 
 /// The study's cases, in the order study.json lists them: the speed and clearance studies,
 /// dry then lubricated, then the ideal mechanism (docs/model.md §6).
@@ -37,6 +39,24 @@ const DRY_CLEARANCES: [&str; 4] = [CASES[1], CASES[4], CASES[5], CASES[6]];
 const LUB_CLEARANCES: [&str; 4] = [CASES[8], CASES[11], CASES[12], CASES[13]];
 /// The study's three solver settings.
 const SETTINGS: [Setting; 3] = [Setting::Study, Setting::Reference, Setting::Loose];
+
+/// A case's realisations at one of the settings.
+fn ensemble(c: &CaseResult, s: Setting) -> &Ensemble {
+    match s {
+        Setting::Study => &c.study,
+        Setting::Reference => &c.reference,
+        Setting::Loose => &c.loose,
+    }
+}
+
+/// A verdict as study.json and the report spell it (HOLDS, DOES NOT HOLD).
+fn spelled(v: Verdict) -> String {
+    serde_json::to_value(v)
+        .unwrap()
+        .as_str()
+        .unwrap()
+        .to_string()
+}
 /// Claims: P1–P25 from the paper, M1–M4 from docs/model.md.
 const CLAIMS: usize = 29;
 /// Figures drawn after the paper's Figures 5–16, one file pair per panel (the engine's own
@@ -49,7 +69,8 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 fn ensemble_mean(r: &StudyResult, case: &str, f: impl Fn(&CaseStats) -> f64) -> f64 {
-    mean(r.case(case).unwrap().study.members.iter().map(f))
+    let c = r.cases.iter().find(|c| c.name == case).unwrap();
+    mean(c.study.members.iter().map(f))
 }
 
 /// HOLDS for true.
@@ -133,7 +154,7 @@ fn study_paper_writes_consistent_results() {
             r.plan.realisations
         };
         for s in SETTINGS {
-            assert_eq!(c.ensemble(s).members.len(), n, "{} {s:?}", c.name);
+            assert_eq!(ensemble(c, s).members.len(), n, "{} {s:?}", c.name);
         }
     }
 
@@ -179,7 +200,7 @@ fn study_paper_writes_consistent_results() {
     // penetration_max = max(0, c (eps_max − 1)); film_thickness_min = c (1 − min(eps_max, 1)).
     for c in r.cases.iter().filter(|c| c.kind != Kind::Ideal) {
         let cl = c.clearance_m.unwrap();
-        for m in SETTINGS.iter().flat_map(|&s| &c.ensemble(s).members) {
+        for m in SETTINGS.iter().flat_map(|&s| &ensemble(c, s).members) {
             let m = &m.metrics;
             let eps = m.eps_max.unwrap();
             let pen = m.penetration_max.unwrap();
@@ -212,14 +233,14 @@ fn study_paper_writes_consistent_results() {
         );
     }
     for c in &r.claims {
-        let heading = format!("\n### {} — {} (", c.id, c.verdict.as_str());
+        let heading = format!("\n### {} — {} (", c.id, spelled(c.verdict));
         assert!(report.contains(&heading), "no '{heading}' in the report");
         let row = format!(
             "\n| {} | {} | {} | **{}** | ",
             c.id,
             c.figure.replace('|', "\\|"),
             c.statement.replace('|', "\\|"),
-            c.verdict.as_str()
+            spelled(c.verdict)
         );
         assert!(report.contains(&row), "no summary row for {}", c.id);
         assert!(report.contains(&c.source), "{}: source not quoted", c.id);

@@ -184,7 +184,7 @@ pub enum Outcome {
 
 impl Outcome {
     /// Whether the outcome is allowed (agreement or a typed error).
-    pub fn is_allowed(&self) -> bool {
+    pub(crate) fn is_allowed(&self) -> bool {
         matches!(self, Outcome::Agrees { .. } | Outcome::Failed { .. })
     }
 
@@ -194,7 +194,7 @@ impl Outcome {
     }
 
     /// One short cell for the markdown tables.
-    pub fn cell(&self) -> String {
+    pub(crate) fn cell(&self) -> String {
         match self {
             Outcome::Agrees { error, promise } => format!("ok {}", ratio(*error, *promise)),
             Outcome::Known { error, promise, .. } => {

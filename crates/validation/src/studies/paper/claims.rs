@@ -224,7 +224,7 @@ impl Verdict {
         }
     }
     /// "HOLDS" or "DOES NOT HOLD".
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Verdict::Holds => "HOLDS",
             Verdict::DoesNotHold => "DOES NOT HOLD",

@@ -27,7 +27,7 @@ pub(crate) const FIGURES_DIR: &str = "figures";
 
 impl CaseResult {
     /// The realisations at `which` settings.
-    pub fn ensemble(&self, which: Setting) -> &Ensemble {
+    pub(crate) fn ensemble(&self, which: Setting) -> &Ensemble {
         match which {
             Setting::Study => &self.study,
             Setting::Reference => &self.reference,
@@ -182,11 +182,6 @@ pub struct StudyResult {
 }
 
 impl StudyResult {
-    /// The case of this name.
-    pub fn case(&self, name: &str) -> Option<&CaseResult> {
-        self.cases.iter().find(|c| c.name == name)
-    }
-
     /// The claims judged again on the statistics stored here at one of the settings (what
     /// `claims`, `reference_claims` and `loose_claims` hold, recomputed: a check that every
     /// verdict follows from the stored numbers). Errors: a case or a statistic missing.
