@@ -14,15 +14,17 @@
 //! ```
 //!
 //! The public API is what the commands take and give: each command function with its option
-//! struct and result type (re-exported here), [`Error`] with its [`ErrorKind`], and the
-//! [`Progress`] hook. Everything else lives in rooms private to the crate: `commands` (one
-//! function per command), `run` (case references, preparing, planning and driving a run,
-//! sampling, quadrature, runs until periodic, the files of one run), `report` (summary.json,
-//! trajectory.csv, metrics, figures, markdown), `store` (atomic writes, the cache of finished
-//! runs, claim files), `compare` (errors against a reference, work–precision), `studies` (the
-//! default run, the paper's §4 and its claims, their robustness, the extremes matrix),
-//! `diagnostics` (stiffness, Poincaré section and Lyapunov exponent), `sweep` (grids, shards,
-//! resume, merge).
+//! struct and result type (re-exported here; the paper's study's and the extremes matrix's
+//! result types under [`study`] and [`extremes`]), [`Error`] with its [`ErrorKind`], and the
+//! [`Progress`] hook; and [`PressCase`], the identity of a case of the paper's press. Everything
+//! else lives in rooms private to the crate: `commands` (one function per command), `run`
+//! (case references, press cases, preparing, planning and driving a run, sampling,
+//! quadrature, runs until periodic, the files of one run), `report` (summary.json,
+//! trajectory.csv, metrics, figures), `store` (atomic writes, the cache of finished runs, claim
+//! files), `compare` (errors against a reference, work–precision), `studies` (the default
+//! run, the paper's §4 and its claims, their robustness, the extremes matrix), `diagnostics`
+//! (stiffness, Poincaré section and Lyapunov exponent), `sweep` (grids, shards, resume,
+//! merge). No source file imports one that imports it back.
 
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
