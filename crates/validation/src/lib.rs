@@ -15,7 +15,7 @@
 //!
 //! The public API is what the commands take and give: each command function with its option
 //! struct and result type (re-exported here; the paper's study's and the extremes matrix's
-//! result types under [`study`] and [`extremes`]), [`Error`] with its [`ErrorKind`], and the
+//! result types under [`study`] and [`extremes`](mod@extremes)), [`Error`] with its [`ErrorKind`], and the
 //! [`Progress`] hook; and [`PressCase`], the identity of a case of the paper's press. Everything
 //! else lives in rooms private to the crate: `commands` (one function per command), `run`
 //! (case references, press cases, preparing, planning and driving a run, sampling,
