@@ -23,7 +23,7 @@
 //! comma-separated, `--step` only for fixed-step methods, `--rtol`/`--atol`/`--controller` only for
 //! adaptive ones. Every parse error becomes one line and exit code 2 ([`parse`]).
 //!
-//! Each argument struct converts into the engine's options (`lash_validation::commands`):
+//! Each argument struct converts into the engine's options (`lash_validation::RunOptions`, …):
 //! `SolverFlags` → [`SolverChoice`], `RunArgs` → `RunOptions`, and so on. The checks that are
 //! facts of the engine (which option fits which method, the work–precision lists) are the
 //! engine's; their errors name options by the engine's names, spelled here as flags
