@@ -99,7 +99,9 @@ mod tests {
         };
         assert_eq!(io.exit_code(), 2);
         assert!(io.to_string().starts_with("a/b: "));
-        let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
+        let s = Error::Solver(SolveError::InvalidOptions(
+            lash_solver::Rule::RTOL.check(0.0).unwrap_err(),
+        ));
         assert_eq!(s.exit_code(), 3);
         assert_eq!(Error::Internal("x".into()).exit_code(), 1);
         let i = Error::from(SolveError::Interrupted {

@@ -49,7 +49,7 @@ pub use commands::{
     sweep::{merge, sweep, sweep_with, MergeOptions, Merged, SweepOutcome, SweepRunOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};
-pub use options::{SolverChoice, RTOL_MIN};
+pub use options::SolverChoice;
 pub use progress::{NoProgress, Progress};
 pub use store::io::Written;
 
