@@ -23,11 +23,7 @@ use pyo3::types::{PyDict, PyList};
 
 use lash_model::SceneError;
 use lash_solver::{Atol, ControllerKind, Method, SolveError};
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::report::metrics::EventRecord;
-use lash_validation::run::case::Case;
-use lash_validation::run::simulate::RunResult;
-use lash_validation::{Error, SolverChoice};
+use lash_validation::{Case, Error, EventRecord, RunOptions, RunResult, SolverChoice};
 
 use crate::convert::bytearray_from_f64s;
 use crate::errors::{failure_kind, scene_error, solve_error, usage_error};
@@ -84,9 +80,7 @@ fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         e @ Error::Io { .. } => PyOSError::new_err(e.to_string()),
         // A stop requested through lash_solver's interrupt flag: what Ctrl-C is in Python.
         e @ Error::Interrupted(_) => PyKeyboardInterrupt::new_err(e.to_string()),
-        e @ (Error::NotYetAvailable(_) | Error::Internal(_)) => {
-            PyRuntimeError::new_err(e.to_string())
-        }
+        e @ Error::Internal(_) => PyRuntimeError::new_err(e.to_string()),
     }
 }
 
@@ -181,9 +175,9 @@ pub fn run_core<'py>(
             (None, Some(t)) => Case::from_json_bytes(&name, t)?,
             (None, None) => return Err(Error::Internal("run_core: no scene".into())),
         };
-        let (prepared, r) = commands::run_in_memory(case, &o)?;
+        let r = lash_validation::run_in_memory(case, &o)?;
         // Built-in test problems have no events.
-        let names = prepared.info.map(|i| i.event_names).unwrap_or_default();
+        let names = r.event_names.clone();
         Ok((r, names, start.elapsed().as_secs_f64()))
     });
     let (r, event_names, engine_s) = outcome.map_err(|e| engine_error(py, e))?;
