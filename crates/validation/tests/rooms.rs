@@ -22,7 +22,10 @@ use std::path::{Path, PathBuf};
 type Files = BTreeMap<Vec<String>, PathBuf>;
 
 fn crate_src(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(name).join("src")
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(name)
+        .join("src")
 }
 
 fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -207,7 +210,10 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
             }
         }
         // Paths through a child module: `child::…`.
-        for child in files.keys().filter(|k| k.len() == m.len() + 1 && k.starts_with(m)) {
+        for child in files
+            .keys()
+            .filter(|k| k.len() == m.len() + 1 && k.starts_with(m))
+        {
             let name = format!("{}::", child.last().unwrap());
             let mut rest = text.as_str();
             while let Some(at) = rest.find(&name) {
@@ -347,7 +353,10 @@ fn the_measures_see_what_they_measure() {
             vec!["a", "f", "G"]
         ]
     );
-    assert_eq!(use_tree("run::prepare::Prepared;"), [vec!["run", "prepare", "Prepared"]]);
+    assert_eq!(
+        use_tree("run::prepare::Prepared;"),
+        [vec!["run", "prepare", "Prepared"]]
+    );
     // A circle of two files and one of three are found; a chain is not a circle.
     let m = |s: &str| -> Vec<String> { s.split("::").map(String::from).collect() };
     let mut e = BTreeMap::new();
@@ -368,5 +377,8 @@ fn the_measures_see_what_they_measure() {
     let text = "pub fn a() {}\n#[cfg(test)]\npub fn b() {}\n#[cfg(test)]\nmod tests {\n    pub fn c() {}\n}\n";
     assert_eq!(production(text).len(), 3);
     assert_eq!(pub_items(&production(text)), 2);
-    assert_eq!(pub_items(&["pub(crate) fn x()", "    pub y: u8,", "pub use a::B;"]), 1);
+    assert_eq!(
+        pub_items(&["pub(crate) fn x()", "    pub y: u8,", "pub use a::B;"]),
+        1
+    );
 }
