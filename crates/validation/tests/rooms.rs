@@ -220,7 +220,7 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
                 let before = rest[..at].chars().last();
                 rest = &rest[at + name.len()..];
                 if !before.is_some_and(|c| is_ident(c) || c == ':') {
-                    to.insert(child.clone());
+                    add(child.clone());
                 }
             }
         }
