@@ -113,6 +113,7 @@ pub mod error;
 pub mod integrator;
 pub mod interrupt;
 pub mod jacobian;
+pub mod memory;
 pub mod onestep;
 pub mod options;
 pub mod rk4;

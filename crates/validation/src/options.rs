@@ -1,13 +1,14 @@
 //! The solver choice of a request, laid over a case's own options.
 //!
 //! ```text
-//! SolverChoice { method, rtol, atol, step, controller, max_steps, max_wall_time }  (each optional)
+//! SolverChoice { method, rtol, atol, step, controller, max_steps, max_wall_time, max_memory }
+//!   (each optional)
 //! choice.apply(base) = base with the choice laid over it, checked against the method:
 //!   fixed-step: step only;  adaptive: rtol, atol, controller only;  budgets: any method
 //! ```
 //!
 //! Errors name the options by their engine names ([`OptionError`]): `rtol`, `atol`, `step`,
-//! `controller`, `method`, `max_steps`, `max_wall_time`.
+//! `controller`, `method`, `max_steps`, `max_wall_time`, `max_memory`.
 //!
 //! Source: docs/outputs.md ("Method and controller names", "Defaults of a run").
 
@@ -25,6 +26,8 @@ pub const RTOL_MIN: f64 = 1e-14;
 /// method, rtol, atol, step, controller:  the method and its error or step control
 /// max_steps, max_wall_time:             budgets; running out is a solver failure
 ///                                       ("too many steps", "budget exhausted")
+/// max_memory:                           the budget of the implicit methods' n² matrices
+///                                       (lash_solver::memory; "not enough memory")
 /// ```
 ///
 /// Source: docs/outputs.md ("Method and controller names").
@@ -44,6 +47,8 @@ pub struct SolverChoice {
     pub max_steps: Option<usize>,
     /// Wall-clock budget of the integration, s.
     pub max_wall_time: Option<f64>,
+    /// Memory budget of the dense n² matrices, bytes (default: half of what is available).
+    pub max_memory: Option<u64>,
 }
 
 impl SolverChoice {
@@ -57,7 +62,7 @@ impl SolverChoice {
     /// adaptive:   step is an error; a controller on diffsol's methods is an error;
     ///             rtol, atol = the choice or base; controller = the choice, or base's if the
     ///             method did not change
-    /// budgets:    max_steps, max_wall_time replace base's for any method
+    /// budgets:    max_steps, max_wall_time, max_memory replace base's for any method
     /// ```
     pub fn apply(&self, base: &SolverOptions) -> Result<SolverOptions, Error> {
         let method = self.method.unwrap_or(base.method);
@@ -69,6 +74,9 @@ impl SolverChoice {
         }
         if let Some(w) = self.max_wall_time {
             o.max_wall_time = Some(w);
+        }
+        if let Some(m) = self.max_memory {
+            o.max_memory = Some(m);
         }
         if method.is_fixed_step() {
             for (option, given) in [
