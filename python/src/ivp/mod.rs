@@ -29,7 +29,7 @@ use pyo3::types::PyDict;
 use lash_solver::{Method, SolveError};
 
 use crate::convert::Numpy;
-use crate::errors::usage_error;
+use crate::errors::{memory_error, usage_error};
 
 pub use parse::{default_controller, IvpArgs};
 use system::{EventLog, PySystem};
@@ -45,6 +45,15 @@ use system::{EventLog, PySystem};
 /// or `(nodes, t0s, t1s, values)` as bytes), `failure` (None or `(kind, message, t, y)`).
 #[pyfunction]
 pub fn solve_ivp_core<'py>(
+    py: Python<'py>,
+    fun: Bound<'py, PyAny>,
+    args: IvpArgs<'py>,
+) -> PyResult<Bound<'py, PyDict>> {
+    crate::errors::guard(py, "lash.solve_ivp", || solve(py, fun, args))
+}
+
+/// The body of [`solve_ivp_core`] (inside its panic guard).
+fn solve<'py>(
     py: Python<'py>,
     fun: Bound<'py, PyAny>,
     args: IvpArgs<'py>,
@@ -73,7 +82,7 @@ pub fn solve_ivp_core<'py>(
     let nodes = drive::lobatto_nodes(parse::dense_degree(p.opts.method));
     let rec = match drive::drive(&sys, &p, &nodes)? {
         Ok(rec) => rec,
-        Err(e) => return Err(solve_error_to_usage(py, &e)),
+        Err(e) => return Err(setup_error(py, &e)),
     };
     if let Some(err) = sys.take_error() {
         return Err(err);
@@ -89,10 +98,12 @@ pub fn default_controllers() -> impl ExactSizeIterator<Item = (&'static str, Opt
         .map(|m| (m.name(), default_controller(*m)))
 }
 
-/// An options error as `lash.UsageError`; other failures cannot reach here.
-fn solve_error_to_usage(py: Python<'_>, e: &SolveError) -> PyErr {
+/// A failure before the first step: options (`lash.UsageError`) or memory refused for the
+/// method's dense matrices (`lash.OutOfMemoryError`); other failures cannot reach here.
+fn setup_error(py: Python<'_>, e: &SolveError) -> PyErr {
     match e {
         SolveError::InvalidOptions(m) => usage_error(py, m),
+        SolveError::OutOfMemory(m) => memory_error(py, m),
         other => usage_error(py, &other.to_string()),
     }
 }

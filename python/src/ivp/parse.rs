@@ -9,6 +9,7 @@
 //! first_step, max_step,     → .h0, .h_max, .h_min (diffsol's methods too: h0 and h_min are
 //! min_step                     diffsol's own, h_max is imposed by stop times)
 //! max_steps, step           → .max_steps, .step (rk4's fixed step)
+//! max_memory                → .max_memory (the budget of the n² matrices, crate lash_solver::memory)
 //! t0, t1                    → d = sign(t1 − t0), solver span [d t0, d t1]; t1 = ±∞ runs up
 //!                              to the largest finite time (until a terminal event)
 //! t_eval                    → output times in solver time
@@ -73,6 +74,8 @@ pub struct IvpArgs<'py> {
     pub max_steps: usize,
     /// rk4's fixed step.
     pub step: Option<f64>,
+    /// Memory budget of the dense n² matrices, bytes (None: half of what is available).
+    pub max_memory: Option<u64>,
     /// Extra positional arguments of every callback.
     pub args: Vec<Bound<'py, PyAny>>,
 }
@@ -220,6 +223,7 @@ pub fn parse<'py>(py: Python<'py>, a: IvpArgs<'py>) -> PyResult<Parsed<'py>> {
         h_min: a.min_step,
         h_max: a.max_step,
         max_steps: a.max_steps,
+        max_memory: a.max_memory,
         controller,
         ..SolverOptions::default()
     };

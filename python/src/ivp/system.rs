@@ -240,7 +240,8 @@ impl OdeSystem for PySystem<'_> {
 
     fn events(&self, s: f64, y: &[f64], g: &mut [f64]) {
         if self.failed() {
-            // NaN has no sign: no event is reported, and the stored error ends the run.
+            // NaN has no sign: the solver stops (SolveError::EventNan) and the stored
+            // exception is raised in its place (drive.rs).
             g.fill(f64::NAN);
             return;
         }
