@@ -78,6 +78,7 @@ fn solve<'py>(
         }),
         fun_calls: Cell::new(0),
         jac_calls: Cell::new(0),
+        jac_buf: RefCell::new(Vec::new()),
     };
     let nodes = drive::lobatto_nodes(parse::dense_degree(p.opts.method));
     let rec = match drive::drive(&sys, &p, &nodes)? {
