@@ -2,7 +2,8 @@
 //! and the guard every entry point runs in.
 //!
 //! ```text
-//! SolveError::InvalidOptions(m)          → lash.UsageError(m)        (raised here)
+//! SolveError::InvalidOptions(o)          → lash.UsageError(o rendered with the keywords'
+//!                                          names: h0 → first_step, h_min → min_step, …)
 //! SolveError::OutOfMemory(m)             → lash.OutOfMemoryError(message, needed, budget)
 //!                                          (a MemoryError)
 //! any other SolveError (time, state)     → (kind, message, t, y) data → lash.SolveError,
@@ -23,7 +24,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::PyType;
 
 use lash_solver::memory::MemoryError;
-use lash_solver::SolveError;
+use lash_solver::{OptionField, SolveError};
 
 static USAGE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static SCENE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
@@ -36,6 +37,19 @@ pub fn usage_error(py: Python<'_>, message: &str) -> PyErr {
     match USAGE_ERROR.import(py, "lash._errors", "UsageError") {
         Ok(ty) => PyErr::from_type(ty.clone(), message.to_string()),
         Err(e) => e,
+    }
+}
+
+/// The keyword of `lash.solve_ivp` (and `lash.run`) that sets a solver option: scipy's
+/// names for the step bounds (`first_step`, `min_step`, `max_step`), the solver's name for
+/// the rest (`rtol`, `atol`, `step`, `max_steps`, `controller`, `method`, ...). Solver
+/// option errors are rendered with it ([`lash_solver::OptionError::render`]).
+pub fn keyword(field: OptionField) -> String {
+    match field {
+        OptionField::H0 => "first_step".into(),
+        OptionField::HMin => "min_step".into(),
+        OptionField::HMax => "max_step".into(),
+        other => other.name().to_string(),
     }
 }
 

@@ -39,7 +39,7 @@ use lash_validation::{Error, SolverChoice};
 
 use crate::convert::bytearray_from_f64s;
 use crate::errors::{
-    failure_kind, guard, memory_error, panic_error, scene_error, solve_error, usage_error,
+    failure_kind, guard, keyword, memory_error, panic_error, scene_error, solve_error, usage_error,
 };
 
 /// The kind of a located event, as `lash.run` reports it: what crossed zero
@@ -98,7 +98,7 @@ fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         Error::Input(m) => scene_error(py, ".", &m),
         Error::Usage(m) => usage_error(py, &m),
         Error::Option(o) => usage_error(py, &o.to_string()),
-        Error::Solver(SolveError::InvalidOptions(m)) => usage_error(py, &m),
+        Error::Solver(SolveError::InvalidOptions(m)) => usage_error(py, &m.render(&keyword)),
         Error::Solver(SolveError::OutOfMemory(m)) => memory_error(py, &m),
         Error::Solver(s) => {
             let t = s.time().unwrap_or(f64::NAN);

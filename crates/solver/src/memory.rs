@@ -29,7 +29,7 @@ use std::fmt;
 
 use faer::Mat;
 
-use crate::options::Method;
+use crate::method::Method;
 
 /// The share of the available memory that the n² allocations of one integration may use
 /// when no `max_memory` is given.

@@ -7,7 +7,7 @@ use pyo3::types::{PyDict, PyList};
 use lash_solver::SolveError;
 
 use super::drive::Record;
-use super::parse::{default_controller, Parsed};
+use super::parse::Parsed;
 use super::system::{Jac, PySystem};
 use crate::convert::bytearray_from_f64s;
 use crate::errors::failure_kind;
@@ -62,7 +62,7 @@ pub fn collect<'py>(
         p.opts
             .controller
             .map(|c| c.name())
-            .or_else(|| default_controller(p.opts.method)),
+            .or_else(|| p.opts.method.default_controller().map(|c| c.name())),
     )?;
     if p.dense_output {
         let dense = (

@@ -3,7 +3,8 @@
 //! states before event hooks.
 //!
 //! Dense output: every step's interpolant is sampled at the m + 1 Chebyshev–Lobatto points of
-//! its interval, m the degree of the method's dense output (`parse::dense_degree`), which
+//! its interval, m the degree of the method's dense output (`Method::dense_degree`, the
+//! solver's table of method facts), which
 //! reproduces it exactly (a polynomial of degree ≤ m is determined by m + 1 values);
 //! python/lash/_ivp.py evaluates it by barycentric interpolation (Berrut & Trefethen, SIAM
 //! Review 46(3) 501–517, 2004). The end nodes are the states themselves (the step's start,

@@ -29,9 +29,9 @@ use pyo3::types::PyDict;
 use lash_solver::{Method, SolveError};
 
 use crate::convert::Numpy;
-use crate::errors::{memory_error, usage_error};
+use crate::errors::{keyword, memory_error, usage_error};
 
-pub use parse::{default_controller, IvpArgs};
+pub use parse::IvpArgs;
 use system::{EventLog, PySystem};
 
 /// Integrates a Python ODE; the engine of `lash.solve_ivp` (python/lash/_ivp.py), which
@@ -80,7 +80,7 @@ fn solve<'py>(
         jac_calls: Cell::new(0),
         jac_buf: RefCell::new(Vec::new()),
     };
-    let nodes = drive::lobatto_nodes(parse::dense_degree(p.opts.method));
+    let nodes = drive::lobatto_nodes(p.opts.method.dense_degree());
     let rec = match drive::drive(&sys, &p, &nodes)? {
         Ok(rec) => rec,
         Err(e) => return Err(setup_error(py, &e)),
@@ -96,14 +96,14 @@ pub fn default_controllers() -> impl ExactSizeIterator<Item = (&'static str, Opt
 {
     Method::ALL
         .iter()
-        .map(|m| (m.name(), default_controller(*m)))
+        .map(|m| (m.name(), m.default_controller().map(|c| c.name())))
 }
 
 /// A failure before the first step: options (`lash.UsageError`) or memory refused for the
 /// method's dense matrices (`lash.OutOfMemoryError`); other failures cannot reach here.
 fn setup_error(py: Python<'_>, e: &SolveError) -> PyErr {
     match e {
-        SolveError::InvalidOptions(m) => usage_error(py, m),
+        SolveError::InvalidOptions(m) => usage_error(py, &m.render(&keyword)),
         SolveError::OutOfMemory(m) => memory_error(py, m),
         other => usage_error(py, &other.to_string()),
     }

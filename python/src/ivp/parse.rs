@@ -80,33 +80,6 @@ pub struct IvpArgs<'py> {
     pub args: Vec<Bound<'py, PyAny>>,
 }
 
-/// The controller a method uses when none is given (docs/outputs.md, "Method and controller
-/// names"): `pi` for the embedded explicit pairs, `gustafsson` for Rodas5P, none for RK4 and
-/// diffsol's methods (they take no controller of ours).
-pub fn default_controller(method: Method) -> Option<&'static str> {
-    match method {
-        Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
-            Some(ControllerKind::Pi.name())
-        }
-        Method::Rodas5p => Some(ControllerKind::Gustafsson.name()),
-        Method::Rk4 | Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => None,
-    }
-}
-
-/// Degree in t of a method's dense output on one step (crates/solver: `rk4` and `bs32` cubic
-/// Hermite, `dopri54`/`tsit54` order-4 continuous extensions and Rodas5P's interpolant of
-/// degree 4, DOP853's of degree 7; diffsol's BDF interpolates its difference table, degree =
-/// order ≤ 5, and its Runge–Kutta methods use Hermite or stage-weight polynomials of lower
-/// degree, so 7 covers them). tests/test_dense.py checks that `sol(t)` equals the
-/// integrator's own interpolation at `t_eval` for every method.
-pub fn dense_degree(method: Method) -> usize {
-    match method {
-        Method::Rk4 | Method::Bs32 => 3,
-        Method::Dopri54 | Method::Tsit54 | Method::Rodas5p => 4,
-        Method::Dop853 | Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => 7,
-    }
-}
-
 /// What the parse stage gives the other stages.
 pub struct Parsed<'py> {
     /// The solver's options.

@@ -140,7 +140,7 @@ impl FailureError {
                 "budget_exhausted"
             }
             SolveError::InvalidOptions(m) => {
-                f.reason = Some(m.clone());
+                f.reason = Some(m.to_string());
                 "invalid_options"
             }
             SolveError::EventNan { .. } => "event_nan",
