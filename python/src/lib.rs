@@ -10,8 +10,8 @@
 //!        │                                    Run (summary dict, numpy columns, events)
 //!        ▼
 //! _lash.run_core (scene.rs)                   RunArgs (the keyword arguments, one dict) →
-//!                                             lash_validation::commands::run_in_memory on an
-//!                                             engine thread, the GIL released, while the
+//!                                             lash_validation::run_in_memory on an engine
+//!                                             thread, the GIL released, while the
 //!                                             caller's thread looks for Ctrl-C every 50 ms
 //!
 //! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's

@@ -1,6 +1,6 @@
 //! What runs report: summary.json, trajectory.csv, the metrics, the figures.
 
-pub mod metrics;
-pub mod plot;
-pub mod summary;
-pub mod trajectory;
+pub(crate) mod metrics;
+pub(crate) mod plot;
+pub(crate) mod summary;
+pub(crate) mod trajectory;
