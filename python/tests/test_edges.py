@@ -238,6 +238,17 @@ def test_oversized_and_nan_run_options_are_usage_errors(kwargs, fragment):
     assert fragment in str(info.value)
 
 
+def test_a_wall_time_budget_beyond_the_clock_is_no_budget():
+    """max_wall_time = 1e300 s is finite and > 0, so the rule lets it through; a deadline that
+    far is beyond what the clock holds and is no deadline (it used to be a panic, an
+    InternalError). The run equals the one without a budget, bit for bit."""
+    kw = dict(t_end=0.01, method="dopri54")
+    budgeted = lash.run(DRY_PRESS, max_wall_time=1e300, **kw)
+    free = lash.run(DRY_PRESS, **kw)
+    assert budgeted.summary["stats"] == free.summary["stats"]
+    assert np.array_equal(budgeted.summary["final_state"], free.summary["final_state"])
+
+
 @pytest.mark.parametrize("method", ["dopri54", "rodas5p", "bdf", "tsit54"])
 def test_an_event_returning_nan_is_a_solve_error_naming_it(method):
     # Before: the event silently never fired. g = 0.3 - t until t = 0.5, then NaN.

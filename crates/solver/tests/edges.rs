@@ -9,6 +9,7 @@
 //!                                       evaluation; the explicit methods allocate no n²
 //! y' = 2y on [0, 1e-4] (scipy's gh-17341): f is never evaluated beyond t_end, and where the
 //!                                       probe fits the span the step is diffsol's own
+//! max_wall_time = 1e300 s (finite, beyond the clock) → no deadline, never a panic
 //! ```
 
 use std::cell::Cell;
@@ -282,4 +283,33 @@ fn bdf_steps_of_equal_size_land_on_its_h_max_stops_without_a_crawl() {
     // 4 time units at h ≤ 0.5 with h = 0.1 kept: about 40 steps (not thousands).
     let accepted = it.stats().accepted;
     assert!(accepted <= 60, "{accepted} steps");
+}
+
+/// A wall-clock budget longer than the clock can hold (1e300 s passes the option rule: finite
+/// and > 0) is no budget: every method runs to the end with the exact decay, where
+/// `Duration::from_secs_f64` used to panic. The deadline itself: none beyond the clock's range
+/// or for a value the rules reject, `start + w` otherwise.
+#[test]
+fn a_wall_time_budget_beyond_the_clock_is_no_budget() {
+    use lash_solver::stepper::deadline_after;
+    use std::time::{Duration, Instant};
+    for method in Method::ALL {
+        let mut o = opts_for(method);
+        o.max_wall_time = Some(1e300);
+        let sol = solve(&Decay(1), (0.0, 1.0), &[1.0], &o).unwrap();
+        let tol = if method.is_fixed_step() { 1e-9 } else { 1e-4 };
+        assert!(
+            (sol.y_final[0] - (-1.0f64).exp()).abs() < tol,
+            "{method}: {}",
+            sol.y_final[0]
+        );
+    }
+    let start = Instant::now();
+    for w in [1e300, f64::INFINITY, f64::NAN, 0.0, -1.0] {
+        assert_eq!(deadline_after(start, w), None, "{w}");
+    }
+    assert_eq!(
+        deadline_after(start, 2.5),
+        Some(start + Duration::from_millis(2500))
+    );
 }
