@@ -214,6 +214,14 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
                 }
             }
         }
+        // lib.rs's re-exports (`pub use room::…`) are imports of the rooms.
+        if m.is_empty() {
+            for l in text.split("pub use ").skip(1) {
+                for p in use_tree(l) {
+                    add(p);
+                }
+            }
+        }
         // Paths through a child module: `child::…`.
         for child in files
             .keys()
@@ -226,14 +234,6 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
                 rest = &rest[at + name.len()..];
                 if !before.is_some_and(|c| is_ident(c) || c == ':') {
                     add(child.clone());
-                }
-            }
-        }
-        // lib.rs's re-exports (`pub use room::…`) are imports of the rooms.
-        if m.is_empty() {
-            for l in text.split("pub use ").skip(1) {
-                for p in use_tree(l) {
-                    add(p);
                 }
             }
         }
