@@ -63,17 +63,13 @@ pub fn scene_error(py: Python<'_>, path: &str, reason: &str) -> PyErr {
 }
 
 /// `lash.SolveError(message, t, y, kind)`: a failed integration with its time and last good
-/// state (`y` a numpy array).
-pub fn solve_error(py: Python<'_>, message: &str, t: f64, y: &[f64], kind: &str) -> PyErr {
-    let ty = match SOLVE_ERROR.import(py, "lash._errors", "SolveError") {
-        Ok(ty) => ty.clone(),
-        Err(e) => return e,
-    };
-    let y = match crate::convert::Numpy::import(py).and_then(|np| np.array(y)) {
-        Ok(a) => a.unbind(),
-        Err(e) => return e,
-    };
-    PyErr::from_type(ty, (message.to_string(), t, y, kind.to_string()))
+/// state (`y` a numpy array, made by the caller: `convert` builds arrays and reports its own
+/// errors through this module, so this module does not import it back).
+pub fn solve_error(py: Python<'_>, message: &str, t: f64, y: Py<PyAny>, kind: &str) -> PyErr {
+    match SOLVE_ERROR.import(py, "lash._errors", "SolveError") {
+        Ok(ty) => PyErr::from_type(ty.clone(), (message.to_string(), t, y, kind.to_string())),
+        Err(e) => e,
+    }
 }
 
 /// `lash.OutOfMemoryError(message, needed, budget)`: memory refused before it was allocated

@@ -86,7 +86,16 @@ fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         Error::Solver(s) => {
             let t = s.time().unwrap_or(f64::NAN);
             let y = s.state().map(<[f64]>::to_vec).unwrap_or_default();
-            solve_error(py, &s.to_string(), t, &y, failure_kind(&s))
+            match crate::convert::Numpy::import(py).and_then(|np| np.array(&y)) {
+                Ok(y) => solve_error(
+                    py,
+                    &s.to_string(),
+                    t,
+                    y.into_any().unbind(),
+                    failure_kind(&s),
+                ),
+                Err(e) => e,
+            }
         }
         e @ Error::Io { .. } => PyOSError::new_err(e.to_string()),
         // A stop requested through lash_solver's interrupt flag: what Ctrl-C is in Python.
