@@ -117,6 +117,8 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Stiffness(a) => stiffness_command(&a).map(|_| ()),
         Command::Poincare(a) => poincare_command(&a).map(|_| ()),
         Command::Extremes(a) => extremes_command(&a).map(|_| ()),
+        Command::Animate(a) => crate::viz::animate_command(&a).map(|_| ()),
+        Command::Plot(a) => crate::viz::plot_command(&a).map(|_| ()),
         Command::Merge(a) => {
             let m = commands::merge(&a.options()).map_err(flagged)?;
             let missing = m.table.unfinished.len() + m.table.corrupt.len();
@@ -154,6 +156,11 @@ pub fn default_command() -> Result<Written<Headline>, Error> {
 /// Returns the result and the output directory. With `--max-wall-time` a watchdog stops the
 /// process (exit 3) if the engine overruns the budget inside work it cannot interrupt.
 pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
+    if a.animate && a.case.starts_with(lash_validation::case::BUILTIN_PREFIX) {
+        return Err(Error::Usage(
+            "--animate needs a scene: a built-in test problem has no mechanism to draw".into(),
+        ));
+    }
     let _watchdog = a.solver.max_wall_time.map(Watchdog::start);
     let w = commands::run(&a.options(), &StderrProgress::new())?;
     out(&describe_run(&w.result));
@@ -162,6 +169,9 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
         w.files.len(),
         w.dir.display()
     ));
+    if a.animate {
+        crate::viz::animate_run(&w.dir)?;
+    }
     Ok((w.result, w.dir))
 }
 

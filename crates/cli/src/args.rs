@@ -16,6 +16,8 @@
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
 //!                    [solver flags] [--out DIR]
 //! lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
+//! lash animate RUN_DIR [--trace BODY[.POINT]] [--column NAME] [--max-frames N] [--out FILE]
+//! lash plot RUN_DIR COLUMN... [--x COLUMN] [--out FILE]          (module `viz`)
 //! ```
 //!
 //! Names and list syntax are the contract of docs/outputs.md ("Method and controller names"):
@@ -100,6 +102,11 @@ pub enum Command {
     /// exit 0 when no run fails (each agrees with its reference within its promise, ends in a
     /// typed solver error, or is a documented known finding), 1 otherwise.
     Extremes(ExtremesArgs),
+    /// Animate a run: RUN_DIR/animation.html, one self-contained page a browser opens (the
+    /// mechanism moving, its clearance joints magnified, forces, a time-series panel).
+    Animate(crate::viz::AnimateArgs),
+    /// Plot trajectory columns of a run against time or another column (SVG and PNG).
+    Plot(crate::viz::PlotArgs),
 }
 
 /// The solver flags of `lash run`.
@@ -226,6 +233,10 @@ pub struct RunArgs {
     #[arg(long = "max-revolutions", value_name = "N", value_parser = parse_max_revolutions,
           requires = "until_periodic")]
     pub max_revolutions: Option<usize>,
+    /// Also write DIR/animation.html, the run as a page a browser opens (as `lash animate
+    /// DIR`; scenes only).
+    #[arg(long)]
+    pub animate: bool,
 }
 
 impl RunArgs {
@@ -617,8 +628,8 @@ impl PoincareArgs {
 /// Source: clap's error kinds DisplayHelp, DisplayVersion.
 #[derive(Debug)]
 pub enum Parsed {
-    /// A command to execute.
-    Cli(Cli),
+    /// A command to execute (boxed: the parsed arguments are large).
+    Cli(Box<Cli>),
     /// Help or version text to print on standard output, then exit 0.
     Print(String),
 }
@@ -631,7 +642,7 @@ where
     T: Into<OsString> + Clone,
 {
     match Cli::try_parse_from(args) {
-        Ok(cli) => Ok(Parsed::Cli(cli)),
+        Ok(cli) => Ok(Parsed::Cli(Box::new(cli))),
         Err(e) => {
             use clap::error::ErrorKind;
             match e.kind() {
@@ -801,7 +812,7 @@ mod tests {
         let mut v = vec!["lash"];
         v.extend_from_slice(args);
         match parse(v)? {
-            Parsed::Cli(c) => Ok(c),
+            Parsed::Cli(c) => Ok(*c),
             Parsed::Print(_) => panic!("help printed"),
         }
     }

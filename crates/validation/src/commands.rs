@@ -16,6 +16,8 @@
 //! stiffness(StiffnessOptions, progress) → Written<StiffnessResult>
 //! poincare(PoincareOptions, progress)   → Written<PoincareResult>
 //! extremes(ExtremesOptions, progress)   → Written<Matrix>       extremes.md, extremes.json
+//! animate(AnimateOptions)               → Written<Animated>     RUN_DIR/animation.html
+//! plot(PlotOptions)                     → Written<Plotted>      a figure of trajectory columns
 //! out = the option, else default_out(COMMAND, case name) = out/COMMAND/NAME
 //! ```
 //!
@@ -124,6 +126,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         Ok(mut r) => {
             r.summary.until_periodic = settled;
             let mut files = vec![traj];
+            files.extend(write_scene(&prepared, dir.path())?);
             files.extend(r.write(dir.path())?);
             let files = files.iter().map(|f| dir.final_path(f)).collect();
             dir.commit()?;
@@ -169,6 +172,37 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         }),
         Err(e) => Err(e),
     }
+}
+
+/// Keeps the scene a run ran in its directory as `scene.json` (before summary.json): the
+/// file's bytes as read (so its SHA-256 is the summary's `scene_sha256`), a catalogue scene as
+/// JSON; a built-in test problem has none.
+fn write_scene(p: &Prepared, dir: &Path) -> Result<Option<PathBuf>, Error> {
+    let path = dir.join(crate::animation::SCENE_FILE);
+    let bytes = match (&p.case.source, p.scene()) {
+        (crate::case::CaseSource::File { bytes, .. }, _) => bytes.clone(),
+        (_, Some(scene)) => scene.to_json_pretty().into_bytes(),
+        (_, None) => return Ok(None),
+    };
+    crate::io::write_atomic(&path, &bytes)?;
+    Ok(Some(path))
+}
+
+/// `lash animate RUN_DIR` (and `lash run --animate` after the run): the run as one
+/// self-contained HTML page, from the directory's scene.json and trajectory.csv (module
+/// `animation`).
+pub fn animate(
+    o: &crate::animation::AnimateOptions,
+) -> Result<Written<crate::animation::Animated>, Error> {
+    crate::animation::animate_dir(o)
+}
+
+/// `lash plot RUN_DIR COLUMN…`: trajectory columns against time or another column, as SVG and
+/// PNG (module `column_plot`).
+pub fn plot(
+    o: &crate::column_plot::PlotOptions,
+) -> Result<Written<crate::column_plot::Plotted>, Error> {
+    crate::column_plot::plot_columns(o)
 }
 
 /// The checked case and the request of a run (the same for [`run`] and [`run_in_memory`]):

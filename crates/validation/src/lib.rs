@@ -25,13 +25,17 @@
 //! cost, cheapest runs), [`stiffness_cmd`] (stiffness diagnostics: eigenvalues, RK4 limits,
 //! verdict), [`poincare`] (Poincaré section, Lyapunov exponent), [`study`] (the paper's §4
 //! and its claims; `study::robustness`, the claims under the modelling choices the paper
-//! leaves open), [`extremes`] (the matrix of extreme scenes × methods × tolerances).
+//! leaves open), [`extremes`] (the matrix of extreme scenes × methods × tolerances),
+//! [`animation`] (the run as a self-contained HTML page: the mechanism moving),
+//! [`column_plot`] (any trajectory columns as a figure).
 
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod cache;
 pub mod case;
 pub mod claim;
+pub mod column_plot;
 pub mod commands;
 pub mod compare;
 pub mod error;

@@ -175,8 +175,13 @@ trait Figure {
 /// Renders `fig` to `stem.svg` and `stem.png` (atomically), both of `size` pixels.
 fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Result<Written, Error> {
     ensure_font()?;
-    let svg = stem.with_extension("svg");
-    let png = stem.with_extension("png");
+    // Appended, not set: a stem may hold dots (`plot_rod.theta`).
+    let with = |ext: &str| {
+        let mut name = stem.as_os_str().to_os_string();
+        name.push(ext);
+        PathBuf::from(name)
+    };
+    let (svg, png) = (with(".svg"), with(".png"));
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();

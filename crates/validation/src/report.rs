@@ -49,8 +49,11 @@ pub fn run_file(name: &str, is_dir: bool) -> bool {
         TRAJECTORY_FILE,
         PARTIAL_TRAJECTORY_FILE,
         FAILURE_FILE,
+        crate::animation::SCENE_FILE,
+        crate::animation::ANIMATION_FILE,
     ]
     .contains(&name)
+        || crate::column_plot::is_plot_file(name)
         || FIGURES
             .iter()
             .any(|f| name == format!("{f}.svg") || name == format!("{f}.png"))
