@@ -4,6 +4,7 @@
 //! Rust → Python (each callback):  bytearray(8n) filled from the slice → numpy.frombuffer
 //!                                 (a fresh, writable float64 array the callee may keep)
 //! Python → Rust (each result):    list / tuple → element by element (PyFloat_AsDouble);
+//!                                 (scipy's vectorized fun: numpy.ravel of its column first)
 //!                                 anything else → numpy.asarray(x, float64), shape checked,
 //!                                 .tobytes() copied out
 //! bulk results:                   bytearray of native-endian f64 (numpy.frombuffer on the
@@ -50,6 +51,7 @@ pub fn bytearray_from_f64s<'py>(
 pub struct Numpy<'py> {
     frombuffer: Bound<'py, PyAny>,
     asarray: Bound<'py, PyAny>,
+    ravel: Bound<'py, PyAny>,
     float64: Bound<'py, PyAny>,
 }
 
@@ -60,6 +62,7 @@ impl<'py> Numpy<'py> {
         Ok(Numpy {
             frombuffer: np.getattr("frombuffer")?,
             asarray: np.getattr("asarray")?,
+            ravel: np.getattr("ravel")?,
             float64: np.getattr("float64")?,
         })
     }
@@ -75,6 +78,12 @@ impl<'py> Numpy<'py> {
         })?;
         // frombuffer's default dtype is float64; a bytearray gives a writable array.
         self.frombuffer.call1((ba,))
+    }
+
+    /// `numpy.ravel(x)`: x as a one-dimensional array (a column (n, 1) of scipy's vectorized
+    /// `fun`, a 0-d Jacobian of a one-dimensional system).
+    pub fn ravel(&self, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        self.ravel.call1((obj,))
     }
 
     /// Reads a vector of length `out.len()` returned by the callback `what` into `out`.

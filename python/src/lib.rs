@@ -15,10 +15,10 @@
 //! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's
 //!        │                                    meaning), builds OdeResult / OdeSolution
 //!        ▼
-//! _lash.solve_ivp_core (ivp.rs)               PySystem: OdeSystem calling fun, jac, events
-//!        │                                    and hooks with the GIL held; drives lash-solver's
-//!        ▼                                    Integrator, records steps, t_eval, events, dense
-//! lash_solver::Problem → Integrator           output; returns raw arrays as bytes
+//! _lash.solve_ivp_core (ivp/)                 parse (IvpArgs, the keyword arguments → options),
+//!        │                                    system (PySystem: OdeSystem calling fun, jac,
+//!        ▼                                    events and hooks with the GIL held), drive,
+//! lash_solver::Problem → Integrator           collect (raw arrays as bytes)
 //! ```
 //!
 //! Arrays cross the boundary as bytes of native-endian f64 (one copy, no per-element
@@ -54,12 +54,7 @@ fn _lash(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add(
         "DEFAULT_CONTROLLERS",
-        PyTuple::new(
-            py,
-            Method::ALL
-                .iter()
-                .map(|x| (x.name(), ivp::default_controller(*x))),
-        )?,
+        PyTuple::new(py, ivp::default_controllers())?,
     )?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

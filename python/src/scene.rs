@@ -23,10 +23,10 @@ use pyo3::types::{PyDict, PyList};
 
 use lash_model::SceneError;
 use lash_solver::{Atol, ControllerKind, Method, SolveError};
-use lash_validation::case::Case;
 use lash_validation::commands::{self, RunOptions};
-use lash_validation::metrics::EventRecord;
-use lash_validation::simulate::RunResult;
+use lash_validation::report::metrics::EventRecord;
+use lash_validation::run::case::Case;
+use lash_validation::run::simulate::RunResult;
 use lash_validation::{Error, SolverChoice};
 
 use crate::convert::bytearray_from_f64s;

@@ -18,6 +18,8 @@ rodas5p 220, bdf 770 (measured). So:
   measured).
 """
 
+import math
+
 import numpy as np
 import pytest
 
@@ -125,3 +127,69 @@ def test_a_terminal_event_ends_both_at_the_same_time():
     np.testing.assert_allclose(ours.t_events[0], theirs.t_events[0], rtol=1e-7)
     # t_eval stops before the event, as in scipy.
     np.testing.assert_array_equal(ours.t, theirs.t)
+
+
+# scipy's semantics that its own suite checks (python/tests/scipy_suite/run.py runs it whole).
+
+def test_zero_length_span_and_empty_state_give_scipys_trivial_result():
+    r = lash.solve_ivp(lambda t, y: -y, (4.0, 4.0), [2.0, 3.0], dense_output=True)
+    assert r.success and r.status == 0 and list(r.t) == [4.0]
+    np.testing.assert_array_equal(r.sol([4.0, 5.0]), [[2.0, 2.0], [3.0, 3.0]])
+    e = lash.solve_ivp(lambda t, y: y, (0.0, math.inf), np.zeros(0), dense_output=True)
+    assert e.y.shape == (0, 2) and e.sol([1.0, 2.0]).shape == (0, 2)
+
+
+def test_complex_state_is_integrated_as_real_and_imaginary_parts():
+    # z' = i z: z(t) = exp(i t) z0, |z| conserved.
+    r = lash.solve_ivp(lambda t, z: 1j * z, (0.0, 2.0), [1.0 + 0.5j], rtol=1e-10,
+                       atol=1e-12, dense_output=True, method="dopri54")
+    exact = np.exp(2.0j) * (1.0 + 0.5j)
+    assert np.iscomplexobj(r.y) and abs(r.y[0, -1] - exact) < 1e-8
+    assert abs(r.sol(2.0)[0] - exact) < 1e-8
+
+
+def test_scipy_solver_classes_and_array_rtol():
+    r = lash.solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], method=scipy_integrate.RK45,
+                       rtol=[1e-8], atol=1e-10)
+    assert r.method == "dopri54" and abs(r.y[0, -1] - math.exp(-1)) < 1e-7
+    with pytest.warns(UserWarning, match="At least one element of `rtol` is too small"):
+        lash.solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], rtol=1e-20)
+
+
+def test_jac_sparsity_costs_one_call_per_colour():
+    # A diagonal system of n = 40: one colour, so each finite-difference Jacobian costs 1 call
+    # of fun instead of 40; the answer is the same.
+    n = 40
+    k = np.linspace(1.0, 100.0, n)
+
+    def fun(t, y):
+        return -k * y
+
+    dense = lash.solve_ivp(fun, (0.0, 1.0), np.ones(n), method="bdf")
+    sparse = lash.solve_ivp(fun, (0.0, 1.0), np.ones(n), method="bdf",
+                            jac_sparsity=np.eye(n))
+    assert sparse.njev == dense.njev > 0
+    # Jacobian calls: n each without the pattern, 1 with it.
+    assert dense.nfev - sparse.nfev == (n - 1) * dense.njev
+    np.testing.assert_allclose(sparse.y[:, -1], np.exp(-k), rtol=1e-4, atol=1e-9)
+
+
+def test_early_terminal_event_gives_falsy_empty_t_and_y():
+    def early(t, y):
+        return t - 0.5
+
+    early.terminal = True
+    r = lash.solve_ivp(lambda t, y: -y, (0.0, 1.0), [1.0], t_eval=[0.8, 0.9], events=early)
+    assert r.status == 1 and not r.t and not r.y and r.y.shape == (1, 0)
+    assert r.t_events[0][0] == 0.5
+
+
+def test_vectorized_fun_is_called_with_a_column():
+    shapes = set()
+
+    def fun(t, y):
+        shapes.add(y.shape)
+        return -y
+
+    r = lash.solve_ivp(fun, (0.0, 1.0), [1.0, 2.0], vectorized=True, method="dopri54")
+    assert shapes == {(2, 1)} and abs(r.y[1, -1] - 2 * math.exp(-1)) < 1e-5

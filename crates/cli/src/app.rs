@@ -21,16 +21,16 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 use lash_validation::commands::{self, describe_run, SweepOutcome, WorkPrecisionResult};
-use lash_validation::compare::Comparison;
-use lash_validation::extremes::{self, Matrix};
-use lash_validation::headline::Headline;
-use lash_validation::io::Written;
-use lash_validation::poincare::PoincareResult;
-use lash_validation::simulate::RunResult;
-use lash_validation::stiffness_cmd::StiffnessResult;
-use lash_validation::study;
+use lash_validation::compare::reference::Comparison;
+use lash_validation::compare::workprecision::WpTable;
+use lash_validation::diagnostics::poincare::PoincareResult;
+use lash_validation::diagnostics::stiffness::StiffnessResult;
+use lash_validation::run::simulate::RunResult;
+use lash_validation::store::io::Written;
+use lash_validation::studies::extremes::{self, Matrix};
+use lash_validation::studies::headline::Headline;
+use lash_validation::studies::paper as study;
 use lash_validation::sweep::{PointResult, SweepPoint, SweepReport};
-use lash_validation::workprecision::WpTable;
 use lash_validation::Error;
 
 use crate::args::{
@@ -94,7 +94,9 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
             let w = commands::study_robustness(&a.options(), &progress);
             progress.clear();
             let w = w?;
-            outln(&study::robustness::describe(&w.result, &w.dir));
+            outln(&lash_validation::studies::robustness::describe(
+                &w.result, &w.dir,
+            ));
             Ok(())
         }
         Command::Study(a) => {
@@ -156,7 +158,10 @@ pub fn default_command() -> Result<Written<Headline>, Error> {
 /// Returns the result and the output directory. With `--max-wall-time` a watchdog stops the
 /// process (exit 3) if the engine overruns the budget inside work it cannot interrupt.
 pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
-    if a.animate && a.case.starts_with(lash_validation::case::BUILTIN_PREFIX) {
+    if a.animate
+        && a.case
+            .starts_with(lash_validation::run::case::BUILTIN_PREFIX)
+    {
         return Err(Error::Usage(
             "--animate needs a scene: a built-in test problem has no mechanism to draw".into(),
         ));

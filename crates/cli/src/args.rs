@@ -40,10 +40,10 @@ use lash_validation::commands::{
     CompareOptions, ExtremesOptions, MergeOptions, PoincareOptions, RunOptions, StiffnessOptions,
     StudyOptions, SweepRunOptions, WorkPrecisionOptions,
 };
+use lash_validation::compare::workprecision::WorkPrecisionPlan;
 use lash_validation::options::RTOL_MIN;
-use lash_validation::steady::{self, UntilPeriodic};
+use lash_validation::run::steady::{self, UntilPeriodic};
 use lash_validation::sweep::Shard;
-use lash_validation::workprecision::WorkPrecisionPlan;
 use lash_validation::{Error, SolverChoice};
 
 use crate::exit::flagged;
@@ -806,7 +806,7 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 mod tests {
     use super::*;
     use crate::exit::ExitStatus;
-    use lash_validation::workprecision::DEFAULT_TOLERANCES;
+    use lash_validation::compare::workprecision::DEFAULT_TOLERANCES;
 
     fn cli(args: &[&str]) -> Result<Cli, Error> {
         let mut v = vec!["lash"];

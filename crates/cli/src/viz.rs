@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use lash_validation::animation::{AnimateOptions, Animated, AnimationOptions};
-use lash_validation::column_plot::{PlotOptions, Plotted};
 use lash_validation::commands;
-use lash_validation::io::Written;
+use lash_validation::report::column_plot::{PlotOptions, Plotted};
+use lash_validation::store::io::Written;
 use lash_validation::Error;
 
 use crate::out::outln;

@@ -5,7 +5,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
-use lash_validation::study::{self, claims, markdown, Kind, Setting, StudyResult, Verdict};
+use lash_validation::studies::paper::{
+    self as study, claims, markdown, Kind, Setting, StudyResult, Verdict,
+};
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
     let v: Vec<f64> = v.collect();
@@ -209,7 +211,7 @@ fn study_paper_writes_consistent_results() {
         study::FIGURES_DIR,
         study::JSON_FILE,
         study::REPORT_FILE,
-        lash_validation::cache::CACHE_DIR,
+        lash_validation::store::cache::CACHE_DIR,
     ]
     .iter()
     .map(|s| s.to_string())

@@ -25,7 +25,8 @@ use std::fmt;
 use faer::Mat;
 use serde::Serialize;
 
-use crate::mechanism::{Mechanism, Owner, Row, Term, TermKind};
+use crate::mechanism::constraints::{Row, Term, TermKind};
+use crate::mechanism::{Mechanism, Owner};
 use crate::scene::{JointSpec, SceneError, GROUND};
 
 /// Changes below this (SI units, or relative to the given value) are not reported.

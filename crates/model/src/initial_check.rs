@@ -35,7 +35,9 @@
 
 use lash_solver::OdeSystem;
 
-use crate::mechanism::{cholesky_in_place, Mechanism, Owner, Row, Scratch, TermKind};
+use crate::linalg::cholesky_in_place;
+use crate::mechanism::constraints::{Row, TermKind};
+use crate::mechanism::{Mechanism, Owner, Scratch};
 use crate::scene::SceneError;
 
 /// Relative Cholesky pivot d_j / S_jj at or below which Φ_q M⁻¹ Φ_qᵀ is singular in f64.

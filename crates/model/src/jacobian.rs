@@ -44,7 +44,10 @@
 use faer::MatMut;
 
 use crate::geometry::{ClearanceInput, ClearanceState};
-use crate::mechanism::{cholesky_solve, perp, rot, Mechanism, Owner, Scratch, TermKind};
+use crate::linalg::cholesky_solve;
+use crate::mechanism::constraints::TermKind;
+use crate::mechanism::{Mechanism, Owner, Scratch};
+use crate::planar::{perp, rot};
 
 /// Relative step of the differences in the clearance variables u = (e, ė, φ̇_J, φ̇_B).
 const LOCAL_STEP: f64 = 1e-6;
@@ -575,7 +578,7 @@ fn clearance_force_jacobian(
 /// ė of clearance joint k (after `kinematics`).
 fn ed(mech: &Mechanism, k: usize, sc: &Scratch) -> [f64; 2] {
     let c = &mech.clr[k];
-    let vel = |end: &crate::mechanism::End| match end.body {
+    let vel = |end: &crate::clearance::revolute::End| match end.body {
         None => [0.0; 2],
         Some(kb) => {
             let a = rot(sc.cs[kb], end.s);

@@ -58,16 +58,18 @@
 
 mod assembly;
 pub mod cases;
+pub mod clearance;
 pub mod elements;
-pub mod geometry;
 mod initial_check;
 pub mod jacobian;
-pub mod laws;
+mod linalg;
 pub mod mechanism;
 pub mod outputs;
+mod planar;
 pub mod scene;
 
 pub use assembly::{CoordinateChange, ProjectionReport};
+pub use clearance::{geometry, laws};
 pub use mechanism::Mechanism;
 pub use outputs::{
     BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,

@@ -16,7 +16,9 @@
 //! ```
 //! Source: docs/model.md §1–§5, docs/outputs.md ("`energy`", "`trajectory.csv`").
 
-use crate::mechanism::{cross, perp, rot, Clr, End, Mechanism, Scratch};
+use crate::clearance::revolute::{Clr, End};
+use crate::mechanism::{Mechanism, Scratch};
+use crate::planar::{cross, perp, rot};
 use crate::scene::{JointSpec, Scene, SceneError};
 
 /// The parts that the press metrics need, resolved to indices (docs/outputs.md, "Scene roles").

@@ -9,11 +9,12 @@
 //!     κ = FAR_FACTOR = 2, no interior sample is taken; otherwise
 //!   sample g at t_a + j (t_b − t_a)/(s + 1), j = 1..s (s = event_samples)
 //!   first sub-interval with a sign change of some g_i in its direction
-//!     → each such i: Illinois (modified regula falsi) on g_i(t, y_dense(t)), trial points
-//!       kept tol/2 inside the bracket, until the bracket is below
-//!       tol = event_rtol · max(|t|, |t_b − t_a|)
-//!     → t* = earliest root (the right end of its final bracket, where g_i already has its
-//!       new sign); every component whose root lies within the tolerance of t* is reported
+//!     → each such i: Brent's method on g_i(t, y_dense(t)) until the bracket is at most
+//!       2 ε |t| wide (a few ulps of t: the floating-point limit of the event time)
+//!     → t* = earliest root (the end of its final bracket on the side after the crossing,
+//!       where g_i already has the sign the event's direction gives it, or the point where
+//!       g_i is exactly zero); every component whose root lies within
+//!       tol = event_rtol · max(|t|, |t_b − t_a|) of t* is reported with it
 //!   hook: y* = on_event(hits, y_dense(t*)); g re-read at (t*, y*) (the signs the next step
 //!         is compared with); then stop, or restart the stepper at (t*, y*)
 //!   restart: all history discarded, the first step chosen as at t0 (opts.h0, else the
@@ -40,9 +41,10 @@
 //!
 //! Rule for zeros: an event function that is exactly zero at the start (or after a restart)
 //! has no sign yet; it takes the sign of its first nonzero value, and no event is reported for
-//! that first value. A crossing is a change between nonzero signs. Because the event time is
-//! taken on the far side of the root, a restart never begins with the triggering function at
-//! exactly zero (the diffsol pitfall of a missed next crossing).
+//! that first value. A crossing is a change between nonzero signs. The event time is taken on
+//! the far side of the root, or exactly on it when g is exactly zero there; in that case the
+//! triggering function keeps the sign the crossing gave it (`handle_event`), so a restart
+//! never begins with an unknown sign (the diffsol pitfall of a missed next crossing).
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
@@ -172,7 +174,7 @@ pub struct Integrator<'p, S: OdeSystem + ?Sized> {
     gd_b: Vec<f64>,
     /// Whether the system gives the rates of its event functions.
     rates: bool,
-    /// Scratch: g at an interior sample, at an Illinois trial point, and at the left end of
+    /// Scratch: g at an interior sample, at a trial point of the root finder, and at the left end of
     /// the sub-interval being scanned.
     g_s: Vec<f64>,
     g_t: Vec<f64>,
@@ -421,7 +423,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
                         // artefact): use the sign that was recorded.
                         -(self.signs[i] as f64) * f64::MIN_POSITIVE
                     };
-                    let r = self.illinois(i, t_a, left, t_j, g_s[i], tol);
+                    let r = self.brent(i, t_a, left, t_j, g_s[i]);
                     roots.push((i, r));
                 }
                 let t_star = roots.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
@@ -451,63 +453,85 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         found
     }
 
-    /// Illinois method on component i over [ta, tb] with g(ta) = ga, g(tb) = gb of opposite
-    /// signs. Returns the right end of the final bracket (g has its new sign there).
-    fn illinois(
-        &mut self,
-        i: usize,
-        mut ta: f64,
-        mut ga: f64,
-        mut tb: f64,
-        mut gb: f64,
-        tol: f64,
-    ) -> f64 {
+    /// Brent's method (Brent 1973, ch. 4: bisection, secant and inverse quadratic
+    /// interpolation, as `zeroin`) on g_i(t, y_dense(t)) over [ta, tb], g(ta) = ga and
+    /// g(tb) = gb of opposite signs, until the bracket is at most 4 ulps of t wide
+    /// (`|b − c| ≤ 2 ε |b|`), or g is exactly zero. Returns the end of the final bracket on the
+    /// side after the crossing (where g has the sign of gb, the sign the event's direction
+    /// gives it), or the point where g is exactly zero.
+    fn brent(&mut self, i: usize, ta: f64, ga: f64, tb: f64, gb: f64) -> f64 {
         let mut g = std::mem::take(&mut self.g_t);
-        let mut side = 0i8;
+        let new_sign = sign(gb);
+        // b: best estimate; c: the other end of the bracket (g(b), g(c) of opposite signs);
+        // a: the previous b.
+        let (mut a, mut fa, mut b, mut fb) = (ta, ga, tb, gb);
+        let (mut c, mut fc) = (a, fa);
+        let mut d = b - a;
+        let mut e = d;
+        let mut root = None;
         for _ in 0..200 {
-            if (tb - ta).abs() <= tol {
+            if sign(fb) == sign(fc) {
+                c = a;
+                fc = fa;
+                d = b - a;
+                e = d;
+            }
+            if fc.abs() < fb.abs() {
+                a = b;
+                b = c;
+                c = a;
+                fa = fb;
+                fb = fc;
+                fc = fa;
+            }
+            // ε|b| is 1 to 2 ulps of b, so a step of tol always moves b; the bracket [b, c] is
+            // final once |c − b| ≤ 2 ε |b| (at most 4 ulps).
+            let tol = f64::EPSILON * b.abs().max(f64::MIN_POSITIVE);
+            let m = 0.5 * (c - b);
+            if fb == 0.0 {
+                root = Some(b);
                 break;
             }
-            let mut tm = tb - gb * (tb - ta) / (gb - ga);
-            if !tm.is_finite() {
-                tm = 0.5 * (ta + tb);
-            }
-            // Keep the trial point at least tol/2 inside the bracket (the bracket is wider than
-            // tol here). When one end is already within rounding of the root, the secant point
-            // equals that end; without the margin it fell back to bisection, halving the far
-            // end ~30 times. With it the next bracket is at most tol wide (Dekker's and
-            // Brent's minimal step).
-            let margin = (0.5 * tol).max(4.0 * f64::EPSILON * tb.abs());
-            if tb - ta <= 2.0 * margin {
+            if m.abs() <= tol {
                 break;
             }
-            tm = tm.clamp(ta + margin, tb - margin);
-            self.eval_g_dense(tm, &mut g);
-            let gm = g[i];
-            if gm == 0.0 {
-                // Exactly on the root: step just past it so that the new sign holds.
-                let nudge = tol.max(f64::EPSILON * tm.abs());
-                self.g_t = g;
-                return (tm + nudge).min(tb);
-            }
-            if sign(gm) == sign(gb) {
-                tb = tm;
-                gb = gm;
-                if side == 1 {
-                    ga *= 0.5;
+            if e.abs() >= tol && fa.abs() > fb.abs() {
+                // Secant (a = c) or inverse quadratic interpolation.
+                let s = fb / fa;
+                let (mut p, mut q);
+                if a == c {
+                    p = 2.0 * m * s;
+                    q = 1.0 - s;
+                } else {
+                    let qa = fa / fc;
+                    let r = fb / fc;
+                    p = s * (2.0 * m * qa * (qa - r) - (b - a) * (r - 1.0));
+                    q = (qa - 1.0) * (r - 1.0) * (s - 1.0);
                 }
-                side = 1;
+                if p > 0.0 {
+                    q = -q;
+                } else {
+                    p = -p;
+                }
+                if 2.0 * p < (3.0 * m * q - (tol * q).abs()).min((e * q).abs()) {
+                    e = d;
+                    d = p / q;
+                } else {
+                    d = m;
+                    e = m;
+                }
             } else {
-                ta = tm;
-                ga = gm;
-                if side == -1 {
-                    gb *= 0.5;
-                }
-                side = -1;
+                d = m;
+                e = m;
             }
+            a = b;
+            fa = fb;
+            b += if d.abs() > tol { d } else { tol.copysign(m) };
+            self.eval_g_dense(b, &mut g);
+            fb = g[i];
         }
         self.g_t = g;
-        tb
+        root.unwrap_or(if sign(fb) == new_sign { b } else { c })
     }
 
     fn handle_event(&mut self, t_ev: f64, hits: Vec<EventHit>) -> Result<StepOutcome, SolveError> {

@@ -162,8 +162,10 @@ pub struct SolverOptions {
     pub output: Output,
     /// Whether event functions are monitored. Default true.
     pub events: bool,
-    /// Relative time tolerance of event location: the bracket is shrunk below
-    /// `event_rtol · max(|t|, |h|)`. Default 1e-13; range [1e-15, 1e-3].
+    /// Relative time tolerance within which roots of several event functions count as one
+    /// event (reported together at the earliest): `event_rtol · max(|t|, |h|)`. Each root
+    /// itself is located to a few ulps of t (crate::integrator). Default 1e-13; range
+    /// [1e-15, 1e-3].
     pub event_rtol: f64,
     /// Interior points of every step at which the event functions are also evaluated (on the
     /// dense output), to catch two crossings inside one step: an excursion of g to the other

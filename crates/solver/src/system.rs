@@ -93,6 +93,16 @@ pub trait OdeSystem {
     /// [`OdeSystem::has_jacobian`] returns true.
     fn jacobian(&self, _t: f64, _y: &[f64], _jac: MatMut<'_, f64>) {}
 
+    /// The sparsity pattern of ∂f/∂y when it is known: for each column j, the rows i at which
+    /// ∂f_i/∂y_j may be nonzero (entries outside it are taken as 0). Default None: dense.
+    /// Used by the finite-difference Jacobian (when the system has no Jacobian of its own),
+    /// which then perturbs structurally orthogonal columns together and costs one RHS
+    /// evaluation per colour instead of one per column (crate::jacobian). Called once per
+    /// integration.
+    fn jacobian_sparsity(&self) -> Option<Vec<Vec<usize>>> {
+        None
+    }
+
     /// Whether f does not depend on t (∂f/∂t = 0). Default false. Rosenbrock methods need
     /// ∂f/∂t; for a system that says it is autonomous they skip its finite-difference estimate
     /// (one RHS evaluation per step).

@@ -1,8 +1,8 @@
 //! Event location on the dense output of the explicit pairs.
 //!
 //! ```text
-//! events g_i(t, y) = 0 located by Illinois on g_i(t, u(t)), u the step's dense output;
-//! t* is reported within event_rtol · max(|t|, h) (1e-13 relative by default)
+//! events g_i(t, y) = 0 located by Brent's method on g_i(t, u(t)), u the step's dense
+//! output, to a bracket of 2 ε |t| (a few ulps of t)
 //! ```
 
 mod common;
@@ -254,10 +254,12 @@ fn stop_action_ends_the_integration_at_the_event() {
 fn event_location_costs_a_few_evaluations_per_event() {
     // Without interior samples (event_samples = 0):
     // event_evals = 1 (at t0) + 1 per accepted step (g at its end) + per event: the root
-    // finder's evaluations + 1 after the hook. Illinois with exact bracket values and a
-    // minimal step of tol/2 needs about 3 evaluations per event; before the fixes of
-    // integrator.rs (stale left value g_a after event-free steps, and bisection once the
-    // secant point hit a bracket end) dopri54 needed 18 here.
+    // finder's evaluations + 1 after the hook. Brent's method from the step's bracket down to
+    // 2 ε |t| (a few ulps of t) takes 3 to 5 evaluations per event here (measured: bs32 12,
+    // dopri54 and tsit54 16, dop853 19 for 4 events); Illinois to the former 1e-13 relative
+    // took about 3, and before the fixes of integrator.rs (stale left value g_a after
+    // event-free steps, and bisection once the secant point hit a bracket end) dopri54
+    // needed 18 here.
     struct Cos;
     impl OdeSystem for Cos {
         fn dim(&self) -> usize {
@@ -283,7 +285,7 @@ fn event_location_costs_a_few_evaluations_per_event() {
         assert_eq!(s.events.len(), 4, "{m}");
         let root_evals = s.stats.event_evals - 1 - s.stats.accepted - s.stats.events;
         assert!(
-            root_evals <= 4 * s.stats.events,
+            root_evals <= 5 * s.stats.events,
             "{m}: {root_evals} evaluations for {} events",
             s.stats.events
         );

@@ -8,7 +8,7 @@
 //! cargo run --release -p lash-validation --example extremes_rk4_scan -- [STEM...]
 //! RK4_STEPS=1e-3,2e-3 cargo run ... -- STEM     (only these steps)
 //! ```
-use lash_validation::extremes::{catalogue, prepare, run_cell, Budget, Setting};
+use lash_validation::studies::extremes::{catalogue, prepare, run_cell, Budget, Setting};
 
 fn main() {
     let wanted: Vec<String> = std::env::args().skip(1).collect();
@@ -59,7 +59,10 @@ fn main() {
                     c.outcome
                 );
                 if c.outcome.is_allowed()
-                    && matches!(c.outcome, lash_validation::extremes::Outcome::Agrees { .. })
+                    && matches!(
+                        c.outcome,
+                        lash_validation::studies::extremes::Outcome::Agrees { .. }
+                    )
                 {
                     agreed += 1;
                     if agreed == 2 {

@@ -13,49 +13,30 @@
 //!                                                  └──Progress (notes, sweep progress)
 //! ```
 //!
-//! Modules: [`commands`] (one function per command: options in, results out), [`cache`]
-//! (finished runs by the hash of their inputs: resuming), [`claim`] (claim files of sweep
-//! points, liveness of processes), [`options`]
-//! (the solver choice of a request), [`progress`] (the progress hook), [`error`] (typed
-//! errors and their kinds), [`compare`] (errors against a reference), [`io`] (atomic writes),
-//! [`headline`] (the default run), [`case`] (case references), [`summary`] (summary.json),
-//! [`trajectory`] (trajectory.csv), [`metrics`] (last-revolution metrics), [`plot`] (SVG + PNG
-//! figures), [`report`] (the files of one run), [`simulate`] (running a case: the core of
-//! every command), [`steady`] (running until the orbit is periodic), [`sweep`] (grids, shards, resume, merge), [`workprecision`] (error against
-//! cost, cheapest runs), [`stiffness_cmd`] (stiffness diagnostics: eigenvalues, RK4 limits,
-//! verdict), [`poincare`] (Poincaré section, Lyapunov exponent), [`study`] (the paper's §4
-//! and its claims; `study::robustness`, the claims under the modelling choices the paper
-//! leaves open), [`extremes`] (the matrix of extreme scenes × methods × tolerances),
-//! [`animation`] (the run as a self-contained HTML page: the mechanism moving),
-//! [`column_plot`] (any trajectory columns as a figure).
+//! Rooms: [`commands`] (one function per command: options in, results out), [`run`] (case
+//! references, the runner every command calls, runs until periodic, the files of one run),
+//! [`report`] (summary.json, trajectory.csv, metrics, figures), [`store`] (atomic writes, the
+//! cache of finished runs, claim files), [`compare`] (errors against a reference,
+//! work–precision), [`studies`] (the default run, the paper's §4 and its claims, their
+//! robustness, the extremes matrix), [`diagnostics`] (stiffness, Poincaré section and
+//! Lyapunov exponent), [`sweep`] (grids, shards, resume, merge), [`animation`] (a run as one
+//! self-contained HTML page: the mechanism moving); [`options`] (the solver choice of a
+//! request), [`progress`] (the progress hook), [`error`] (typed errors and their kinds).
 
 #![warn(missing_docs)]
 
 pub mod animation;
-pub mod cache;
-pub mod case;
-pub mod claim;
-pub mod column_plot;
 pub mod commands;
 pub mod compare;
+pub mod diagnostics;
 pub mod error;
-pub mod extremes;
-pub mod headline;
-pub mod io;
-pub mod metrics;
 pub mod options;
-pub mod plot;
-pub mod poincare;
 pub mod progress;
 pub mod report;
-pub mod simulate;
-pub mod steady;
-pub mod stiffness_cmd;
-pub mod study;
-pub mod summary;
+pub mod run;
+pub mod store;
+pub mod studies;
 pub mod sweep;
-pub mod trajectory;
-pub mod workprecision;
 
 pub use error::{Error, ErrorKind};
 pub use options::SolverChoice;

@@ -6,9 +6,9 @@
 use lash_model::cases::{press_scene, PressJoint};
 use lash_solver::analysis::stiffness::{Rk4ProbeOptions, StiffnessOptions};
 use lash_solver::{Method, OdeSystem, SolverOptions};
-use lash_validation::poincare::{self, Chaos, PoincareSettings};
-use lash_validation::simulate::Prepared;
-use lash_validation::stiffness_cmd::{measure_limit, sample_along};
+use lash_validation::diagnostics::poincare::{self, Chaos, PoincareSettings};
+use lash_validation::diagnostics::stiffness::{measure_limit, sample_along};
+use lash_validation::run::simulate::Prepared;
 
 /// y' = A y, A = blockdiag(−1000, [[−1, 100], [−100, −1]]) (normal), through the functions the
 /// command runs: every sample has λ = −1000 (dominant) and the limit 2.7853/1000 (the real

@@ -1,4 +1,4 @@
-//! The extremes matrix (`lash_validation::extremes`): the scene files, the scene that drives
+//! The extremes matrix (`lash_validation::studies::extremes`): the scene files, the scene that drives
 //! the film to ε ≈ 0.999, the quick subset of the matrix (default run) and the full matrix
 //! (ignored: `cargo test --release -p lash-validation --test extremes -- --ignored`, or
 //! `lash extremes`).
@@ -7,7 +7,9 @@ use std::path::PathBuf;
 
 use lash_model::scene::JointSpec;
 use lash_model::{Mechanism, Scene};
-use lash_validation::extremes::{self, catalogue, FailureKind, Matrix, Outcome, Plan, Setting};
+use lash_validation::studies::extremes::{
+    self, catalogue, FailureKind, Matrix, Outcome, Plan, Setting,
+};
 
 fn cases_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/extremes")

@@ -1,7 +1,7 @@
 //! The default run (`cargo run --release`): its table, its files, and the claims it makes.
 
 use lash_solver::Method;
-use lash_validation::headline;
+use lash_validation::studies::headline;
 
 #[test]
 fn default_run_compares_rk4_with_the_best_adaptive_method() {

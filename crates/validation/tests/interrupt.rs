@@ -13,10 +13,10 @@ use std::sync::Mutex;
 
 use lash_solver::interrupt::{clear_stop, request_stop, stop_requested};
 use lash_solver::{solve, Method, OdeSystem, SolveError, SolverOptions};
-use lash_validation::cache::RunCache;
 use lash_validation::error::Message;
-use lash_validation::extremes::{self, Plan as ExtremesPlan};
-use lash_validation::study::{self, Plan as StudyPlan};
+use lash_validation::store::cache::RunCache;
+use lash_validation::studies::extremes::{self, Plan as ExtremesPlan};
+use lash_validation::studies::paper::{self as study, Plan as StudyPlan};
 use lash_validation::sweep::{self, PointResult, SweepOptions, SweepPoint, SweepSpec};
 use lash_validation::{Error, Progress};
 

@@ -6,9 +6,9 @@
 
 use std::sync::Mutex;
 
-use lash_validation::study::claims::{Thresholds, Verdict};
-use lash_validation::study::robustness::{self, ClaimRobustness, Variant};
-use lash_validation::study::Plan;
+use lash_validation::studies::paper::claims::{Thresholds, Verdict};
+use lash_validation::studies::paper::Plan;
+use lash_validation::studies::robustness::{self, ClaimRobustness, Variant};
 use lash_validation::Progress;
 
 fn quick_plan() -> Plan {
@@ -97,7 +97,7 @@ fn robustness_verdicts_come_from_the_runs_and_follow_the_thresholds() {
     let cases = robustness::run_variants(
         &plan,
         &variants,
-        &lash_validation::cache::RunCache::new(&out.join("cache")),
+        &lash_validation::store::cache::RunCache::new(&out.join("cache")),
         &count,
     )
     .unwrap()

@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;
-use lash_validation::case::Case;
-use lash_validation::metrics::EventQuantity;
-use lash_validation::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
-use lash_validation::trajectory::{Columns, CsvFile, Header, TrajectorySink};
+use lash_validation::report::metrics::EventQuantity;
+use lash_validation::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
+use lash_validation::run::case::Case;
+use lash_validation::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
 use lash_validation::{Error, ErrorKind};
 
 fn case(stem: &str) -> Prepared {
@@ -149,7 +149,7 @@ fn dry_press_contact_onsets_match_a_tight_reference() {
     assert!(ref_on.len() >= 20, "{}", ref_on.len());
     let r = run(
         &p,
-        lash_validation::simulate::DEFAULT_METHOD,
+        lash_validation::run::simulate::DEFAULT_METHOD,
         1e-10,
         Some(t_rev),
     );
@@ -232,7 +232,7 @@ fn hires_reference_error_at_rtol_1e8() {
 fn catalogue_case_prepares_the_scene_of_its_file() {
     // Case::catalogue builds the scene in code; the file in cases/press/ was written from the
     // same generator, so both prepare to the same scene and mechanism facts.
-    use lash_validation::case::Case;
+    use lash_validation::run::case::Case;
     let name = "lubricated_150rpm_c0.2";
     let from_code = Prepared::load(Case::catalogue(name).unwrap()).unwrap();
     let from_file = case(name);
@@ -290,7 +290,12 @@ impl TrajectorySink for MaxOf {
 #[test]
 fn the_pendulums_peak_contact_force_is_the_true_peak() {
     let p = prepared("pendulum", &readme_pendulum());
-    let r = run(&p, lash_validation::simulate::DEFAULT_METHOD, 1e-8, None);
+    let r = run(
+        &p,
+        lash_validation::run::simulate::DEFAULT_METHOD,
+        1e-8,
+        None,
+    );
     let m = r.summary.metrics.as_ref().unwrap();
     let peak = m.contact_force_max.unwrap();
     let mut req = RunRequest::new(

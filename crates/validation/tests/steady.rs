@@ -1,11 +1,11 @@
-//! `lash run --until-periodic` (crate::steady): the run ends at the first revolution K ≥ 2 whose
+//! `lash run --until-periodic` (crate::run::steady): the run ends at the first revolution K ≥ 2 whose
 //! section change is below the tolerance, reports K, and its metrics are those of revolution K.
 
 use std::path::PathBuf;
 
 use lash_validation::commands::{self, RunOptions};
-use lash_validation::simulate::Prepared;
-use lash_validation::steady::{settle, UntilPeriodic};
+use lash_validation::run::simulate::Prepared;
+use lash_validation::run::steady::{settle, UntilPeriodic};
 use lash_validation::{ErrorKind, NoProgress};
 
 fn press(stem: &str) -> String {

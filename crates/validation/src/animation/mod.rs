@@ -28,9 +28,9 @@ use std::path::{Path, PathBuf};
 use lash_model::Scene;
 
 use crate::error::Error;
-use crate::io::{self, Written};
-use crate::summary::SUMMARY_FILE;
-use crate::trajectory::{PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
+use crate::report::summary::SUMMARY_FILE;
+use crate::report::trajectory::{PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
+use crate::store::io::{self, Written};
 
 pub use geometry::{AnimationOptions, PageData, DEFAULT_MAX_FRAMES};
 pub use table::{unit, Table};
@@ -196,7 +196,7 @@ pub fn animate_dir(o: &AnimateOptions) -> Result<Written<Animated>, Error> {
         Err(_) => serde_json::Value::Null,
     };
     if let Some(want) = summary.get("scene_sha256").and_then(|v| v.as_str()) {
-        let have = crate::case::sha256_hex(&scene_bytes);
+        let have = crate::run::case::sha256_hex(&scene_bytes);
         if have != want {
             return Err(Error::Input(format!(
                 "{} is not the scene of this run: its SHA-256 {have} differs from \

@@ -1,0 +1,87 @@
+//! Why a scene is rejected.
+
+/// Why a scene is rejected. Every message names where (a JSON path such as
+/// `joints[3].bearing.radius`, or a body/point name) and why.
+///
+/// ```text
+/// Syntax      JSON syntax error at line L, column C: …
+/// Schema      <path>: unknown field / wrong type / missing field (serde, path tracked)
+/// Invalid     <path>: <reason>                    (a value out of range, a missing name, …)
+/// Redundant   <path>: redundant or contradictory constraints: …
+/// Assembly    <path>: initial assembly did not converge: equation …, residual …
+/// Dynamics    <path>: the equations of motion fail at the initial state: … (not finite, or
+///             Φ_q M⁻¹ Φ_qᵀ singular in f64)
+/// Unknown     unknown body 'x' / unknown point 'p' on body 'x'   (output look-ups)
+/// ```
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// The text is not valid JSON.
+    #[error("JSON syntax error at line {line}, column {column}: {message}")]
+    Syntax {
+        /// Line (1-based).
+        line: usize,
+        /// Column (1-based).
+        column: usize,
+        /// serde_json's message.
+        message: String,
+    },
+    /// Valid JSON that does not fit the schema: unknown field, wrong type, missing field.
+    #[error("{path}: {message}")]
+    Schema {
+        /// JSON path of the offending value.
+        path: String,
+        /// serde's message (with line and column).
+        message: String,
+    },
+    /// A value out of range, a name that refers to nothing, a missing choice.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// JSON path of the offending value.
+        path: String,
+        /// Why it is rejected.
+        reason: String,
+    },
+    /// The constraint Jacobian is rank deficient at the initial state.
+    #[error("{path}: redundant or contradictory constraints: {reason}")]
+    Redundant {
+        /// JSON path of the joint whose equation depends on earlier ones.
+        path: String,
+        /// Which equation, and the rank found.
+        reason: String,
+    },
+    /// Newton's method on the position (or velocity) constraints did not converge.
+    #[error("{path}: initial assembly did not converge: {reason}")]
+    Assembly {
+        /// JSON path of the joint with the largest residual.
+        path: String,
+        /// Which equation and by how much.
+        reason: String,
+    },
+    /// The equations of motion are not finite, or their KKT system is singular in f64, at the
+    /// assembled initial state (numbers each finite, but beyond what f64 can combine).
+    #[error("{path}: the equations of motion fail at the initial state: {reason}")]
+    Dynamics {
+        /// JSON path of the body or joint to blame.
+        path: String,
+        /// Which quantity, its value, and the numbers of the scene behind it.
+        reason: String,
+    },
+    /// An output asked for a body or point the scene does not have.
+    #[error("unknown {0}")]
+    Unknown(String),
+    /// The scene file could not be read.
+    #[error("cannot read {path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS error.
+        message: String,
+    },
+}
+
+pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        path: path.into(),
+        reason: reason.into(),
+    }
+}

@@ -1,0 +1,4 @@
+//! Diagnostics of one case: stiffness, Poincaré section and Lyapunov exponent.
+
+pub mod poincare;
+pub mod stiffness;

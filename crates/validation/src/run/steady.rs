@@ -1,0 +1,220 @@
+//! Steady state of a press: run until the once-per-revolution section of the clearance joint
+//! stops moving (`lash run --until-periodic TOL`, and the study's periodicity claims).
+//!
+//! ```text
+//! section     s_k = e(t₀ + kT)/c of the clearance-joint role,  k = 0, 1, 2, …  (T crank period)
+//! change      d_k = |s_k − s_{k−1}|   (in units of the clearance c)
+//! settled     at the first K ≥ MIN_REVOLUTIONS with d_K < TOL;  K ≤ max_revolutions
+//! otherwise   K = max_revolutions, settled = false (a chaotic dry joint never settles)
+//! the run     then integrates t₀ … t₀ + K T as any run (its metrics: revolution K)
+//! ```
+//!
+//! The settling pass and the run are two integrations with the same options from the same
+//! initial state: a run until periodic costs about twice a run of K revolutions. The settling
+//! pass keeps nothing but the sections.
+//!
+//! Why: the lubricated journal starts centred (docs/model.md §6) and sinks into the film over
+//! many revolutions; an orbit judged after two revolutions has not settled (BENCHMARKS.md, "The
+//! paper's claims under model uncertainty").
+//!
+//! Source: docs/outputs.md (`until_periodic` of summary.json); docs/model.md §9.
+
+use lash_model::Mechanism;
+use lash_solver::{Problem, SolverOptions, StepOutcome};
+
+use crate::error::Error;
+use crate::run::simulate::{Model, Prepared, Sampler};
+
+/// Fewest revolutions of a run until periodic: the metrics need a last revolution and the
+/// periodicity check a revolution before it.
+pub const MIN_REVOLUTIONS: usize = 2;
+
+/// Default cap on the revolutions of a run until periodic.
+pub const DEFAULT_MAX_REVOLUTIONS: usize = 100;
+
+/// What to run until: the section's change per revolution below `tol`·c, within
+/// `max_revolutions`.
+///
+/// ```text
+/// tol > 0 (units of c);  MIN_REVOLUTIONS ≤ max_revolutions
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct UntilPeriodic {
+    /// Largest change of the section between consecutive revolutions, in units of c.
+    pub tol: f64,
+    /// Cap on the revolutions.
+    pub max_revolutions: usize,
+}
+
+impl UntilPeriodic {
+    /// `tol` with the default cap.
+    pub fn new(tol: f64) -> UntilPeriodic {
+        UntilPeriodic {
+            tol,
+            max_revolutions: DEFAULT_MAX_REVOLUTIONS,
+        }
+    }
+
+    /// Usage errors: tol not finite and > 0, a cap below [`MIN_REVOLUTIONS`].
+    pub fn validate(&self) -> Result<(), Error> {
+        if !(self.tol.is_finite() && self.tol > 0.0) {
+            return Err(Error::Usage(format!(
+                "--until-periodic must be a finite number > 0 (units of the clearance), got {}",
+                self.tol
+            )));
+        }
+        if self.max_revolutions < MIN_REVOLUTIONS {
+            return Err(Error::Usage(format!(
+                "--max-revolutions must be at least {MIN_REVOLUTIONS}, got {}",
+                self.max_revolutions
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// How a run until periodic ended.
+///
+/// ```text
+/// revolutions = K;  settled ⇔ d_K < tol;  section_changes = [d_1, …, d_K]
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Settled {
+    /// The request.
+    pub tol: f64,
+    /// The cap of the request.
+    pub max_revolutions: usize,
+    /// Revolutions run, K.
+    pub revolutions: usize,
+    /// Whether the section moved by less than tol·c in revolution K.
+    pub settled: bool,
+    /// d_k = |s_k − s_{k−1}| / c for k = 1..=K.
+    pub section_changes: Vec<f64>,
+}
+
+impl Settled {
+    /// d_K, the change in the last revolution.
+    pub fn last_change(&self) -> f64 {
+        self.section_changes.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
+    pub fn describe(&self) -> String {
+        if self.settled {
+            format!(
+                "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
+                 the last, below {:e} c)",
+                self.revolutions,
+                self.last_change(),
+                self.tol
+            )
+        } else {
+            format!(
+                "until periodic: not settled within {} revolutions (the section moved {:.2e} c \
+                 in the last, tolerance {:e} c); metrics are those of revolution {}",
+                self.max_revolutions,
+                self.last_change(),
+                self.tol,
+                self.revolutions
+            )
+        }
+    }
+}
+
+/// The settling pass (module doc): integrates `p` with `opts` revolution by revolution from
+/// its start until the section settles or the cap. Errors: a case without a crank driver or a
+/// clearance joint ([`Error::Usage`]), a bad request, solver failures.
+pub fn settle(p: &Prepared, opts: &SolverOptions, until: &UntilPeriodic) -> Result<Settled, Error> {
+    until.validate()?;
+    let (info, scene) = match (&p.info, &p.model) {
+        (Some(i), Model::Mechanism(s)) => (i, s),
+        _ => {
+            return Err(Error::Usage(format!(
+                "--until-periodic needs a scene with a crank driver and a clearance joint; {} \
+                 is a test problem",
+                p.case.name
+            )))
+        }
+    };
+    let period = info.period.ok_or_else(|| {
+        Error::Usage(format!(
+            "--until-periodic needs a crank driver (the section is taken once per revolution), \
+             and {} has none",
+            p.case.name
+        ))
+    })?;
+    if info.joint.is_none() {
+        return Err(Error::Usage(format!(
+            "--until-periodic needs a clearance joint (its section decides the steady state), \
+             and {} has none",
+            p.case.name
+        )));
+    }
+    let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
+    let sampler = Sampler::new(&mech, scene);
+    let section = |t: f64, y: &[f64]| -> Result<[f64; 2], Error> {
+        let s = sampler.sample(t, y);
+        match (s.ex_over_c, s.ey_over_c) {
+            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => Ok([x, y]),
+            _ => Err(Error::Internal(format!(
+                "until periodic: no finite e/c of the clearance joint at t = {t:e}"
+            ))),
+        }
+    };
+    let t0 = info.t_start;
+    let t_cap = t0 + period * until.max_revolutions as f64;
+    let y0 = mech.initial_state();
+    let problem = Problem::new(&mech, opts)?;
+    let mut it = problem.integrator(t0, t_cap, &y0)?;
+    let mut prev = section(t0, &y0)?;
+    let mut changes = Vec::new();
+    let mut buf = vec![0.0; y0.len()];
+    let mut k = 1usize;
+    loop {
+        let outcome = it.step()?;
+        let tb = it.t();
+        // Every section the step covers (h_max may exceed T when the scene sets none).
+        while k <= until.max_revolutions {
+            let tk = if k == until.max_revolutions {
+                t_cap
+            } else {
+                t0 + period * k as f64
+            };
+            if tk > tb {
+                break;
+            }
+            it.interpolate(tk, &mut buf);
+            let s = section(tk, &buf)?;
+            let d = (s[0] - prev[0]).hypot(s[1] - prev[1]);
+            changes.push(d);
+            prev = s;
+            if k >= MIN_REVOLUTIONS && d < until.tol {
+                return Ok(Settled {
+                    tol: until.tol,
+                    max_revolutions: until.max_revolutions,
+                    revolutions: k,
+                    settled: true,
+                    section_changes: changes,
+                });
+            }
+            k += 1;
+        }
+        if k > until.max_revolutions
+            || matches!(outcome, StepOutcome::StopTime { .. })
+            || it.is_finished()
+        {
+            break;
+        }
+    }
+    Ok(Settled {
+        tol: until.tol,
+        max_revolutions: until.max_revolutions,
+        revolutions: changes.len(),
+        settled: false,
+        section_changes: changes,
+    })
+}
