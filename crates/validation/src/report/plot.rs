@@ -21,7 +21,8 @@
 //! Text is drawn with DejaVu Sans, shipped in `assets/` (Bitstream Vera licence, see
 //! `assets/DejaVuSans-LICENSE.txt`) and registered with plotters' `ab_glyph` renderer, so no
 //! system font library is needed. Both files are written atomically. Source:
-//! docs/outputs.md ("
+//! docs/outputs.md ("`lash run CASE`", "`lash work-precision CASE`", "`lash plot RUN_DIR
+//! COLUMN…`").
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
