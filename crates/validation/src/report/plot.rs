@@ -27,6 +27,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::register_font;
@@ -166,11 +169,47 @@ pub struct Written {
     pub svg: PathBuf,
     /// The PNG file.
     pub png: PathBuf,
+    /// Where the PNG's plot areas and legends are.
+    pub layout: Layout,
+}
+
+/// A rectangle of pixels `[x0, y0, x1, y1]`, `x1` and `y1` excluded.
+pub type PixelRect = [i32; 4];
+
+/// Where a figure put its parts, in the PNG's pixels: every pixel of a data series lies in one
+/// of the `plots`; the `legends` hold samples of the series' lines and markers.
+///
+/// ```text
+/// plots: one per panel (the orbit's square, the line plot's axes box); legends: likewise
+/// ```
+///
+/// Source: this module.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Layout {
+    /// The plot areas.
+    pub plots: Vec<PixelRect>,
+    /// The legends.
+    pub legends: Vec<PixelRect>,
+}
+
+/// The pixel rectangle of a drawing area (backend coordinates).
+fn rect_of<DB: DrawingBackend, CT: plotters::coord::CoordTranslate>(
+    area: &DrawingArea<DB, CT>,
+) -> PixelRect {
+    let (x, y) = area.get_pixel_range();
+    [x.start, y.start, x.end, y.end]
 }
 
 /// Something that draws itself on any plotters backend.
 trait Figure {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+    /// Draws on `root`; `raster`: on a bitmap (lines drawn piece by piece, module doc); the
+    /// plot areas and legends go into `layout`.
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+        layout: &mut Layout,
+    ) -> Result<(), String>;
 }
 
 /// Renders `fig` to `stem.svg` and `stem.png` (atomically), both of `size` pixels.
@@ -186,19 +225,22 @@ fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Result<Written, 
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        fig.draw(&root).map_err(|e| plot_err(&svg, e))?;
+        fig.draw(&root, false, &mut Layout::default())
+            .map_err(|e| plot_err(&svg, e))?;
         root.present().map_err(|e| plot_err(&svg, e.to_string()))?;
     }
     io::write_atomic(&svg, text.as_bytes())?;
     let mut rgb = vec![0u8; 3 * size.0 as usize * size.1 as usize];
+    let mut layout = Layout::default();
     {
         let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
-        fig.draw(&root).map_err(|e| plot_err(&png, e))?;
+        fig.draw(&root, true, &mut layout)
+            .map_err(|e| plot_err(&png, e))?;
         root.present().map_err(|e| plot_err(&png, e.to_string()))?;
     }
     let bytes = palette_png(&rgb, size).map_err(|e| plot_err(&png, e))?;
     io::write_atomic(&png, &bytes)?;
-    Ok(Written { svg, png })
+    Ok(Written { svg, png, layout })
 }
 
 /// Encodes an RGB image as an 8-bit palette PNG (module doc).
@@ -328,20 +370,6 @@ pub fn equal_aspect(r: f64, width_px: u32, height_px: u32) -> (f64, f64) {
 
 fn style_of(i: usize) -> RGBColor {
     COLORS[i % COLORS.len()]
-}
-
-/// Tick label on a linear axis spanning `span`: values below 1e-9·span print as 0 (rounding
-/// noise such as −2.2e-16), others in plain form, or scientific when tiny or huge.
-fn tick(v: f64, span: f64) -> String {
-    let a = v.abs();
-    if a <= 1e-9 * span.abs() || v == 0.0 {
-        "0".into()
-    } else if (1e-3..1e5).contains(&a) {
-        let s = format!("{v:.6}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        format!("{v:.1e}")
-    }
 }
 
 /// Tick label on a log axis: `1e-4` for powers of ten, else one significant digit (`3e-4`).
@@ -514,6 +542,7 @@ fn with_legend_column<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     series: &[Series<'_>],
     top: i32,
+    layout: &mut Layout,
 ) -> Result<DrawingArea<DB, Shift>, String> {
     let es = entries(series);
     let w = legend_width(area, &es);
@@ -523,96 +552,718 @@ fn with_legend_column<DB: DrawingBackend>(
     let (total, _) = area.dim_in_pixel();
     let (plot, legend) = area.split_horizontally(total.saturating_sub(w) as i32);
     legend_column(&legend, &es, top)?;
+    layout.legends.push(rect_of(&legend));
     Ok(plot)
 }
 
-fn draw_series<'a, DB, X, Y>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
-    series: &[Series<'_>],
-) -> Result<(), String>
-where
-    DB: DrawingBackend + 'a,
-    X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
-    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
-{
-    for (i, s) in series.iter().enumerate() {
-        let c = style_of(i);
-        let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
-        let line = ShapeStyle::from(&c).stroke_width(2);
-        if s.style.line() {
-            if s.style.dashed() {
-                chart
-                    .draw_series(DashedLineSeries::new(pts.clone(), 10, 6, line))
-                    .map_err(|e| e.to_string())?;
-            } else {
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), line))
-                    .map_err(|e| e.to_string())?;
+// ---------------------------------------------------------------------------------------------
+// Data in pixels: clipped, without repeated points, a raster drawn piece by piece
+// ---------------------------------------------------------------------------------------------
+
+/// A point in backend pixels.
+type Px = (f64, f64);
+
+/// Pixels between a stroke's centre line and the plot area's edge: the half width of the
+/// widest line (2 px), rounded up.
+const STROKE_INSET: f64 = 1.0;
+
+/// The inclusive pixel box `r` shrunk by `by` on every side, as floats.
+fn inset(r: PixelRect, by: f64) -> [f64; 4] {
+    [
+        f64::from(r[0]) + by,
+        f64::from(r[1]) + by,
+        f64::from(r[2] - 1) - by,
+        f64::from(r[3] - 1) - by,
+    ]
+}
+
+fn within(p: Px, r: [f64; 4]) -> bool {
+    p.0 >= r[0] && p.0 <= r[2] && p.1 >= r[1] && p.1 <= r[3]
+}
+
+/// The part of the segment a → b inside the box `r` = [x0, y0, x1, y1] (Liang–Barsky), if any.
+fn clip(a: Px, b: Px, r: [f64; 4]) -> Option<(Px, Px)> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0 - r[0]),
+        (dx, r[2] - a.0),
+        (-dy, a.1 - r[1]),
+        (dy, r[3] - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
             }
         } else {
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            let t = q / p;
+            if p < 0.0 {
+                if t > t1 {
+                    return None;
+                }
+                t0 = t0.max(t);
+            } else {
+                if t < t0 {
+                    return None;
+                }
+                t1 = t1.min(t);
+            }
+        }
+    }
+    Some((
+        (a.0 + t0 * dx, a.1 + t0 * dy),
+        (a.0 + t1 * dx, a.1 + t1 * dy),
+    ))
+}
+
+fn whole(p: Px) -> (i32, i32) {
+    (p.0.round() as i32, p.1.round() as i32)
+}
+
+/// The visible runs of a polyline inside the box `r`: each segment clipped to it, the points
+/// as whole pixels, a point repeating the one before dropped (plotters' thick-line polygon
+/// has no direction for a piece of zero length and throws spikes across the figure).
+fn visible_runs(pts: &[Px], r: [f64; 4]) -> Vec<Vec<(i32, i32)>> {
+    let mut runs = Vec::new();
+    let mut cur: Vec<(i32, i32)> = Vec::new();
+    let mut end = |cur: &mut Vec<(i32, i32)>| {
+        if cur.len() > 1 {
+            runs.push(std::mem::take(cur));
+        } else {
+            cur.clear();
+        }
+    };
+    for w in pts.windows(2) {
+        match clip(w[0], w[1], r) {
+            Some((a, b)) => {
+                let (a, b) = (whole(a), whole(b));
+                if cur.last() != Some(&a) {
+                    end(&mut cur);
+                    cur.push(a);
+                }
+                if cur.last() != Some(&b) {
+                    cur.push(b);
+                }
+            }
+            None => end(&mut cur),
+        }
+    }
+    end(&mut cur);
+    runs
+}
+
+/// Dashes of `on` px with `off` px gaps along each run, the pattern carried across its
+/// vertices.
+fn dashes(runs: &[Vec<(i32, i32)>], on: f64, off: f64) -> Vec<Vec<(i32, i32)>> {
+    let mut out = Vec::new();
+    for run in runs {
+        let mut pos = 0.0;
+        let mut dash: Vec<Px> = Vec::new();
+        let mut flush = |dash: &mut Vec<Px>| {
+            let mut d: Vec<(i32, i32)> = Vec::new();
+            for p in dash.drain(..) {
+                let q = whole(p);
+                if d.last() != Some(&q) {
+                    d.push(q);
+                }
+            }
+            if d.len() > 1 {
+                out.push(d);
+            }
+        };
+        for w in run.windows(2) {
+            let (a, b) = (
+                (f64::from(w[0].0), f64::from(w[0].1)),
+                (f64::from(w[1].0), f64::from(w[1].1)),
+            );
+            let len = (b.0 - a.0).hypot(b.1 - a.1);
+            let at = |s: f64| (a.0 + (b.0 - a.0) * s / len, a.1 + (b.1 - a.1) * s / len);
+            let mut s = 0.0;
+            while s < len {
+                if pos < on {
+                    let take = (on - pos).min(len - s);
+                    if dash.is_empty() {
+                        dash.push(at(s));
+                    }
+                    dash.push(at(s + take));
+                    s += take;
+                    pos += take;
+                    if pos >= on {
+                        flush(&mut dash);
+                    }
+                } else {
+                    let take = (on + off - pos).min(len - s);
+                    s += take;
+                    pos += take;
+                    if pos >= on + off {
+                        pos = 0.0;
+                    }
+                }
+            }
+        }
+        flush(&mut dash);
+    }
+    out
+}
+
+/// Strokes runs: on a raster each segment alone (no joins to miter past the data) with a
+/// round dot at each inner vertex; in SVG each run as one polyline.
+fn stroke<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    runs: &[Vec<(i32, i32)>],
+    color: RGBColor,
+    width: u32,
+    raster: bool,
+) -> Result<(), String> {
+    let style = color.stroke_width(width);
+    for run in runs {
+        if raster {
+            for w in run.windows(2) {
+                root.draw(&PathElement::new(vec![w[0], w[1]], style))
+                    .map_err(|e| e.to_string())?;
+            }
+            if width > 1 {
+                for &p in &run[1..run.len() - 1] {
+                    root.draw(&Circle::new(p, width / 2, color.filled()))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+        } else {
+            root.draw(&PathElement::new(run.clone(), style))
                 .map_err(|e| e.to_string())?;
         }
+    }
+    Ok(())
+}
+
+/// A line's points reduced for the pixels they fall on: of each run of points in one pixel
+/// column, the first, the lowest, the highest and the last, in order (what a stroke of them
+/// covers is unchanged). Only for more than four points per column.
+fn per_column(pts: Vec<Px>, columns: f64) -> Vec<Px> {
+    if (pts.len() as f64) <= 4.0 * columns {
+        return pts;
+    }
+    let mut out = Vec::with_capacity(4 * columns as usize + 4);
+    let mut i = 0;
+    while i < pts.len() {
+        let col = pts[i].0.round();
+        let mut j = i;
+        let (mut lo, mut hi) = (i, i);
+        while j < pts.len() && pts[j].0.round() == col {
+            if pts[j].1 < pts[lo].1 {
+                lo = j;
+            }
+            if pts[j].1 > pts[hi].1 {
+                hi = j;
+            }
+            j += 1;
+        }
+        let mut keep = vec![i, lo, hi, j - 1];
+        keep.sort_unstable();
+        keep.dedup();
+        out.extend(keep.into_iter().map(|k| pts[k]));
+        i = j;
+    }
+    out
+}
+
+/// Draws the series (their points already in pixels) inside the plot area `plot`: lines
+/// clipped one stroke's half width inside it, points and markers only where they fit whole.
+fn draw_data<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    plot: PixelRect,
+    series: &[Series<'_>],
+    pixels: Vec<Vec<Px>>,
+    width: u32,
+    raster: bool,
+) -> Result<(), String> {
+    let columns = f64::from(plot[2] - plot[0]);
+    for (i, (s, px)) in series.iter().zip(pixels).enumerate() {
+        let c = style_of(i);
+        if s.style.line() {
+            let line = per_column(px.clone(), columns);
+            let runs = visible_runs(&line, inset(plot, STROKE_INSET));
+            let runs = if s.style.dashed() {
+                dashes(&runs, 10.0, 6.0)
+            } else {
+                runs
+            };
+            stroke(root, &runs, c, width, raster)?;
+        } else {
+            for &p in px.iter().filter(|&&p| within(p, inset(plot, 4.0))) {
+                root.draw(&Circle::new(whole(p), 3, c.filled()))
+                    .map_err(|e| e.to_string())?;
+            }
+        }
         if s.style.marked() {
-            let area = chart.plotting_area();
-            for &p in &pts {
-                draw_marker(area, p, i, c)?;
+            for &p in px.iter().filter(|&&p| within(p, inset(plot, 7.0))) {
+                draw_marker(root, whole(p), i, c)?;
             }
         }
     }
     Ok(())
 }
 
+/// The series' points in the chart's pixels.
+fn to_pixels<DB, X, Y>(
+    chart: &ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    series: &[Series<'_>],
+) -> Vec<Vec<Px>>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    series
+        .iter()
+        .map(|s| {
+            s.x.iter()
+                .zip(s.y)
+                .map(|(&x, &y)| {
+                    let p = chart.backend_coord(&(x, y));
+                    (f64::from(p.0), f64::from(p.1))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ticks: chosen so that their labels fit, every decade of a log axis labelled
+// ---------------------------------------------------------------------------------------------
+
+/// Gap between two tick labels along an axis, px.
+const LABEL_GAP: f64 = 10.0;
+
+/// Whether labels at `ticks` (positions along the axis in px from `pos`) fit without
+/// overlapping: neighbours apart by at least half their widths (x axis) or their height
+/// (y axis) plus a gap.
+fn labels_fit(
+    ticks: &[f64],
+    pos: &dyn Fn(f64) -> f64,
+    label: &dyn Fn(f64) -> String,
+    horizontal: bool,
+    measure: &dyn Fn(&str) -> (u32, u32),
+) -> bool {
+    let sizes: Vec<(f64, f64)> = ticks
+        .iter()
+        .map(|&v| {
+            let (w, h) = measure(&label(v));
+            (f64::from(w), f64::from(h))
+        })
+        .collect();
+    ticks.windows(2).zip(sizes.windows(2)).all(|(t, s)| {
+        let room = (pos(t[1]) - pos(t[0])).abs();
+        let need = if horizontal {
+            0.5 * (s[0].0 + s[1].0) + LABEL_GAP
+        } else {
+            0.5 * (s[0].1 + s[1].1) + 0.5 * LABEL_GAP
+        };
+        room >= need
+    })
+}
+
+/// The multiples k·step in [lo, hi] (values within 1e-9 step of 0 as 0, of an end as it).
+fn multiples(lo: f64, hi: f64, step: f64) -> Vec<f64> {
+    let (a, b) = (
+        (lo / step - 1e-9).ceil() as i64,
+        (hi / step + 1e-9).floor() as i64,
+    );
+    (a..=b)
+        .map(|k| {
+            let v = k as f64 * step;
+            if v.abs() < 1e-9 * step {
+                0.0
+            } else {
+                // k·step may round a few ulps past an end it belongs to.
+                v.clamp(lo, hi)
+            }
+        })
+        .collect()
+}
+
+/// Label of a linear tick on an axis of tick spacing `step`: as many decimals as the step
+/// needs (1-2-5 steps have one significant digit), scientific when tiny or huge.
+fn tick_at(v: f64, step: f64) -> String {
+    if v == 0.0 || v.abs() < 1e-9 * step {
+        return "0".into();
+    }
+    let a = v.abs();
+    let e_step = step.log10().floor();
+    if (1e-3..1e5).contains(&a) {
+        let d = (-e_step).max(0.0) as usize;
+        format!("{v:.d$}")
+    } else {
+        let d = (a.log10().floor() - e_step).max(0.0) as usize;
+        format!("{v:.d$e}")
+    }
+}
+
+/// Ticks of a linear axis [lo, hi] of `len` px: the finest 1-2-5 step (at most 12 ticks)
+/// whose labels fit ([`labels_fit`]); light lines at a fifth (a quarter for a step of 2) of
+/// it. Returns (ticks, light lines, step).
+fn linear_ticks(
+    lo: f64,
+    hi: f64,
+    len: f64,
+    horizontal: bool,
+    measure: &dyn Fn(&str) -> (u32, u32),
+) -> (Vec<f64>, Vec<f64>, f64) {
+    let span = hi - lo;
+    let pos = |v: f64| (v - lo) / span * len;
+    let mut p = 10f64.powf((span / 12.0).log10().floor());
+    for _ in 0..40 {
+        for m in [1.0, 2.0, 5.0] {
+            let step = m * p;
+            let t = multiples(lo, hi, step);
+            if t.len() > 12 || t.len() < 2 {
+                continue;
+            }
+            if labels_fit(&t, &pos, &|v| tick_at(v, step), horizontal, measure) {
+                let sub = if m == 2.0 { step / 4.0 } else { step / 5.0 };
+                return (t, multiples(lo, hi, sub), step);
+            }
+        }
+        p *= 10.0;
+    }
+    // Nothing fits (an axis a few pixels long): its two ends.
+    (vec![lo, hi], Vec::new(), span)
+}
+
+/// Label of a log-axis tick: `1e-4`, `2e-4` for m·10^k, else as on a linear axis of
+/// spacing `step`.
+fn log_label(v: f64, step: Option<f64>) -> String {
+    match step {
+        None => tick_log(v),
+        Some(s) => tick_at(v, s),
+    }
+}
+
+/// Ticks of a log axis [lo, hi] (lo > 0) of `len` px, the first that fits: 1, 2, 5 × 10^k;
+/// the decades with 2 and 5 × 10^k only at the partial ends (so that no end of the axis goes
+/// unlabelled); the decades alone; every second, third … decade (too many decades to label
+/// each). An axis spanning too little for two such ticks gets 1 … 9 × 10^k, or linear ticks.
+/// Light lines at 1 … 9 × 10^k. Returns (ticks, light lines, the linear step if linear).
+#[allow(clippy::type_complexity)]
+fn log_ticks(
+    lo: f64,
+    hi: f64,
+    len: f64,
+    horizontal: bool,
+    measure: &dyn Fn(&str) -> (u32, u32),
+) -> (Vec<f64>, Vec<f64>, Option<f64>) {
+    let (a, b) = (lo.log10(), hi.log10());
+    let pos = |v: f64| (v.log10() - a) / (b - a) * len;
+    let inside = |v: f64| v >= lo * (1.0 - 1e-12) && v <= hi * (1.0 + 1e-12);
+    let (k0, k1) = (a.floor() as i32, b.ceil() as i32);
+    let of = |m: f64, k: i32| {
+        // m · 10^k, exactly for the decades.
+        let p = format!("1e{k}").parse::<f64>().unwrap_or(f64::NAN);
+        m * p
+    };
+    let with = |mults: &[f64]| -> Vec<f64> {
+        (k0..=k1)
+            .flat_map(|k| mults.iter().map(move |&m| of(m, k)))
+            .filter(|&v| inside(v))
+            .collect()
+    };
+    let light = with(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+    let decades = with(&[1.0]);
+    let fits =
+        |t: &[f64]| t.len() >= 2 && labels_fit(t, &pos, &|v| tick_log(v), horizontal, measure);
+    let dense = with(&[1.0, 2.0, 5.0]);
+    if fits(&dense) {
+        return (dense, light, None);
+    }
+    if let (Some(&first), Some(&last)) = (decades.first(), decades.last()) {
+        let ends: Vec<f64> = dense
+            .iter()
+            .copied()
+            .filter(|&v| v < first || v > last || decades.contains(&v))
+            .collect();
+        if fits(&ends) {
+            return (ends, light, None);
+        }
+        if fits(&decades) {
+            return (decades, light, None);
+        }
+        for every in 2..=decades.len().max(2) {
+            let some: Vec<f64> = decades.iter().copied().step_by(every).collect();
+            if fits(&some) {
+                return (some, light, None);
+            }
+        }
+    }
+    let all = light.clone();
+    if fits(&all) {
+        return (all, light, None);
+    }
+    // Less than a decade with too few round values: linear ticks on the log axis.
+    let (t, _, step) = linear_ticks(lo, hi, len, horizontal, measure);
+    let lin_pos = |v: f64| pos(v);
+    if t.len() >= 2 && labels_fit(&t, &lin_pos, &|v| tick_at(v, step), horizontal, measure) {
+        return (t, light, Some(step));
+    }
+    (vec![lo, hi], light, Some(hi - lo))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Axes
+// ---------------------------------------------------------------------------------------------
+
+/// How an axes box is laid out: margin, label areas, fonts, line width.
+#[derive(Clone, Copy)]
+struct Frame {
+    margin: u32,
+    x_area: u32,
+    y_area: u32,
+    label_font: u32,
+    desc_font: u32,
+    width: u32,
+}
+
+const XY_FRAME: Frame = Frame {
+    margin: 15,
+    x_area: 50,
+    y_area: 85,
+    label_font: 15,
+    desc_font: 17,
+    width: 2,
+};
+
+const PANEL_FRAME: Frame = Frame {
+    margin: 12,
+    x_area: 45,
+    y_area: 85,
+    label_font: 14,
+    desc_font: 16,
+    width: 2,
+};
+
+/// The pixel box the plot area of a chart on `area` with `f` gets (a chart built and
+/// dropped: building draws nothing without a caption).
+fn plot_box<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    f: Frame,
+) -> Result<PixelRect, String> {
+    let probe = ChartBuilder::on(area)
+        .margin(f.margin)
+        .x_label_area_size(f.x_area)
+        .y_label_area_size(f.y_area)
+        .build_cartesian_2d(0f64..1f64, 0f64..1f64)
+        .map_err(|e| e.to_string())?;
+    Ok(rect_of(probe.plotting_area()))
+}
+
+/// An axis: its range, whether log10, and its ticks.
+struct Axis {
+    lo: f64,
+    hi: f64,
+    log: bool,
+    ticks: Vec<f64>,
+    light: Vec<f64>,
+    /// Linear labels with this spacing (None: log labels).
+    step: Option<f64>,
+}
+
+/// A coordinate with the ticks of this module: `inner` maps values to pixels, `ticks` are
+/// its labelled key points and `light` its light grid lines (plotters' own choice of key
+/// points is what overlapped and skipped decades).
+struct Ticked<R: Ranged<ValueType = f64>> {
+    inner: R,
+    ticks: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl<R: Ranged<ValueType = f64>> Ranged for Ticked<R> {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.ticks.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> std::ops::Range<i32> {
+        self.inner.axis_pixel_range(limit)
+    }
+}
+
+impl<R: Ranged<ValueType = f64>> ValueFormatter<f64> for Ticked<R> {
+    fn format(value: &f64) -> String {
+        format!("{value}")
+    }
+}
+
+impl Axis {
+    fn linear(&self) -> Ticked<RangedCoordf64> {
+        Ticked {
+            inner: (self.lo..self.hi).into(),
+            ticks: self.ticks.clone(),
+            light: self.light.clone(),
+        }
+    }
+
+    fn logarithmic(&self) -> Ticked<LogCoord<f64>> {
+        Ticked {
+            inner: (self.lo..self.hi).log_scale().into(),
+            ticks: self.ticks.clone(),
+            light: self.light.clone(),
+        }
+    }
+
+    fn new(
+        (lo, hi): (f64, f64),
+        log: bool,
+        len: f64,
+        horizontal: bool,
+        measure: &dyn Fn(&str) -> (u32, u32),
+    ) -> Axis {
+        let (ticks, light, step) = if log {
+            log_ticks(lo, hi, len, horizontal, measure)
+        } else {
+            let (t, l, s) = linear_ticks(lo, hi, len, horizontal, measure);
+            (t, l, Some(s))
+        };
+        Axis {
+            lo,
+            hi,
+            log,
+            ticks,
+            light,
+            step,
+        }
+    }
+
+    fn label(&self, v: f64) -> String {
+        if self.log {
+            log_label(v, self.step)
+        } else {
+            tick_at(v, self.step.unwrap_or(self.hi - self.lo))
+        }
+    }
+}
+
+/// One axes box on `area`: the mesh with the ticks of `x` and `y`, the axis labels of
+/// `axes`, then `series` drawn into it; its plot area goes into `layout`.
+#[allow(clippy::too_many_arguments)]
+fn axes_box<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    area: &DrawingArea<DB, Shift>,
+    f: Frame,
+    axes: &Axes<'_>,
+    x: &Axis,
+    y: &Axis,
+    series: &[Series<'_>],
+    raster: bool,
+    layout: &mut Layout,
+) -> Result<(), String> {
+    let fx = |v: &f64| x.label(*v);
+    let fy = |v: &f64| y.label(*v);
+    macro_rules! go {
+        ($xr:expr, $yr:expr) => {{
+            let mut chart = ChartBuilder::on(area)
+                .margin(f.margin)
+                .x_label_area_size(f.x_area)
+                .y_label_area_size(f.y_area)
+                .build_cartesian_2d($xr, $yr)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc(axes.x_label)
+                .y_desc(axes.y_label)
+                .x_label_formatter(&fx)
+                .y_label_formatter(&fy)
+                .label_style((FAMILY, f.label_font))
+                .axis_desc_style((FAMILY, f.desc_font))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let r = rect_of(chart.plotting_area());
+            layout.plots.push(r);
+            let px = to_pixels(&chart, series);
+            draw_data(root, r, series, px, f.width, raster)
+        }};
+    }
+    match (x.log, y.log) {
+        (false, false) => go!(x.linear(), y.linear()),
+        (false, true) => go!(x.linear(), y.logarithmic()),
+        (true, false) => go!(x.logarithmic(), y.linear()),
+        (true, true) => go!(x.logarithmic(), y.logarithmic()),
+    }
+}
+
+/// A measure of label text in pixels with the figure's tick font.
+fn measurer<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    size: u32,
+) -> impl Fn(&str) -> (u32, u32) + 'a {
+    move |s: &str| {
+        let font: TextStyle<'_> = (FAMILY, size).into_font().into();
+        area.estimate_text_size(s, &font)
+            .unwrap_or((8 * s.chars().count() as u32, size))
+    }
+}
+
+/// The range of a linear axis over data [lo, hi]: exact ends for lines (x), 5 % padding
+/// otherwise or when points or markers sit on the ends (they must fit whole).
+fn linear_range(lo: f64, hi: f64, pad: bool) -> (f64, f64) {
+    if hi > lo && !pad {
+        (lo, hi)
+    } else {
+        padded(lo, hi)
+    }
+}
+
+fn has_marks(series: &[Series<'_>]) -> bool {
+    series.iter().any(|s| !s.style.line() || s.style.marked())
+}
+
 impl Figure for XyFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+        layout: &mut Layout,
+    ) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let titled = root
             .margin(10, 0, 0, 0)
             .titled(self.axes.title, (FAMILY, 22))
             .map_err(|e| e.to_string())?;
-        let plot = with_legend_column(&titled, self.series, 15)?;
+        let plot = with_legend_column(&titled, self.series, 15, layout)?;
         let (x0, x1, y0, y1) = self.bounds;
-        let mut b = ChartBuilder::on(&plot);
-        b.margin(15).x_label_area_size(50).y_label_area_size(85);
-        if self.log {
-            let fmt = |v: &f64| tick_log(*v);
-            let (xa, xb) = padded_log(x0, x1);
-            let (ya, yb) = padded_log(y0, y1);
-            let mut chart = b
-                .build_cartesian_2d((xa..xb).log_scale(), (ya..yb).log_scale())
-                .map_err(|e| e.to_string())?;
-            chart
-                .configure_mesh()
-                .x_desc(self.axes.x_label)
-                .y_desc(self.axes.y_label)
-                .x_label_formatter(&fmt)
-                .y_label_formatter(&fmt)
-                .label_style((FAMILY, 15))
-                .axis_desc_style((FAMILY, 17))
-                .draw()
-                .map_err(|e| e.to_string())?;
-            draw_series(&mut chart, self.series)
+        let b = plot_box(&plot, XY_FRAME)?;
+        let (w, h) = (f64::from(b[2] - b[0]), f64::from(b[3] - b[1]));
+        let measure = measurer(root, XY_FRAME.label_font);
+        let (xr, yr) = if self.log {
+            (padded_log(x0, x1), padded_log(y0, y1))
         } else {
-            let (xa, xb) = if x1 > x0 { (x0, x1) } else { padded(x0, x1) };
-            let (ya, yb) = padded(y0, y1);
-            let fx = |v: &f64| tick(*v, xb - xa);
-            let fy = |v: &f64| tick(*v, yb - ya);
-            let mut chart = b
-                .build_cartesian_2d(xa..xb, ya..yb)
-                .map_err(|e| e.to_string())?;
-            chart
-                .configure_mesh()
-                .x_desc(self.axes.x_label)
-                .y_desc(self.axes.y_label)
-                .x_label_formatter(&fx)
-                .y_label_formatter(&fy)
-                .label_style((FAMILY, 15))
-                .axis_desc_style((FAMILY, 17))
-                .draw()
-                .map_err(|e| e.to_string())?;
-            draw_series(&mut chart, self.series)
-        }
+            (linear_range(x0, x1, has_marks(self.series)), padded(y0, y1))
+        };
+        let x = Axis::new(xr, self.log, w, true, &measure);
+        let y = Axis::new(yr, self.log, h, false, &measure);
+        axes_box(
+            root,
+            &plot,
+            XY_FRAME,
+            &self.axes,
+            &x,
+            &y,
+            self.series,
+            raster,
+            layout,
+        )
     }
 }
 
@@ -669,7 +1320,12 @@ struct PanelsFigure<'a> {
 }
 
 impl Figure for PanelsFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+        layout: &mut Layout,
+    ) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let area = root
             .margin(10, 0, 0, 0)
@@ -683,52 +1339,37 @@ impl Figure for PanelsFigure<'_> {
             .flat_map(|p| p.series.iter().copied())
             .collect();
         let w = legend_width(root, &entries(&all));
+        let measure = measurer(root, PANEL_FRAME.label_font);
         for ((p, part), &(x0, x1, y0, y1)) in self.panels.iter().zip(&parts).zip(&self.bounds) {
-            let (xa, xb) = if x1 > x0 { (x0, x1) } else { padded(x0, x1) };
-            let fx = |v: &f64| tick(*v, xb - xa);
+            // The panel's title above it (not a chart caption: the chart is built twice).
+            let part = part
+                .titled(p.axes.title, (FAMILY, 18))
+                .map_err(|e| e.to_string())?;
             let (total, _) = part.dim_in_pixel();
             let (plot, legend) = part.split_horizontally(total.saturating_sub(w) as i32);
-            legend_column(&legend, &entries(p.series), 40)?;
-            let mut b = ChartBuilder::on(&plot);
-            b.caption(p.axes.title, (FAMILY, 18))
-                .margin(12)
-                .x_label_area_size(45)
-                .y_label_area_size(85);
-            if p.log_y {
-                let (ya, yb) = padded_log(y0, y1);
-                let fy = |v: &f64| tick_log(*v);
-                let mut chart = b
-                    .build_cartesian_2d(xa..xb, (ya..yb).log_scale())
-                    .map_err(|e| e.to_string())?;
-                chart
-                    .configure_mesh()
-                    .x_desc(p.axes.x_label)
-                    .y_desc(p.axes.y_label)
-                    .x_label_formatter(&fx)
-                    .y_label_formatter(&fy)
-                    .label_style((FAMILY, 14))
-                    .axis_desc_style((FAMILY, 16))
-                    .draw()
-                    .map_err(|e| e.to_string())?;
-                draw_series(&mut chart, p.series)?;
+            legend_column(&legend, &entries(p.series), PANEL_FRAME.margin as i32)?;
+            layout.legends.push(rect_of(&legend));
+            let b = plot_box(&plot, PANEL_FRAME)?;
+            let (bw, bh) = (f64::from(b[2] - b[0]), f64::from(b[3] - b[1]));
+            let xr = linear_range(x0, x1, has_marks(p.series));
+            let yr = if p.log_y {
+                padded_log(y0, y1)
             } else {
-                let (ya, yb) = padded(y0, y1);
-                let fy = |v: &f64| tick(*v, yb - ya);
-                let mut chart = b
-                    .build_cartesian_2d(xa..xb, ya..yb)
-                    .map_err(|e| e.to_string())?;
-                chart
-                    .configure_mesh()
-                    .x_desc(p.axes.x_label)
-                    .y_desc(p.axes.y_label)
-                    .x_label_formatter(&fx)
-                    .y_label_formatter(&fy)
-                    .label_style((FAMILY, 14))
-                    .axis_desc_style((FAMILY, 16))
-                    .draw()
-                    .map_err(|e| e.to_string())?;
-                draw_series(&mut chart, p.series)?;
-            }
+                padded(y0, y1)
+            };
+            let x = Axis::new(xr, false, bw, true, &measure);
+            let y = Axis::new(yr, p.log_y, bh, false, &measure);
+            axes_box(
+                root,
+                &plot,
+                PANEL_FRAME,
+                &p.axes,
+                &x,
+                &y,
+                p.series,
+                raster,
+                layout,
+            )?;
         }
         Ok(())
     }
@@ -762,8 +1403,22 @@ struct OrbitFigure<'a> {
     r: f64,
 }
 
+const ORBIT_FRAME: Frame = Frame {
+    margin: 15,
+    x_area: 50,
+    y_area: 80,
+    label_font: 15,
+    desc_font: 17,
+    width: 1,
+};
+
 impl Figure for OrbitFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+        layout: &mut Layout,
+    ) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let area = root
             .margin(10, 0, 0, 0)
@@ -795,6 +1450,7 @@ impl Figure for OrbitFigure<'_> {
         let (area, legend) =
             area.split_vertically(full_h.saturating_sub(rows * LEGEND_ROW as u32 + 8) as i32);
         let (lw, _) = legend.dim_in_pixel();
+        layout.legends.push(rect_of(&legend));
         for (k, e) in es.iter().enumerate() {
             let col = (k % 2) as i32;
             let row = (k / 2) as i32;
@@ -805,50 +1461,49 @@ impl Figure for OrbitFigure<'_> {
                 LEGEND_ROW / 2 + row * LEGEND_ROW,
             )?;
         }
-        let (margin, x_area, y_area) = (15u32, 50u32, 80u32);
-        let (w, h) = area.dim_in_pixel();
-        let pw = w.saturating_sub(2 * margin + y_area);
-        let ph = h.saturating_sub(2 * margin + x_area);
+        let b = plot_box(&area, ORBIT_FRAME)?;
+        let (pw, ph) = ((b[2] - b[0]).max(1) as u32, (b[3] - b[1]).max(1) as u32);
         let (rx, ry) = equal_aspect(self.r, pw, ph);
+        let measure = measurer(root, ORBIT_FRAME.label_font);
+        let x = Axis::new((-rx, rx), false, f64::from(pw), true, &measure);
+        let y = Axis::new((-ry, ry), false, f64::from(ph), false, &measure);
+        // The circle first (black, 2 px), then the orbits (1 px) and sections (dots).
+        let circle: (Vec<f64>, Vec<f64>) = (0..=360)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                (a.cos(), a.sin())
+            })
+            .unzip();
         let mut chart = ChartBuilder::on(&area)
-            .margin(margin)
-            .x_label_area_size(x_area)
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(-rx..rx, -ry..ry)
+            .margin(ORBIT_FRAME.margin)
+            .x_label_area_size(ORBIT_FRAME.x_area)
+            .y_label_area_size(ORBIT_FRAME.y_area)
+            .build_cartesian_2d(x.linear(), y.linear())
             .map_err(|e| e.to_string())?;
-        let (fx, fy) = (|v: &f64| tick(*v, 2.0 * rx), |v: &f64| tick(*v, 2.0 * ry));
+        let (fx, fy) = (|v: &f64| x.label(*v), |v: &f64| y.label(*v));
         chart
             .configure_mesh()
             .x_desc("eccentricity e/c, x component")
             .y_desc("eccentricity e/c, y component")
             .x_label_formatter(&fx)
             .y_label_formatter(&fy)
-            .label_style((FAMILY, 15))
-            .axis_desc_style((FAMILY, 17))
+            .label_style((FAMILY, ORBIT_FRAME.label_font))
+            .axis_desc_style((FAMILY, ORBIT_FRAME.desc_font))
             .draw()
             .map_err(|e| e.to_string())?;
-        let circle: Vec<(f64, f64)> = (0..=360)
-            .map(|k| {
-                let a = (k as f64).to_radians();
-                (a.cos(), a.sin())
-            })
-            .collect();
-        chart
-            .draw_series(LineSeries::new(circle, BLACK.stroke_width(2)))
-            .map_err(|e| e.to_string())?;
-        for (k, o) in self.orbits.iter().enumerate() {
-            let c = style_of(k);
-            let orbit: Vec<(f64, f64)> = o.x.iter().copied().zip(o.y.iter().copied()).collect();
-            match o.style {
-                SeriesStyle::Points => chart
-                    .draw_series(orbit.iter().map(|&p| Circle::new(p, 3, c.filled())))
-                    .map_err(|e| e.to_string())?,
-                _ => chart
-                    .draw_series(LineSeries::new(orbit, ShapeStyle::from(&c).stroke_width(1)))
-                    .map_err(|e| e.to_string())?,
-            };
-        }
-        Ok(())
+        let r = rect_of(chart.plotting_area());
+        layout.plots.push(r);
+        let ring = [Series {
+            name: "",
+            x: &circle.0,
+            y: &circle.1,
+            style: SeriesStyle::Line,
+        }];
+        let px = to_pixels(&chart, &ring);
+        let runs = visible_runs(&px[0], inset(r, STROKE_INSET));
+        stroke(root, &runs, BLACK, 2, raster)?;
+        let px = to_pixels(&chart, self.orbits);
+        draw_data(root, r, self.orbits, px, ORBIT_FRAME.width, raster)
     }
 }
 
@@ -1191,6 +1846,338 @@ mod tests {
         assert!(orbit_plot(&d.path().join("o"), "t", &[0.1], &[]).is_err());
     }
 
+    /// Pixels of a data colour (saturated: max − min channel > 60; text, axes and grid are
+    /// grey) that lie in no plot area and no legend of the layout.
+    fn strays(w: &Written) -> (usize, usize, Vec<(u32, u32)>) {
+        let (width, height, buf, bpp) = decode(&w.png);
+        let inside = |r: &PixelRect, x: u32, y: u32| {
+            (x as i32) >= r[0] && (x as i32) < r[2] && (y as i32) >= r[1] && (y as i32) < r[3]
+        };
+        let (mut data, mut out) = (0, Vec::new());
+        for y in 0..height {
+            for x in 0..width {
+                let i = ((y * width + x) as usize) * bpp;
+                let (mx, mn) = (
+                    buf[i..i + 3].iter().max().unwrap(),
+                    buf[i..i + 3].iter().min().unwrap(),
+                );
+                if mx - mn <= 60 {
+                    continue;
+                }
+                if w.layout.plots.iter().any(|r| inside(r, x, y)) {
+                    data += 1;
+                } else if !w.layout.legends.iter().any(|r| inside(r, x, y)) {
+                    out.push((x, y));
+                }
+            }
+        }
+        (data, out.len(), out.into_iter().take(8).collect())
+    }
+
+    /// A dry joint's contact force: zero, with spikes of one or two samples up to 3e4 N, on
+    /// 2001 samples of 0…720° (several samples per pixel column).
+    fn spiky() -> (Vec<f64>, Vec<f64>) {
+        let x: Vec<f64> = (0..=2000).map(|k| 0.36 * k as f64).collect();
+        let y: Vec<f64> = (0..=2000)
+            .map(|k| match k % 97 {
+                0 => 3e4 * (1.0 + (k as f64).sin()) / 2.0,
+                1 => 1.5e4,
+                5..=9 => 2e3 * ((k % 7) as f64),
+                _ => 0.0,
+            })
+            .collect();
+        (x, y)
+    }
+
+    /// Every figure kind, drawn from data that provokes strokes past the axes (spikes of one
+    /// sample, many samples per pixel, steep reversals, markers at the ends of the range):
+    /// no pixel of a data series lies outside the plot areas (legends aside), and the series
+    /// are drawn inside them.
+    #[test]
+    fn no_data_pixel_lies_outside_the_axes() {
+        let d = tempfile::tempdir().unwrap();
+        let (x, y) = spiky();
+        let wave: Vec<f64> = x.iter().map(|a| 1e4 * a.to_radians().sin()).collect();
+        let few_x = [0.0, 180.0, 360.0, 720.0];
+        let few_y = [0.0, 3e4, -1e4, 2e4];
+        let ax = Axes {
+            title: "Clearance joint forces",
+            x_label: "crank angle θ, °",
+            y_label: "force, N",
+        };
+        let line = line_plot(
+            &d.path().join("line"),
+            &ax,
+            &[
+                Series {
+                    name: "contact",
+                    x: &x,
+                    y: &y,
+                    style: SeriesStyle::Line,
+                },
+                Series {
+                    name: "ideal",
+                    x: &x,
+                    y: &wave,
+                    style: SeriesStyle::Dashed,
+                },
+                Series {
+                    name: "marked",
+                    x: &few_x,
+                    y: &few_y,
+                    style: SeriesStyle::LinePoints,
+                },
+                Series {
+                    name: "points",
+                    x: &few_x,
+                    y: &few_y,
+                    style: SeriesStyle::Points,
+                },
+            ],
+        )
+        .unwrap();
+        // Work–precision: errors over 16 decades, costs over 6, zigzags.
+        let cost: Vec<f64> = (0..12).map(|k| 10f64.powf(2.0 + 0.5 * k as f64)).collect();
+        let err: Vec<f64> = (0..12)
+            .map(|k| 10f64.powf(-(k as f64) * 1.4 + if k % 2 == 0 { 0.8 } else { 0.0 }))
+            .collect();
+        let err2: Vec<f64> = err.iter().map(|e| e * 3.0).collect();
+        let wp = loglog_plot(
+            &d.path().join("wp"),
+            &Axes {
+                title: "Work–precision",
+                x_label: "RHS evaluations",
+                y_label: "error",
+            },
+            &[
+                Series {
+                    name: "dop853",
+                    x: &cost,
+                    y: &err,
+                    style: SeriesStyle::LinePoints,
+                },
+                Series {
+                    name: "bdf",
+                    x: &cost,
+                    y: &err2,
+                    style: SeriesStyle::DashedPoints,
+                },
+            ],
+        )
+        .unwrap();
+        // Stiffness: |λ| jumping between 5 and 1e3 with single-sample spikes to 5e4.
+        let rho: Vec<f64> = y
+            .iter()
+            .map(|v| if *v > 0.0 { 5e4 * v / 3e4 + 5.0 } else { 1e3 })
+            .collect();
+        let h: Vec<f64> = rho.iter().map(|r| 2.785 / r).collect();
+        let s1 = [Series {
+            name: "|λ|max",
+            x: &x,
+            y: &rho,
+            style: SeriesStyle::Line,
+        }];
+        let s2 = [
+            Series {
+                name: "limit",
+                x: &x,
+                y: &h,
+                style: SeriesStyle::Line,
+            },
+            Series {
+                name: "force",
+                x: &x,
+                y: &y,
+                style: SeriesStyle::Dashed,
+            },
+        ];
+        let panels = panels_plot(
+            &d.path().join("panels"),
+            "Stiffness",
+            &[
+                Panel {
+                    axes: Axes {
+                        title: "spectral radius",
+                        x_label: "crank angle, °",
+                        y_label: "|λ|, 1/s",
+                    },
+                    series: &s1,
+                    log_y: true,
+                },
+                Panel {
+                    axes: Axes {
+                        title: "RK4 limit",
+                        x_label: "crank angle, °",
+                        y_label: "h, s",
+                    },
+                    series: &s2[..1],
+                    log_y: true,
+                },
+                Panel {
+                    axes: Axes {
+                        title: "force",
+                        x_label: "crank angle, °",
+                        y_label: "N",
+                    },
+                    series: &s2[1..],
+                    log_y: false,
+                },
+            ],
+        )
+        .unwrap();
+        // A dry orbit: through the clearance circle to 2.3 c with sharp turns, and a section.
+        let (ex, ey): (Vec<f64>, Vec<f64>) = (0..2001)
+            .map(|k| {
+                let a = k as f64 * 0.05;
+                let r = if k % 50 < 2 {
+                    2.3
+                } else {
+                    0.6 + 0.4 * (3.0 * a).sin()
+                };
+                (r * a.cos(), r * a.sin())
+            })
+            .unzip();
+        let orbit = orbits_plot(
+            &d.path().join("orbit"),
+            "Journal centre orbit",
+            &[
+                Series {
+                    name: "orbit",
+                    x: &ex,
+                    y: &ey,
+                    style: SeriesStyle::Line,
+                },
+                Series {
+                    name: "section",
+                    x: &ex[..40],
+                    y: &ey[..40],
+                    style: SeriesStyle::Points,
+                },
+            ],
+        )
+        .unwrap();
+        for (name, w) in [
+            ("line", &line),
+            ("wp", &wp),
+            ("panels", &panels),
+            ("orbit", &orbit),
+        ] {
+            // LASH_FIGURE_SHOTS=DIR keeps the PNGs to look at.
+            if let Some(dir) = std::env::var_os("LASH_FIGURE_SHOTS") {
+                std::fs::copy(&w.png, Path::new(&dir).join(format!("{name}.png"))).unwrap();
+            }
+            let (data, n, first) = strays(w);
+            assert_eq!(
+                n, 0,
+                "{name}: {n} data pixels outside the axes, e.g. {first:?}"
+            );
+            assert!(
+                data > 1000,
+                "{name}: only {data} data pixels inside the axes"
+            );
+        }
+        assert_eq!(panels.layout.plots.len(), 3);
+    }
+
+    /// Tick labels, measured with the figures' font, never overlap, never repeat, number at
+    /// least two, and on a log axis every decade in range is labelled whenever the decades'
+    /// labels fit (and at least one label falls in each partial decade at the ends, when
+    /// 1-2-5 labels fit): the issue's "5e-16e-17e-18e-19e-11e0" and its unlabelled decade.
+    #[test]
+    fn tick_labels_fit_and_decades_are_labelled() {
+        ensure_font().unwrap();
+        let mut buf = vec![0u8; 3 * 64 * 64];
+        let area = BitMapBackend::with_buffer(&mut buf, (64, 64)).into_drawing_area();
+        let measure = measurer(&area, 15);
+        let check = |t: &[f64],
+                     pos: &dyn Fn(f64) -> f64,
+                     label: &dyn Fn(f64) -> String,
+                     h: bool,
+                     what: &str| {
+            assert!(t.len() >= 2, "{what}: {t:?}");
+            let labels: Vec<String> = t.iter().map(|&v| label(v)).collect();
+            for w in labels.windows(2) {
+                assert_ne!(w[0], w[1], "{what}: {labels:?}");
+            }
+            for (i, pair) in t.windows(2).enumerate() {
+                let (a, b) = (measure(&labels[i]), measure(&labels[i + 1]));
+                let room = (pos(pair[1]) - pos(pair[0])).abs();
+                let need = if h {
+                    0.5 * f64::from(a.0 + b.0)
+                } else {
+                    0.5 * f64::from(a.1 + b.1)
+                };
+                assert!(
+                    room > need,
+                    "{what}: {labels:?} overlap at {i} ({room} px for {need})"
+                );
+            }
+        };
+        for &(lo, hi) in &[
+            (0.0, 360.0),
+            (-3.86, 3.86),
+            (-1500.0, 31500.0),
+            (1e-9, 3e-9),
+            (120_000.0, 125_000.0),
+            (0.3650, 0.3651),
+            (-2.7e-17, 4.1e-17),
+            (0.0, 1e9),
+        ] {
+            for len in [120.0, 400.0, 760.0] {
+                for h in [true, false] {
+                    let (t, _, step) = linear_ticks(lo, hi, len, h, &measure);
+                    let pos = |v: f64| (v - lo) / (hi - lo) * len;
+                    check(
+                        &t,
+                        &pos,
+                        &|v| tick_at(v, step),
+                        h,
+                        &format!("[{lo}, {hi}] {len} px"),
+                    );
+                    assert!(t.iter().all(|v| *v >= lo && *v <= hi));
+                }
+            }
+        }
+        for &(lo, hi, len, h) in &[
+            (3e-3, 2.4e-2, 680.0, true),
+            (1e-17, 2.0, 520.0, false),
+            (1e-17, 2.0, 680.0, true),
+            (50.0, 4e8, 680.0, true),
+            (0.3, 1.2, 680.0, true),
+            (1.1, 1.3, 680.0, true),
+            (1.1, 1.3, 300.0, false),
+            (1e-300, 1e300, 680.0, true),
+            (2e-6, 5e-4, 300.0, false),
+        ] {
+            let (t, _, step) = log_ticks(lo, hi, len, h, &measure);
+            let pos = |v: f64| (v.log10() - lo.log10()) / (hi.log10() - lo.log10()) * len;
+            let what = format!("log [{lo:e}, {hi:e}] {len} px");
+            check(&t, &pos, &|v| log_label(v, step), h, &what);
+            let decades: Vec<f64> = (lo.log10().ceil() as i32..=hi.log10().floor() as i32)
+                .map(|k| format!("1e{k}").parse().unwrap())
+                .collect();
+            // Whether the decades' labels alone fit: a decade's length against the widest
+            // (x) or tallest (y) of their labels and the gap.
+            let per_decade = len / (hi.log10() - lo.log10());
+            let need = decades
+                .iter()
+                .map(|&d| {
+                    let m = measure(&tick_log(d));
+                    if h {
+                        f64::from(m.0) + LABEL_GAP
+                    } else {
+                        f64::from(m.1) + 0.5 * LABEL_GAP
+                    }
+                })
+                .fold(0.0, f64::max);
+            let every = decades.iter().all(|d| t.contains(d));
+            assert_eq!(every, per_decade >= need, "{what}: {t:?}");
+        }
+        // The issue's work-precision axis: 3e-3 … 2.4e-2 s labels its left decade too.
+        let (t, _, _) = log_ticks(3e-3, 2.4e-2, 680.0, true, &measure);
+        assert!(t.iter().any(|v| *v < 1e-2), "{t:?}");
+    }
+
     #[test]
     fn ranges() {
         assert_eq!(padded(0.0, 10.0), (-0.5, 10.5));
@@ -1203,10 +2190,16 @@ mod tests {
         assert!((2.0 * rx / 600.0 - 2.0 * ry / 400.0).abs() < 1e-15 && ry == 1.2);
         let (rx, ry) = equal_aspect(1.2, 300, 500);
         assert!((2.0 * rx / 300.0 - 2.0 * ry / 500.0).abs() < 1e-15 && rx == 1.2);
-        assert_eq!(tick(0.5, 2.0), "0.5");
-        assert_eq!(tick(-2.2e-16, 2.0), "0");
-        assert_eq!(tick(1e-6, 1e-5), "1.0e-6");
-        assert_eq!(tick(-120.0, 400.0), "-120");
+        assert_eq!(tick_at(0.5, 0.5), "0.5");
+        assert_eq!(tick_at(-2.2e-16, 0.5), "0");
+        assert_eq!(tick_at(1e-6, 1e-6), "1e-6");
+        assert_eq!(tick_at(1.2e-6, 2e-7), "1.2e-6");
+        assert_eq!(tick_at(-120.0, 20.0), "-120");
+        assert_eq!(tick_at(0.0002, 0.0001), "2e-4");
+        assert_eq!(tick_at(0.002, 0.001), "0.002");
+        // Ticks one step apart never print alike.
+        assert_eq!(tick_at(120000.0, 5000.0), "1.20e5");
+        assert_eq!(tick_at(125000.0, 5000.0), "1.25e5");
         assert_eq!(tick_log(1e-4), "1e-4");
         assert_eq!(tick_log(1000.0), "1e3");
         assert_eq!(tick_log(3e-4), "3e-4");
