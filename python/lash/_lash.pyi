@@ -1,6 +1,6 @@
 """Type stub of the extension module lash._lash (python/src/lib.rs)."""
 
-from typing import Any, Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 __version__: str
 METHODS: Tuple[str, ...]
@@ -19,3 +19,9 @@ def run_core(path: Optional[str], text: Optional[bytes], name: str, method: Opti
              samples_per_revolution: Optional[int], output_every: Optional[float],
              max_wall_time: Optional[float], max_steps: Optional[int]) -> Dict[str, Any]:
     """Runs one scene by the engine (python/src/scene.rs)."""
+
+
+def animation_html(scene_json: str, names: List[str], columns: bytes, rows: int, title: str,
+                   trace: Optional[str] = ..., column: Optional[str] = ...,
+                   max_frames: Optional[int] = ...) -> str:
+    """A run's animation page (python/src/animation.rs)."""

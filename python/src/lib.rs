@@ -28,6 +28,7 @@
 //! and an exception raised inside a Python callback stops the integration and propagates as
 //! itself (python/lash/_errors.py).
 
+mod animation;
 mod convert;
 mod errors;
 mod ivp;
@@ -44,6 +45,7 @@ fn _lash(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(ivp::solve_ivp_core, m)?)?;
     m.add_function(wrap_pyfunction!(scene::run_core, m)?)?;
+    m.add_function(wrap_pyfunction!(animation::animation_html, m)?)?;
     m.add(
         "METHODS",
         PyTuple::new(py, Method::ALL.iter().map(|x| x.name()))?,
