@@ -89,7 +89,7 @@ pub struct PlotArgs {
     #[arg(long, value_name = "COLUMN")]
     pub x: Option<String>,
     /// The figure: FILE.svg and FILE.png (FILE may end in .svg or .png). Default
-    /// RUN_DIR/plot_<COLUMNS>.
+    /// RUN_DIR/plot_COLUMNS (joined by +).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
 }

@@ -235,7 +235,7 @@ pub struct Clearance {
 pub struct SeriesData {
     /// The column's name in trajectory.csv.
     pub name: String,
-    /// Its SI unit ([`unit`]).
+    /// Its SI unit ([`unit()`]).
     pub unit: String,
     /// Its value on each frame.
     #[serde(serialize_with = "ser7")]
