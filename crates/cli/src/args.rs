@@ -234,7 +234,7 @@ pub struct RunArgs {
           requires = "until_periodic")]
     pub max_revolutions: Option<usize>,
     /// Also write DIR/animation.html, the run as a page a browser opens (as `lash animate
-    /// DIR`; scenes only).
+    /// DIR`; scenes only). Default: off.
     #[arg(long)]
     pub animate: bool,
 }
