@@ -88,7 +88,7 @@ pub(crate) fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         Error::Input(m) => scene_error(py, ".", &m),
         Error::Usage(m) => usage_error(py, &m),
         Error::Option(o) => usage_error(py, &o.to_string()),
-        Error::Solver(SolveError::InvalidOptions(m)) => usage_error(py, &m),
+        Error::Solver(SolveError::InvalidOptions(m)) => usage_error(py, &m.to_string()),
         Error::Solver(s) => {
             let t = s.time().unwrap_or(f64::NAN);
             let y = s.state().map(<[f64]>::to_vec).unwrap_or_default();

@@ -35,13 +35,12 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
+use lash_solver::{Atol, ControllerKind, Method, Rule, SolverOptions};
 use lash_validation::commands::{
     CompareOptions, ExtremesOptions, MergeOptions, PoincareOptions, RunOptions, StiffnessOptions,
     StudyOptions, SweepRunOptions, WorkPrecisionOptions,
 };
 use lash_validation::compare::workprecision::WorkPrecisionPlan;
-use lash_validation::options::RTOL_MIN;
 use lash_validation::run::steady::{self, UntilPeriodic};
 use lash_validation::sweep::Shard;
 use lash_validation::{Error, SolverChoice};
@@ -696,13 +695,10 @@ fn parse_number(s: &str, what: &str) -> Result<f64, String> {
     Ok(v)
 }
 
-/// Parses a relative tolerance: a number in [1e-14, 1).
+/// Parses a relative tolerance: a number in the solver's range ([`Rule::RTOL`]).
 pub fn parse_rtol(s: &str) -> Result<f64, String> {
     let v = parse_number(s, "rtol")?;
-    if !(RTOL_MIN..1.0).contains(&v) {
-        return Err(format!("rtol must be in [1e-14, 1), got {s}"));
-    }
-    Ok(v)
+    Rule::RTOL.check(v).map_err(|e| e.to_string())
 }
 
 /// Parses an absolute tolerance: one number, or comma-separated numbers; each finite and > 0.
@@ -1001,7 +997,10 @@ mod tests {
             );
         }
         let e = run_flags(&["--method", "rk4"]).apply(&d).unwrap_err();
-        assert_eq!(e.to_string(), "method rk4 is fixed-step and needs --step");
+        assert_eq!(
+            e.to_string(),
+            "method rk4 is fixed-step and needs --step (it needs a fixed step size)"
+        );
     }
 
     #[test]

@@ -95,7 +95,9 @@ mod tests {
         let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
         assert_eq!(io.exit_code(), 2);
         assert!(io.to_string().starts_with("a/b: "));
-        let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
+        let s = Error::Solver(SolveError::InvalidOptions(
+            lash_solver::Rule::RTOL.check(0.0).unwrap_err(),
+        ));
         assert_eq!(s.exit_code(), 3);
         assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
         assert_eq!(Error::Internal("x".into()).exit_code(), 1);

@@ -21,7 +21,7 @@
 //! norms are floored at 1e-10 before taking powers, so an exact step (ε = 0) gives a finite
 //! factor that the growth cap then limits.
 
-use crate::error::SolveError;
+use crate::options::{OptionError, Rule};
 
 /// The controller presets. Names are the contract of docs/outputs.md ("Method and controller
 /// names").
@@ -275,34 +275,18 @@ impl Default for StepLimits {
 }
 
 impl StepLimits {
-    /// Checks the ranges documented on each field.
-    pub fn validate(&self) -> Result<(), SolveError> {
-        let bad = |m: &str| Err(SolveError::InvalidOptions(format!("limits: {m}")));
-        if !(self.safety > 0.0 && self.safety <= 1.0) {
-            return bad("safety must be in (0, 1]");
-        }
-        if !(self.max_growth > 1.0 && self.max_growth.is_finite()) {
-            return bad("max_growth must be finite and > 1");
-        }
-        if !(self.max_first_growth > 1.0 && self.max_first_growth.is_finite()) {
-            return bad("max_first_growth must be finite and > 1");
-        }
-        if !(self.min_shrink > 0.0 && self.min_shrink < 1.0) {
-            return bad("min_shrink must be in (0, 1)");
-        }
-        if !(self.max_after_reject > 0.0 && self.max_after_reject <= 1.0) {
-            return bad("max_after_reject must be in (0, 1]");
-        }
-        if !(self.max_growth_after_reject >= 1.0 && self.max_growth_after_reject.is_finite()) {
-            return bad("max_growth_after_reject must be finite and >= 1");
-        }
-        if !(self.max_after_repeated_reject > 0.0 && self.max_after_repeated_reject <= 1.0) {
-            return bad("max_after_repeated_reject must be in (0, 1]");
-        }
-        let (lo, hi) = self.deadband;
-        if !(lo > 0.0 && lo <= 1.0 && hi >= 1.0 && hi.is_finite()) {
-            return bad("deadband must satisfy 0 < lower <= 1 <= upper");
-        }
+    /// Checks the ranges documented on each field (the rules `Rule::SAFETY`, … of
+    /// [`crate::options`]).
+    pub fn validate(&self) -> Result<(), OptionError> {
+        Rule::SAFETY.check(self.safety)?;
+        Rule::MAX_GROWTH.check(self.max_growth)?;
+        Rule::MAX_FIRST_GROWTH.check(self.max_first_growth)?;
+        Rule::MIN_SHRINK.check(self.min_shrink)?;
+        Rule::MAX_AFTER_REJECT.check(self.max_after_reject)?;
+        Rule::MAX_GROWTH_AFTER_REJECT.check(self.max_growth_after_reject)?;
+        Rule::MAX_AFTER_REPEATED_REJECT.check(self.max_after_repeated_reject)?;
+        Rule::DEADBAND_LOWER.check_entry(0, self.deadband.0)?;
+        Rule::DEADBAND_UPPER.check_entry(1, self.deadband.1)?;
         Ok(())
     }
 }

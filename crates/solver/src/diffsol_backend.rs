@@ -52,7 +52,8 @@
 //! - diffsol's cumulative limit on Newton failures is raised to `max_steps` (our own budget);
 //!   the budgets ([`crate::stepper::Budget`]) are checked before every step.
 //! - diffsol's controllers are its own; `controller` and `limits` do not apply (options
-//!   validation rejects a controller for these methods) and `adaptive = false` is rejected.
+//!   validation rejects a controller for these methods, and `adaptive = false`:
+//!   [`crate::options`]).
 //!
 //! Errors: diffsol's step-size and error-test failures become `StepSizeTooSmall` (or
 //! `NewtonFailure` when Newton convergence failures, not error-test failures, drove the step
@@ -80,7 +81,8 @@ use faer::MatMut;
 
 use crate::error::SolveError;
 use crate::jacobian::JacobianEvaluator;
-use crate::options::{Method, SolverOptions};
+use crate::method::{Family, Method};
+use crate::options::{Budgets, DiffsolConfig, OptionError, OptionField, Reason, SolverOptions};
 use crate::stats::Stats;
 use crate::stepper::{check_stop, landing_step, step_floor, Budget, Stepper};
 use crate::system::OdeSystem;
@@ -289,23 +291,13 @@ pub struct DiffsolProblem<'a, S: OdeSystem + ?Sized> {
 }
 
 impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
-    /// Builds diffsol's problem for `sys` with the tolerances of `opts` (validated options of
-    /// one of diffsol's methods).
-    pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
-        let method = opts.method;
-        if !method.is_diffsol() {
-            return Err(SolveError::InvalidOptions(format!(
-                "{method} is not one of diffsol's methods"
-            )));
-        }
-        if !opts.adaptive {
-            return Err(SolveError::InvalidOptions(format!(
-                "method {method} cannot run non-adaptive"
-            )));
-        }
+    /// Builds diffsol's problem for `sys` with the tolerances and budgets of `cfg` (the
+    /// validated configuration of one of diffsol's methods).
+    pub fn new(sys: &'a S, cfg: &DiffsolConfig) -> Result<Self, SolveError> {
         let n = sys.dim();
         let ctx = Cx::default();
-        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
+        let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
         let eqn = SysEqn {
             rhs: SysRhs {
                 sys,
@@ -326,13 +318,18 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
                 ctx,
             },
         };
-        let atol: Vec<f64> = (0..n).map(|i| opts.atol.get(i)).collect();
+        let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
         let mut problem = OdeBuilder::<Md>::new()
-            .rtol(opts.rtol)
+            .rtol(rtol)
             .atol(atol)
             .build_from_eqn(eqn)
-            .map_err(|e| SolveError::InvalidOptions(format!("diffsol: {e}")))?;
-        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
+            .map_err(|e| {
+                OptionError::new(
+                    OptionField::Method,
+                    Reason::Invalid(format!("diffsol: {e}")),
+                )
+            })?;
+        problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
         Ok(DiffsolProblem { problem })
     }
 
@@ -418,16 +415,25 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     ) -> Result<Self, SolveError> {
         let method = opts.method;
         if !method.is_diffsol() {
-            return Err(SolveError::InvalidOptions(format!(
-                "{method} is not one of diffsol's methods"
-            )));
+            return Err(OptionError::new(
+                OptionField::Method,
+                Reason::WrongFamily {
+                    method,
+                    expected: Family::Diffsol.describe(),
+                },
+            )
+            .into());
         }
         let n = y0.len();
         if n != problem.problem.eqn.rhs.n {
-            return Err(SolveError::InvalidOptions(format!(
-                "y0 has {n} entries, the system {}",
-                problem.problem.eqn.rhs.n
-            )));
+            return Err(OptionError::new(
+                OptionField::Y0,
+                Reason::WrongLength {
+                    len: n,
+                    expected: problem.problem.eqn.rhs.n,
+                },
+            )
+            .into());
         }
         let ctx = *problem.problem.context();
         let mut st = DiffsolStepper {
@@ -435,7 +441,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             solver: None,
             method,
             opts: opts.clone(),
-            budget: Budget::new(opts),
+            budget: Budget::new(Budgets::new(opts.max_steps, opts.max_wall_time)?),
             t: t0,
             t_prev: t0,
             y: y0.to_vec(),

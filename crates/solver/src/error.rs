@@ -1,5 +1,7 @@
 //! Typed solver failures. Every failure carries the time and, where one exists, the state.
 
+use crate::options::OptionError;
+
 /// Why an integration failed. Never a panic, never a silent NaN.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
@@ -64,9 +66,10 @@ pub enum SolveError {
         /// What failed (singular matrix, divergence, backend message).
         reason: String,
     },
-    /// The options are inconsistent or out of range.
+    /// The options are inconsistent or out of range: which field, what is wrong, the value
+    /// and what is allowed ([`OptionError`]; the rules: [`crate::options`]).
     #[error("invalid options: {0}")]
-    InvalidOptions(String),
+    InvalidOptions(#[from] OptionError),
     /// A budget (wall clock) ran out before the end time.
     #[error("budget exhausted at t = {t:e}: {reason}")]
     BudgetExhausted {

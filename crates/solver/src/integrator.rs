@@ -48,7 +48,9 @@
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
-use crate::options::{Output, SolverOptions};
+use crate::options::{
+    Allowed, Config, OptionError, OptionField, Output, Reason, Rule, SolverOptions,
+};
 use crate::stats::Stats;
 use crate::stepper::{make_stepper, Stepper};
 use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
@@ -65,6 +67,37 @@ pub fn far_from_zero(g_a: f64, gd_a: f64, g_b: f64, gd_b: f64, h: f64) -> bool {
     s != 0
         && s == sign(g_b)
         && g_a.abs().min(g_b.abs()) >= FAR_FACTOR * h * gd_a.abs().max(gd_b.abs())
+}
+
+/// The arguments of an integration: y0 has n finite entries, t0 and t_end are finite,
+/// t_end > t0.
+fn check_span(t0: f64, t_end: f64, y0: &[f64], n: usize) -> Result<(), OptionError> {
+    if y0.len() != n {
+        return Err(OptionError::new(
+            OptionField::Y0,
+            Reason::WrongLength {
+                len: y0.len(),
+                expected: n,
+            },
+        ));
+    }
+    let finite = |field| Rule::new(field, Allowed::Finite);
+    finite(OptionField::T0).check(t0)?;
+    finite(OptionField::TEnd).check(t_end)?;
+    if !(t_end > t0) {
+        return Err(OptionError::new(
+            OptionField::TEnd,
+            Reason::NotAbove {
+                value: t_end,
+                other: OptionField::T0,
+                other_value: t0,
+            },
+        ));
+    }
+    for (i, v) in y0.iter().enumerate() {
+        finite(OptionField::Y0).check_entry(i, *v)?;
+    }
+    Ok(())
 }
 
 /// What one call of [`Integrator::step`] did, and where the state is afterwards.
@@ -105,23 +138,30 @@ pub enum StepOutcome {
 pub struct Problem<'a, S: OdeSystem + ?Sized> {
     sys: &'a S,
     opts: SolverOptions,
+    config: Config,
     diffsol: Option<DiffsolProblem<'a, S>>,
 }
 
 impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
-    /// Validates `opts` for `sys` and builds what the method needs besides the state.
+    /// Validates `opts` for `sys` ([`SolverOptions::configure`]) and builds what the method
+    /// needs besides the state.
     pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
-        opts.validate(sys.dim())?;
-        let diffsol = if opts.method.is_diffsol() {
-            Some(DiffsolProblem::new(sys, opts)?)
-        } else {
-            None
+        let config = opts.configure(sys.dim())?;
+        let diffsol = match &config {
+            Config::Diffsol(c) => Some(DiffsolProblem::new(sys, c)?),
+            _ => None,
         };
         Ok(Problem {
             sys,
             opts: opts.clone(),
+            config,
             diffsol,
         })
+    }
+
+    /// The validated configuration of the method's family, which the steppers consume.
+    pub fn config(&self) -> &Config {
+        &self.config
     }
 
     /// The system.
@@ -208,20 +248,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         let sys = problem.system();
         let opts = problem.options();
         let n = sys.dim();
-        if y0.len() != n {
-            return Err(SolveError::InvalidOptions(format!(
-                "y0 has {} entries, the system {n}",
-                y0.len()
-            )));
-        }
-        if !(t0.is_finite() && t_end.is_finite() && t_end > t0) {
-            return Err(SolveError::InvalidOptions(format!(
-                "time span must be finite with t_end > t0, got [{t0}, {t_end}]"
-            )));
-        }
-        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::InvalidOptions(format!("y0[{i}] is not finite")));
-        }
+        check_span(t0, t_end, y0, n)?;
         let stepper = make_stepper(problem, t0, y0)?;
         let m = if opts.events { sys.n_events() } else { 0 };
         let specs = (0..m).map(|i| sys.event_spec(i)).collect();

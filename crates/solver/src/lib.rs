@@ -8,7 +8,12 @@
 //!
 //! - [`OdeSystem`]: the problem (right-hand side, optional Jacobian, event functions and the
 //!   hook an event runs).
-//! - [`SolverOptions`]: method, tolerances, step limits, controller, output, events.
+//! - [`Method`]: the methods, with one table of their facts ([`Method::info`]: family, orders,
+//!   stages, default controller, dense-output degree).
+//! - [`SolverOptions`]: method, tolerances, step limits, controller, output, events; its
+//!   rules are written once ([`options`]) and [`SolverOptions::configure`] turns it into the
+//!   validated configuration of the method's family ([`Config`]), or a typed
+//!   [`OptionError`] naming the field.
 //! - [`solve`] integrates a span; a [`Problem`] (system + validated options) builds an
 //!   [`Integrator`], which steps one step at a time and says where the state is after each
 //!   ([`StepOutcome`]).
@@ -113,6 +118,7 @@ pub mod error;
 pub mod integrator;
 pub mod interrupt;
 pub mod jacobian;
+pub mod method;
 pub mod onestep;
 pub mod options;
 pub mod rk4;
@@ -125,7 +131,8 @@ pub mod testset;
 pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
 pub use error::SolveError;
 pub use integrator::{solve, Integrator, Problem, Solution, StepOutcome};
-pub use options::{Atol, Method, Output, SolverOptions};
+pub use method::{Method, MethodInfo};
+pub use options::{Atol, Config, OptionError, OptionField, Output, Rule, SolverOptions};
 pub use stats::Stats;
 pub use stepper::{make_stepper, Stepper};
 pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};

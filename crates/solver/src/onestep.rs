@@ -10,7 +10,9 @@
 //!
 //! driver (OneStepDriver): owns t, y, h, the controller, the landing rule, h_min, h_max,
 //! the budgets and the counters:
-//!   h  = opts.h0, else the starting-step algorithm (HNW I §II.4)     at t0 and after a restart
+//!   controller = the configuration's (the options' choice, else the method's default:
+//!                Method::default_controller)
+//!   h  = h0, else the starting-step algorithm (HNW I §II.4)          at t0 and after a restart
 //!   loop: budgets; (h_try, lands) = landing_step(t, t_stop, h); h_try ≥ floor or fail
 //!         ε = attempt(h_try)
 //!         ε ≤ 1 → accept; t ← t_stop if lands else t + h_try; h ← clamp(controller, h_min, h_max)
@@ -24,14 +26,15 @@
 //! had non-finite stages, or `NewtonFailure` when its iteration matrix was singular; a budget
 //! ran out → `TooManySteps` / `BudgetExhausted`.
 //!
-//! With `opts.adaptive == false` every step is `opts.h0` (the last one shortened by the
-//! landing rule), no error estimate is used and nothing is rejected: a non-finite attempt
+//! With `adaptive = false` (`StepControl::Fixed`) every step is `h0` (the last one
+//! shortened by the landing rule), no error estimate is used and nothing is rejected: a non-finite attempt
 //! fails with `NonFiniteState` (`NewtonFailure` for a singular iteration matrix). This is the
 //! mode of fixed-step convergence-order tests.
 
-use crate::controller::{ControllerKind, StepSizeControl};
+use crate::controller::StepSizeControl;
 use crate::error::SolveError;
-use crate::options::{Method, SolverOptions};
+use crate::method::Method;
+use crate::options::{OneStepConfig, StepControl, Tolerances};
 use crate::stats::Stats;
 use crate::stepper::{check_stop, initial_step, landing_step, step_floor, Budget, Stepper};
 use crate::system::OdeSystem;
@@ -55,8 +58,6 @@ pub trait OneStepMethod<S: OdeSystem + ?Sized> {
     fn method(&self) -> Method;
     /// Order p̂ of the error estimate (the controller's exponent is 1/(p̂ + 1)).
     fn error_order(&self) -> usize;
-    /// Controller used when the options name none.
-    fn default_controller(&self) -> ControllerKind;
     /// Prepares a step from (t, y): what belongs to the step's start and is reused by every
     /// attempt (f(t, y), and for a Rosenbrock method J and ∂f/∂t). Called once per step, before
     /// the first attempt. Fails with `NonFiniteState` when f(t, y) is not finite.
@@ -112,14 +113,20 @@ enum Failure {
 pub struct OneStepDriver<'a, S: OdeSystem + ?Sized, M> {
     sys: &'a S,
     m: M,
-    opts: SolverOptions,
-    control: StepSizeControl,
+    /// The error control (None with `adaptive = false`: every step is `h0`).
+    control: Option<StepSizeControl>,
+    tol: Tolerances,
+    /// The first trial step (None: the starting-step algorithm); with `adaptive = false`
+    /// the step of every step.
+    h0: Option<f64>,
+    h_min: f64,
+    h_max: f64,
     budget: Budget,
     t: f64,
     t_prev: f64,
     y: Vec<f64>,
     y_prev: Vec<f64>,
-    /// Trial step of the next attempt (None: `opts.h0` or the starting-step algorithm).
+    /// Trial step of the next attempt (None: `h0` or the starting-step algorithm).
     h_next: Option<f64>,
     /// Whether `m.start` has run for the current (t, y).
     started: bool,
@@ -127,16 +134,29 @@ pub struct OneStepDriver<'a, S: OdeSystem + ?Sized, M> {
 }
 
 impl<'a, S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'a, S, M> {
-    /// The driver of method `m` at (t0, y0). Options must be validated. Nothing is evaluated
-    /// before the first step.
-    pub fn new(sys: &'a S, m: M, t0: f64, y0: &[f64], opts: &SolverOptions) -> Self {
-        let kind = opts.controller.unwrap_or(m.default_controller());
+    /// The driver of method `m` at (t0, y0) with the configuration `cfg` (its controller,
+    /// limits, step bounds, tolerances and budgets). Nothing is evaluated before the first
+    /// step.
+    pub fn new(sys: &'a S, m: M, t0: f64, y0: &[f64], cfg: &OneStepConfig) -> Self {
+        let (control, h0, h_min, h_max) = match cfg.control() {
+            StepControl::Adaptive(a) => {
+                let b = a.bounds();
+                let control =
+                    StepSizeControl::new(Box::new(a.controller().build()), a.limits().clone());
+                (Some(control), b.h0(), b.h_min(), b.h_max())
+            }
+            // The bounds are not used without error control.
+            StepControl::Fixed { h } => (None, Some(*h), 0.0, f64::INFINITY),
+        };
         OneStepDriver {
             sys,
-            control: StepSizeControl::new(Box::new(kind.build()), opts.limits.clone()),
+            control,
+            tol: cfg.tolerances().clone(),
+            h0,
+            h_min,
+            h_max,
             m,
-            opts: opts.clone(),
-            budget: Budget::new(opts),
+            budget: Budget::new(cfg.budgets()),
             t: t0,
             t_prev: t0,
             y: y0.to_vec(),
@@ -167,10 +187,10 @@ impl<'a, S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'a, S, M> {
         }
     }
 
-    /// The first trial step from the current state: `opts.h0`, else the starting-step
+    /// The first trial step from the current state: `h0`, else the starting-step
     /// algorithm (one RHS evaluation), raised to h_min.
     fn first_step(&mut self, t_stop: f64) -> f64 {
-        match self.opts.h0 {
+        match self.h0 {
             Some(h0) => h0,
             None => {
                 let h = initial_step(
@@ -179,11 +199,12 @@ impl<'a, S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'a, S, M> {
                     &self.y,
                     self.m.f_start(),
                     self.m.error_order(),
-                    &self.opts,
+                    &self.tol,
+                    self.h_max,
                     t_stop,
                 );
                 self.stats.rhs_evals += 1;
-                h.max(self.opts.h_min)
+                h.max(self.h_min)
             }
         }
     }
@@ -209,8 +230,8 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
             self.m.start(self.sys, self.t, &self.y, &mut self.stats)?;
             self.started = true;
         }
-        let adaptive = self.opts.adaptive;
-        let (h_min, h_max) = (self.opts.h_min, self.opts.h_max);
+        let adaptive = self.control.is_some();
+        let (h_min, h_max) = (self.h_min, self.h_max);
         let p_hat = self.m.error_order();
         let mut h = match self.h_next {
             Some(h) => h,
@@ -234,26 +255,26 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
             let err = match outcome {
                 Attempt::Error(err) if err <= 1.0 => err,
                 Attempt::Error(err) => {
-                    if !adaptive {
+                    let Some(control) = self.control.as_mut() else {
                         return Err(self.underflow(h_try, Failure::NonFinite));
-                    }
+                    };
                     self.stats.rejected_error += 1;
                     last = if err.is_finite() {
                         Failure::Error
                     } else {
                         Failure::NonFinite
                     };
-                    let proposal = self.control.reject(h_try, err, p_hat);
+                    let proposal = control.reject(h_try, err, p_hat);
                     h = self.below_h_min(proposal, h_try, last)?;
                     continue;
                 }
                 Attempt::Singular => {
                     self.stats.rejected_newton += 1;
-                    if !adaptive {
+                    let Some(control) = self.control.as_mut() else {
                         return Err(self.underflow(h_try, Failure::Singular));
-                    }
+                    };
                     last = Failure::Singular;
-                    let proposal = self.control.reject_newton(h_try);
+                    let proposal = control.reject_newton(h_try);
                     h = self.below_h_min(proposal, h_try, last)?;
                     continue;
                 }
@@ -267,10 +288,9 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
             self.started = false;
             self.stats.accepted += 1;
             self.stats.record_step_size(h_try);
-            self.h_next = Some(if adaptive {
-                self.control.accept(h_try, err, p_hat).min(h_max).max(h_min)
-            } else {
-                h
+            self.h_next = Some(match self.control.as_mut() {
+                Some(control) => control.accept(h_try, err, p_hat).min(h_max).max(h_min),
+                None => h,
             });
             return Ok(());
         }
@@ -292,7 +312,9 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
         self.t_prev = t;
         self.y.copy_from_slice(y);
         self.y_prev.copy_from_slice(y);
-        self.control.reset();
+        if let Some(control) = self.control.as_mut() {
+            control.reset();
+        }
         self.m.reset();
         self.started = false;
         self.h_next = None;
@@ -310,7 +332,7 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'_, S, M> {
     /// A rejection's proposal below h_min: one more try at h_min, unless the rejected trial
     /// was already at h_min (then the step fails).
     fn below_h_min(&self, proposal: f64, h_try: f64, last: Failure) -> Result<f64, SolveError> {
-        let h_min = self.opts.h_min;
+        let h_min = self.h_min;
         if h_min > 0.0 && proposal < h_min {
             if h_try <= h_min {
                 return Err(self.underflow(proposal, last));

@@ -52,7 +52,8 @@
 
 use crate::analysis::{eigenvalues, jacobian_at, rk4_amplification, rk4_ray_limit};
 use crate::error::SolveError;
-use crate::options::{Method, SolverOptions};
+use crate::method::Method;
+use crate::options::FixedConfig;
 use crate::stats::Stats;
 use crate::stepper::{check_stop, landing_step, Budget, Stepper};
 use crate::system::OdeSystem;
@@ -90,17 +91,15 @@ pub struct Rk4<'a, S: OdeSystem + ?Sized> {
 }
 
 impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
-    /// Builds the stepper at (t0, y0) with `opts.step` as the step.
-    pub fn new(sys: &'a S, t0: f64, y0: &[f64], opts: &SolverOptions) -> Result<Self, SolveError> {
-        let h = opts
-            .step
-            .ok_or_else(|| SolveError::InvalidOptions("rk4 needs a fixed step".into()))?;
+    /// Builds the stepper at (t0, y0) with the configuration's step, stability check and
+    /// budgets. Evaluates f(t0, y0) (a non-finite value fails with `NonFiniteState`).
+    pub fn new(sys: &'a S, t0: f64, y0: &[f64], cfg: &FixedConfig) -> Result<Self, SolveError> {
         let n = y0.len();
         let mut s = Rk4 {
             sys,
-            h,
-            budget: Budget::new(opts),
-            instability_steps: opts.rk4_instability_steps,
+            h: cfg.step(),
+            budget: Budget::new(cfg.budgets()),
+            instability_steps: cfg.instability_steps(),
             unstable_run: 0,
             t: t0,
             t_prev: t0,

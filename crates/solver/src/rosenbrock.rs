@@ -35,8 +35,8 @@
 //! h0 on every step, the error estimate ignored.
 //!
 //! Step size: the loop of [`crate::onestep::OneStepDriver`] (default controller Gustafsson's
-//! predictive one, any [`crate::ControllerKind`] accepted), with error order p̂ = 4. A singular
-//! W (a zero or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4;
+//! predictive one, [`Method::default_controller`]; any [`crate::ControllerKind`] accepted),
+//! with error order p̂ = 4. A singular W (a zero or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4;
 //! non-finite stages reject it as an error-test failure with ε = ∞. When h falls below
 //! max(h_min, 16 ε |t|) the step fails with `NewtonFailure` (the last failure was a singular
 //! W), `NonFiniteState` (non-finite stages) or `StepSizeTooSmall`. After a restart the first
@@ -47,11 +47,11 @@ use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::{Mat, MatMut, Par};
 
-use crate::controller::ControllerKind;
 use crate::error::SolveError;
 use crate::jacobian::JacobianEvaluator;
+use crate::method::Method;
 use crate::onestep::{Attempt, OneStepMethod};
-use crate::options::{Atol, Method, SolverOptions};
+use crate::options::{Atol, Tolerances};
 use crate::stats::Stats;
 use crate::stepper::error_norm;
 use crate::system::OdeSystem;
@@ -451,15 +451,16 @@ pub struct Rodas5pMethod {
 }
 
 impl Rodas5pMethod {
-    /// The method for `sys` with the tolerances of `opts` (the finite-difference increments of
-    /// the Jacobian are floored at atol_i/rtol). Nothing is evaluated before the first step.
-    pub fn new<Sy: OdeSystem + ?Sized>(sys: &Sy, opts: &SolverOptions) -> Self {
+    /// The method for `sys` with tolerances `tol` (the finite-difference increments of the
+    /// Jacobian are floored at atol_i/rtol). Nothing is evaluated before the first step.
+    pub fn new<Sy: OdeSystem + ?Sized>(sys: &Sy, tol: &Tolerances) -> Self {
         let n = sys.dim();
-        let scale = (0..n).map(|i| opts.atol.get(i) / opts.rtol).collect();
+        let (rtol, atol) = (tol.rtol(), tol.atol());
+        let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
         Rodas5pMethod {
             autonomous: sys.is_autonomous(),
-            rtol: opts.rtol,
-            atol: opts.atol.clone(),
+            rtol,
+            atol: atol.clone(),
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
             jac: Mat::zeros(n, n),
@@ -480,9 +481,6 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
     }
     fn error_order(&self) -> usize {
         P_HAT
-    }
-    fn default_controller(&self) -> ControllerKind {
-        ControllerKind::Gustafsson
     }
 
     /// Evaluates f(t, y), J and f_t at the step's start (reused by every attempt).

@@ -14,7 +14,8 @@
 //! Rules every stepper follows (one function each, below):
 //! - landing ([`landing_step`]): a step that would end within max(10⁻¹⁰ h, 16 ε |t_stop|) of
 //!   the stop time ends exactly on it, so no sliver is left for a later step;
-//! - the stop time must lie after t ([`check_stop`]), else [`SolveError::InvalidOptions`];
+//! - the stop time must lie after t ([`check_stop`]), else [`SolveError::InvalidOptions`]
+//!   (field `t_stop`);
 //! - the smallest step is max(h_min, 16 ε |t|) ([`step_floor`]);
 //! - budgets ([`Budget`]): `max_steps` attempts (accepted and rejected) and the wall-clock
 //!   budget `max_wall_time`, counted from the stepper's construction; and the process-wide
@@ -24,7 +25,8 @@ use std::time::{Duration, Instant};
 
 use crate::error::SolveError;
 use crate::integrator::Problem;
-use crate::options::{Atol, Method, SolverOptions};
+use crate::method::Method;
+use crate::options::{Atol, Budgets, Config, OptionError, OptionField, Reason, Tolerances};
 use crate::stats::Stats;
 use crate::system::OdeSystem;
 
@@ -53,34 +55,39 @@ pub trait Stepper {
     fn stats(&self) -> Stats;
 }
 
-/// Builds the stepper of the problem's method at (t0, y0). The problem's options are
-/// validated.
+/// Builds the stepper of the problem's method at (t0, y0), from the validated configuration
+/// of its family ([`Problem::config`]).
 pub fn make_stepper<'p, S: OdeSystem + ?Sized>(
     problem: &'p Problem<'_, S>,
     t0: f64,
     y0: &[f64],
 ) -> Result<Box<dyn Stepper + 'p>, SolveError> {
-    let (sys, opts) = (problem.system(), problem.options());
-    match opts.method {
-        Method::Rk4 => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, opts)?)),
-        Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
-            let m = crate::erk::ErkMethod::new(opts.method, opts, y0.len())?;
+    let sys = problem.system();
+    match problem.config() {
+        Config::Fixed(c) => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, c)?)),
+        Config::OneStep(c) if c.method() == Method::Rodas5p => {
+            let m = crate::rosenbrock::Rodas5pMethod::new(sys, c.tolerances());
             Ok(Box::new(crate::onestep::OneStepDriver::new(
-                sys, m, t0, y0, opts,
+                sys, m, t0, y0, c,
             )))
         }
-        Method::Rodas5p => {
-            let m = crate::rosenbrock::Rodas5pMethod::new(sys, opts);
+        Config::OneStep(c) => {
+            let m = crate::erk::ErkMethod::new(c.method(), c.tolerances(), y0.len())?;
             Ok(Box::new(crate::onestep::OneStepDriver::new(
-                sys, m, t0, y0, opts,
+                sys, m, t0, y0, c,
             )))
         }
-        Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => {
-            let backend = problem.diffsol().ok_or_else(|| {
-                SolveError::InvalidOptions(format!("{} needs its diffsol problem", opts.method))
-            })?;
+        Config::Diffsol(c) => {
+            // Problem::new builds diffsol's problem for every diffsol configuration.
+            let backend = problem.diffsol().ok_or(OptionError::new(
+                OptionField::Method,
+                Reason::Invalid(format!("{} has no diffsol problem", c.method())),
+            ))?;
             Ok(Box::new(crate::diffsol_backend::DiffsolStepper::new(
-                backend, t0, y0, opts,
+                backend,
+                t0,
+                y0,
+                problem.options(),
             )?))
         }
     }
@@ -105,14 +112,12 @@ pub fn landing_step(t: f64, t_stop: f64, h: f64) -> (f64, bool) {
 }
 
 /// The precondition of [`Stepper::step`]: the stop time lies after t. Every stepper reports
-/// its violation the same way, as [`SolveError::InvalidOptions`].
+/// its violation the same way, as [`SolveError::InvalidOptions`] of the field `t_stop`.
 pub fn check_stop(t: f64, t_stop: f64) -> Result<(), SolveError> {
     if t_stop > t {
         Ok(())
     } else {
-        Err(SolveError::InvalidOptions(format!(
-            "step: stop time {t_stop} is not after t = {t}"
-        )))
+        Err(OptionError::new(OptionField::TStop, Reason::NotAfter { value: t_stop, t }).into())
     }
 }
 
@@ -136,12 +141,12 @@ pub struct Budget {
 }
 
 impl Budget {
-    /// The budgets of `opts`, the wall clock starting now.
-    pub fn new(opts: &SolverOptions) -> Self {
+    /// The budgets of a configuration, the wall clock starting now.
+    pub fn new(budgets: Budgets) -> Self {
         Budget {
-            max_steps: opts.max_steps,
-            deadline: opts
-                .max_wall_time
+            max_steps: budgets.max_steps(),
+            deadline: budgets
+                .max_wall_time()
                 .map(|w| (Instant::now() + Duration::from_secs_f64(w), w)),
         }
     }
@@ -173,20 +178,23 @@ impl Budget {
 }
 
 /// Hairer's starting-step algorithm (HNW I, §II.4, p. 169): a first step for a method of
-/// order `order` from the scaled norms of y0, f0 and a finite-difference estimate of y''.
-/// Uses 1 extra RHS evaluation (counted by the caller via the return value's second field).
+/// order `order` from the scaled norms of y0, f0 and a finite-difference estimate of y'',
+/// capped by `h_max`. Uses 1 extra RHS evaluation (counted by the caller).
+#[allow(clippy::too_many_arguments)]
 pub fn initial_step<S: OdeSystem + ?Sized>(
     sys: &S,
     t0: f64,
     y0: &[f64],
     f0: &[f64],
     order: usize,
-    opts: &SolverOptions,
+    tol: &Tolerances,
+    h_max: f64,
     t_stop: f64,
 ) -> f64 {
     let n = y0.len();
     let span = (t_stop - t0).abs();
-    let sc = |i: usize| opts.atol.get(i) + opts.rtol * y0[i].abs();
+    let (rtol, atol) = (tol.rtol(), tol.atol());
+    let sc = |i: usize| atol.get(i) + rtol * y0[i].abs();
     let rms = |v: &dyn Fn(usize) -> f64| -> f64 {
         ((0..n).map(|i| v(i).powi(2)).sum::<f64>() / n.max(1) as f64).sqrt()
     };
@@ -197,7 +205,7 @@ pub fn initial_step<S: OdeSystem + ?Sized>(
     } else {
         0.01 * d0 / d1
     };
-    h0 = h0.min(span).min(opts.h_max);
+    h0 = h0.min(span).min(h_max);
     let y1: Vec<f64> = (0..n).map(|i| y0[i] + h0 * f0[i]).collect();
     let mut f1 = vec![0.0; n];
     sys.rhs(t0 + h0, &y1, &mut f1);
@@ -207,7 +215,7 @@ pub fn initial_step<S: OdeSystem + ?Sized>(
     } else {
         (0.01 / d1.max(d2)).powf(1.0 / (order as f64 + 1.0))
     };
-    let h = (100.0 * h0).min(h1).min(span).min(opts.h_max);
+    let h = (100.0 * h0).min(h1).min(span).min(h_max);
     if h.is_finite() && h > 0.0 {
         h
     } else {

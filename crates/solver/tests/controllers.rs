@@ -176,26 +176,67 @@ fn deadband_keeps_the_step() {
 
 #[test]
 fn invalid_limits_are_typed_errors() {
+    use lash_solver::options::Reason;
+    struct Decay;
+    impl OdeSystem for Decay {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+            dy[0] = -y[0];
+        }
+    }
     let bad = [
-        StepLimits {
-            safety: 0.0,
-            ..Default::default()
-        },
-        StepLimits {
-            max_growth: 1.0,
-            ..Default::default()
-        },
-        StepLimits {
-            min_shrink: 1.0,
-            ..Default::default()
-        },
-        StepLimits {
-            deadband: (1.2, 1.5),
-            ..Default::default()
-        },
+        (
+            StepLimits {
+                safety: 0.0,
+                ..Default::default()
+            },
+            OptionField::Safety,
+            "limits.safety must be in (0, 1], got 0",
+        ),
+        (
+            StepLimits {
+                max_growth: 1.0,
+                ..Default::default()
+            },
+            OptionField::MaxGrowth,
+            "limits.max_growth must be finite and > 1, got 1",
+        ),
+        (
+            StepLimits {
+                min_shrink: 1.0,
+                ..Default::default()
+            },
+            OptionField::MinShrink,
+            "limits.min_shrink must be in (0, 1), got 1",
+        ),
+        (
+            StepLimits {
+                deadband: (1.2, 1.5),
+                ..Default::default()
+            },
+            OptionField::Deadband,
+            "limits.deadband[0] must be in (0, 1], got 1.2",
+        ),
     ];
-    for l in bad {
-        assert!(matches!(l.validate(), Err(SolveError::InvalidOptions(_))));
+    for (l, field, message) in bad {
+        let e = l.validate().unwrap_err();
+        assert_eq!(e.field, field);
+        assert!(matches!(
+            e.reason,
+            Reason::OutOfRange { .. } | Reason::EntryOutOfRange { index: 0, .. }
+        ));
+        assert_eq!(e.to_string(), message);
+        // Through an integration the same error is the solver's InvalidOptions.
+        let opts = SolverOptions {
+            limits: l,
+            ..Default::default()
+        };
+        assert_eq!(
+            solve(&Decay, (0.0, 1.0), &[1.0], &opts).unwrap_err(),
+            SolveError::InvalidOptions(e)
+        );
     }
     assert!(StepLimits::default().validate().is_ok());
 }

@@ -375,7 +375,46 @@ fn shapes_are_validated() {
         a: &[&[], &[0.5], &[1.0]],
         ..BS32
     };
-    let opts = lash_solver::SolverOptions::default();
-    let r = lash_solver::erk::ErkMethod::with_tableau(lash_solver::Method::Bs32, &opts, 1, &BROKEN);
-    assert!(matches!(r, Err(lash_solver::SolveError::InvalidOptions(_))));
+    let tol =
+        lash_solver::options::Tolerances::new(1e-6, lash_solver::Atol::Scalar(1e-9), 1).unwrap();
+    let r = lash_solver::erk::ErkMethod::with_tableau(lash_solver::Method::Bs32, &tol, 1, &BROKEN);
+    let Err(lash_solver::SolveError::InvalidOptions(e)) = r else {
+        panic!("a broken tableau must be refused")
+    };
+    assert_eq!(e.field, lash_solver::OptionField::Tableau);
+}
+
+/// The method table ([`Method::info`]) agrees with the tableaus: the orders it states are the
+/// ones the order conditions of all rooted trees prove, and its estimate order, stages, FSAL
+/// flag and dense-output degree are the tableau's.
+#[test]
+fn method_table_agrees_with_the_tableaus() {
+    use lash_solver::erk::tableau_of;
+    use lash_solver::method::{Family, Method};
+    let pairs: Vec<Method> = Method::ALL
+        .into_iter()
+        .filter(|m| m.info().family == Family::Explicit)
+        .collect();
+    assert_eq!(pairs.len(), ALL.len());
+    for m in pairs {
+        let info = m.info();
+        let tab = tableau_of(m).unwrap();
+        assert_eq!(tab.name, info.name);
+        assert_order(info.name, tab, tab.b, info.order);
+        let embedded = info
+            .embedded_order
+            .expect("every pair has an embedded formula");
+        assert_order(&format!("{m} b̂"), tab, &tab.b_hat(), embedded);
+        assert_eq!(Some(tab.estimate_order), info.error_order, "{m}");
+        assert_eq!(Some(tab.stages()), info.stages, "{m}");
+        assert_eq!(tab.fsal, info.fsal, "{m}");
+        // Degree of the dense output: the highest power of θ with a nonzero weight.
+        let degree = tab
+            .dense_weights()
+            .iter()
+            .filter_map(|r| r.iter().rposition(|c| *c != 0.0).map(|k| k + 1))
+            .max()
+            .unwrap();
+        assert_eq!(degree, info.dense_degree, "{m}");
+    }
 }

@@ -292,6 +292,32 @@ impl From<OptionError> for Error {
     }
 }
 
+impl From<lash_solver::OptionError> for OptionError {
+    /// The solver's typed option error with its fields kept apart, so that each front end
+    /// spells them (`lash`: `--rtol`).
+    fn from(e: lash_solver::OptionError) -> Self {
+        use lash_solver::options::Part;
+        let pieces = e
+            .parts()
+            .into_iter()
+            .map(|p| match p {
+                Part::Text(s) => Piece::Text(s),
+                Part::Field(f) => Piece::Option(f.name()),
+            })
+            .collect();
+        OptionError {
+            option: e.field.name(),
+            message: Message { pieces },
+        }
+    }
+}
+
+impl From<lash_solver::OptionError> for Error {
+    fn from(e: lash_solver::OptionError) -> Self {
+        Error::Option(e.into())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -303,7 +329,9 @@ mod tests {
         let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
         assert_eq!(io.kind(), ErrorKind::BadInput);
         assert!(io.to_string().starts_with("a/b: "));
-        let s = Error::Solver(SolveError::InvalidOptions("bad".into()));
+        let s = Error::Solver(SolveError::InvalidOptions(
+            lash_solver::Rule::RTOL.check(0.0).unwrap_err(),
+        ));
         assert_eq!(s.kind(), ErrorKind::Solver);
         assert_eq!(
             Error::NotYetAvailable("lash run".into()).kind(),
@@ -345,5 +373,25 @@ mod tests {
             Error::Input("x".into()).message_with(&flag),
             Error::Input("x".into()).to_string()
         );
+    }
+
+    #[test]
+    fn solver_option_errors_keep_their_fields() {
+        use lash_solver::{Method, OptionField};
+        let flag = |o: &str| format!("--{}", o.replace('_', "-"));
+        let e = Error::from(lash_solver::Rule::RTOL.check(0.0).unwrap_err());
+        assert_eq!(e.kind(), ErrorKind::BadInput);
+        assert_eq!(e.to_string(), "rtol must be in [1e-14, 1), got 0");
+        assert_eq!(e.message_with(&flag), "--rtol must be in [1e-14, 1), got 0");
+        let e = Error::from(lash_solver::OptionError::not_for(
+            OptionField::Step,
+            Method::Dopri54,
+        ));
+        assert_eq!(
+            e.message_with(&flag),
+            "--step is only for fixed-step methods, and dopri54 is adaptive"
+        );
+        let Error::Option(o) = e else { panic!() };
+        assert_eq!(o.option, "step");
     }
 }

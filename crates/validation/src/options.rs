@@ -2,22 +2,20 @@
 //!
 //! ```text
 //! SolverChoice { method, rtol, atol, step, controller, max_steps, max_wall_time }  (each optional)
-//! choice.apply(base) = base with the choice laid over it, checked against the method:
-//!   fixed-step: step only;  adaptive: rtol, atol, controller only;  budgets: any method
+//! choice.apply(base) = base with the choice laid over it; the solver's rules decide
+//!   which option fits which method and what values are allowed (lash_solver::options)
 //! ```
 //!
-//! Errors name the options by their engine names ([`OptionError`]): `rtol`, `atol`, `step`,
-//! `controller`, `method`, `max_steps`, `max_wall_time`.
+//! The rules are the solver's (`lash_solver::options`: `Family::takes` and
+//! [`SolverOptions::check`]); its typed errors become [`OptionError`]s that name the options
+//! by their engine names: `rtol`, `atol`, `step`, `controller`, `method`, `max_steps`,
+//! `max_wall_time`.
 //!
 //! Source: docs/outputs.md ("Method and controller names", "Defaults of a run").
 
-use lash_solver::{Atol, ControllerKind, Method, SolverOptions};
+use lash_solver::{Atol, ControllerKind, Method, OptionField, SolverOptions};
 
 use crate::error::{Error, OptionError};
-
-/// Smallest relative tolerance accepted (the solver's range, `SolverOptions::rtol`); the range
-/// of rtol is [`RTOL_MIN`, 1).
-pub const RTOL_MIN: f64 = 1e-14;
 
 /// What a request says about the solver; `None` means "as the case says".
 ///
@@ -32,7 +30,7 @@ pub const RTOL_MIN: f64 = 1e-14;
 pub struct SolverChoice {
     /// Integration method.
     pub method: Option<Method>,
-    /// Relative tolerance of adaptive methods, in [[`RTOL_MIN`], 1).
+    /// Relative tolerance of adaptive methods (range: `lash_solver::Rule::RTOL`).
     pub rtol: Option<f64>,
     /// Absolute tolerance of adaptive methods: one number, or one per state component.
     pub atol: Option<Atol>,
@@ -47,20 +45,32 @@ pub struct SolverChoice {
 }
 
 impl SolverChoice {
-    /// Lays the choice over `base` (the case's own options, or the defaults) and checks that
-    /// it fits the method that results.
+    /// Lays the choice over `base` (the case's own options, or the defaults) and checks the
+    /// result by the solver's rules.
     ///
     /// ```text
     /// method = choice.method or base.method
-    /// fixed-step: rtol, atol, controller are errors; step = choice.step, or base.step
-    ///             if the method did not change; none → "needs step"
-    /// adaptive:   step is an error; a controller on diffsol's methods is an error;
-    ///             rtol, atol = the choice or base; controller = the choice, or base's if the
-    ///             method did not change
-    /// budgets:    max_steps, max_wall_time replace base's for any method
+    /// an option given that the method does not take is an error (Family::takes):
+    ///   rtol, atol on fixed-step methods; step on adaptive ones; controller on fixed-step
+    ///   and diffsol's methods
+    /// rtol, atol, max_steps, max_wall_time = the choice, else base's
+    /// step, controller = the choice, else base's if the method did not change, where the
+    ///   method takes them (none else)
+    /// then SolverOptions::check (a fixed-step method needs step, the ranges)
     /// ```
     pub fn apply(&self, base: &SolverOptions) -> Result<SolverOptions, Error> {
         let method = self.method.unwrap_or(base.method);
+        let family = method.info().family;
+        for (field, given) in [
+            (OptionField::Rtol, self.rtol.is_some()),
+            (OptionField::Atol, self.atol.is_some()),
+            (OptionField::Controller, self.controller.is_some()),
+            (OptionField::Step, self.step.is_some()),
+        ] {
+            if given {
+                family.check_takes(field, method)?;
+            }
+        }
         let same = method == base.method;
         let mut o = base.clone();
         o.method = method;
@@ -70,57 +80,23 @@ impl SolverChoice {
         if let Some(w) = self.max_wall_time {
             o.max_wall_time = Some(w);
         }
-        if method.is_fixed_step() {
-            for (option, given) in [
-                ("rtol", self.rtol.is_some()),
-                ("atol", self.atol.is_some()),
-                ("controller", self.controller.is_some()),
-            ] {
-                if given {
-                    return Err(OptionError::leading(
-                        option,
-                        format!(" is only for adaptive methods, and {method} is fixed-step"),
-                    )
-                    .into());
-                }
-            }
-            o.step = self.step.or(if same { base.step } else { None });
-            if o.step.is_none() {
-                return Err(OptionError::new("step")
-                    .text(format!("method {method} is fixed-step and needs "))
-                    .name("step")
-                    .into());
-            }
-            o.controller = None;
-        } else {
-            if self.step.is_some() {
-                return Err(OptionError::leading(
-                    "step",
-                    format!(" is only for fixed-step methods, and {method} is adaptive"),
-                )
-                .into());
-            }
-            if self.controller.is_some() && method.is_diffsol() {
-                return Err(OptionError::leading(
-                    "controller",
-                    format!(" does not apply to {method}, which uses diffsol's own step control"),
-                )
-                .into());
-            }
-            o.step = None;
-            if let Some(r) = self.rtol {
-                o.rtol = r;
-            }
-            if let Some(a) = &self.atol {
-                o.atol = a.clone();
-            }
-            o.controller = if method.is_diffsol() {
-                None
-            } else {
-                self.controller
-                    .or(if same { base.controller } else { None })
-            };
+        if let Some(r) = self.rtol {
+            o.rtol = r;
         }
+        if let Some(a) = &self.atol {
+            o.atol = a.clone();
+        }
+        let base_step = if same { base.step } else { None };
+        let base_controller = if same { base.controller } else { None };
+        o.step = self
+            .step
+            .or(base_step)
+            .filter(|_| family.takes(OptionField::Step));
+        o.controller = self
+            .controller
+            .or(base_controller)
+            .filter(|_| family.takes(OptionField::Controller));
+        o.check()?;
         Ok(o)
     }
 }
@@ -151,7 +127,10 @@ mod tests {
             ..Default::default()
         };
         let e = c.apply(&d).unwrap_err();
-        assert_eq!(e.to_string(), "method rk4 is fixed-step and needs step");
+        assert_eq!(
+            e.to_string(),
+            "method rk4 is fixed-step and needs step (it needs a fixed step size)"
+        );
         let Error::Option(o) = e else { panic!() };
         assert_eq!(o.option, "step");
         let c = SolverChoice {

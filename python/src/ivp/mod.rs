@@ -92,7 +92,7 @@ pub fn default_controllers() -> impl ExactSizeIterator<Item = (&'static str, Opt
 /// An options error as `lash.UsageError`; other failures cannot reach here.
 fn solve_error_to_usage(py: Python<'_>, e: &SolveError) -> PyErr {
     match e {
-        SolveError::InvalidOptions(m) => usage_error(py, m),
+        SolveError::InvalidOptions(m) => usage_error(py, &m.to_string()),
         other => usage_error(py, &other.to_string()),
     }
 }

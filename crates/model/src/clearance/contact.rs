@@ -134,10 +134,6 @@ pub enum FrictionSpec {
     Coulomb(CoulombSpec),
 }
 
-/// Hydrodynamic film of a lubricated clearance joint (docs/model.md §4).
-///
-/// ```text
-
 impl<'de> Deserialize<'de> for NormalSpec {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let (tag, obj) = tagged_object::<D>(d, "law")?;

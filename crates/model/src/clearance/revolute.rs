@@ -77,6 +77,9 @@ fn is_zero2(v: &[f64; 2]) -> bool {
     *v == [0.0, 0.0]
 }
 
+/// Hydrodynamic film of a lubricated clearance joint (docs/model.md §4).
+///
+/// ```text
 /// F_r, F_t = film model(ε_eff, ε̇, Ω);  R = R_J, c = R_B − R_J
 /// ε_eff = min(ε, ε_cap)  ("eps_cap": number, default 0.99)
 ///       = min(ε, 1 − 1e-12)  ("eps_cap": null: no cap, the law at the true ε)

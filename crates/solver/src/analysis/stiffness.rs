@@ -32,7 +32,8 @@ use faer::{Mat, MatMut, MatRef};
 use super::AnalysisError;
 use crate::error::SolveError;
 use crate::integrator::{solve, Problem, Solution, StepOutcome};
-use crate::options::{Method, Output, SolverOptions};
+use crate::method::Method;
+use crate::options::{Output, SolverOptions};
 use crate::system::OdeSystem;
 
 /// One eigenvalue λ = re + i·im of the Jacobian.

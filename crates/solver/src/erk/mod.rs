@@ -26,7 +26,7 @@
 //!
 //! - The first step is `opts.h0` or Hairer's starting step ([`crate::stepper::initial_step`],
 //!   one extra RHS evaluation), at t0 and again after every restart.
-//! - The default controller is `pi`.
+//! - The default controller is `pi` ([`Method::default_controller`]).
 //! - A non-finite stage (NaN or ±∞ in the RHS or the stage value) makes the error norm +∞:
 //!   the driver rejects the attempt and shrinks the step.
 //! - FSAL pairs reuse f(t + h, y_{n+1}) as the next step's first stage; DOP853 (not FSAL)
@@ -42,10 +42,10 @@ use std::cell::{Cell, RefCell};
 
 pub use tableaus::{Dense, ErrorEstimate, Tableau, BS32, DOP853, DOPRI54, TSIT54};
 
-use crate::controller::ControllerKind;
 use crate::error::SolveError;
+use crate::method::{Family, Method};
 use crate::onestep::{Attempt, OneStepMethod};
-use crate::options::{Atol, Method, SolverOptions};
+use crate::options::{Atol, OptionError, OptionField, Reason, Tolerances};
 use crate::stats::Stats;
 use crate::stepper::error_norm;
 use crate::system::OdeSystem;
@@ -107,24 +107,29 @@ pub struct ErkMethod {
 }
 
 impl ErkMethod {
-    /// The pair of `method` for a system of dimension n, with the tolerances of `opts`.
-    pub fn new(method: Method, opts: &SolverOptions, n: usize) -> Result<Self, SolveError> {
-        let tab = tableau_of(method).ok_or_else(|| {
-            SolveError::InvalidOptions(format!(
-                "method {method} is not an explicit Runge–Kutta pair"
-            ))
-        })?;
-        Self::with_tableau(method, opts, n, tab)
+    /// The pair of `method` for a system of dimension n, with tolerances `tol`.
+    pub fn new(method: Method, tol: &Tolerances, n: usize) -> Result<Self, SolveError> {
+        let tab = tableau_of(method).ok_or(OptionError::new(
+            OptionField::Method,
+            Reason::WrongFamily {
+                method,
+                expected: Family::Explicit.describe(),
+            },
+        ))?;
+        Self::with_tableau(method, tol, n, tab)
     }
 
-    /// A method for any tableau (`method` is only reported by [`OneStepMethod::method`]).
+    /// A method for any tableau (`method` is reported by [`OneStepMethod::method`] and
+    /// decides the default controller); a tableau of the wrong shape is an
+    /// [`SolveError::InvalidOptions`] of the field `tableau`.
     pub fn with_tableau(
         method: Method,
-        opts: &SolverOptions,
+        tol: &Tolerances,
         n: usize,
         tab: &'static Tableau,
     ) -> Result<Self, SolveError> {
-        tab.validate().map_err(SolveError::InvalidOptions)?;
+        tab.validate()
+            .map_err(|e| OptionError::new(OptionField::Tableau, Reason::Invalid(e)))?;
         let n_extra = tab.total_stages() - tab.f_new_stage() - 1;
         let (err_w, err_w3) = match tab.error {
             ErrorEstimate::Embedded { e } => (e.to_vec(), vec![]),
@@ -146,8 +151,8 @@ impl ErkMethod {
             errv3: vec![0.0; n],
             err_w,
             err_w3,
-            rtol: opts.rtol,
-            atol: opts.atol.clone(),
+            rtol: tol.rtol(),
+            atol: tol.atol().clone(),
             dense: RefCell::new(DenseCache {
                 ready: false,
                 k: vec![vec![0.0; n]; n_extra],
@@ -209,9 +214,6 @@ impl<S: OdeSystem + ?Sized> OneStepMethod<S> for ErkMethod {
     }
     fn error_order(&self) -> usize {
         self.tab.estimate_order
-    }
-    fn default_controller(&self) -> ControllerKind {
-        ControllerKind::Pi
     }
 
     fn start(&mut self, sys: &S, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), SolveError> {

@@ -414,7 +414,7 @@ pub fn compare_one(
     let t_end = p.info.as_ref().map(|_| reference.t_end);
     let base = Compared {
         method,
-        controller: crate::report::summary::effective_controller(&opts),
+        controller: opts.controller_in_use(),
         rtol: (!method.is_fixed_step()).then_some(opts.rtol),
         step: opts.step,
         norms: None,

@@ -26,21 +26,6 @@ use crate::store::io;
 /// File name of the summary in an output directory.
 pub const SUMMARY_FILE: &str = "summary.json";
 
-/// The controller a run uses: the chosen one, else the method's default (`pi` for explicit
-/// pairs, `gustafsson` for Rosenbrock methods, per `SolverOptions::controller`); None for
-/// fixed-step methods and diffsol's methods.
-pub fn effective_controller(opts: &SolverOptions) -> Option<ControllerKind> {
-    let m = opts.method;
-    if m.is_fixed_step() || m.is_diffsol() {
-        return None;
-    }
-    Some(opts.controller.unwrap_or(if m.is_stiff() {
-        ControllerKind::Gustafsson
-    } else {
-        ControllerKind::Pi
-    }))
-}
-
 /// Which case ran with which settings: the header the diagnostic reports (`stiffness.json`,
 /// `poincare.json`) share with summary.json, flattened into their JSON objects.
 ///
@@ -60,7 +45,8 @@ pub struct RunHeader {
     pub scene_sha256: Option<String>,
     /// Method.
     pub method: Method,
-    /// Controller ([`effective_controller`]).
+    /// Controller in use (`SolverOptions::controller_in_use`: the chosen one, else the
+    /// method's default; null for fixed-step and diffsol's methods).
     pub controller: Option<ControllerKind>,
     /// Relative tolerance (null for fixed-step methods).
     pub rtol: Option<f64>,
@@ -77,7 +63,7 @@ impl RunHeader {
             case: case.name.clone(),
             scene_sha256: case.sha256().map(str::to_string),
             method: opts.method,
-            controller: effective_controller(opts),
+            controller: opts.controller_in_use(),
             rtol: (!fixed).then_some(opts.rtol),
             step: if fixed { opts.step } else { None },
         }
@@ -156,7 +142,7 @@ impl Summary {
             case: case.name.clone(),
             scene_sha256: case.sha256().map(str::to_string),
             method: opts.method,
-            controller: effective_controller(opts),
+            controller: opts.controller_in_use(),
             rtol: (!fixed).then_some(opts.rtol),
             atol: (!fixed).then(|| opts.atol.clone()),
             step: if fixed { opts.step } else { None },
@@ -303,10 +289,15 @@ mod tests {
             (j["controller"].as_str(), j["atol"].as_f64()),
             (Some("h211"), Some(1e-9))
         );
+        // Rodas5P's default is gustafsson; diffsol's methods record none.
         let ros = SolverOptions::with_method(Method::Rodas5p);
-        assert_eq!(effective_controller(&ros), Some(ControllerKind::Gustafsson));
+        let j =
+            serde_json::to_value(Summary::new(&case, &ros, 0.8, Stats::default(), 0.1, 0)).unwrap();
+        assert_eq!(j["controller"], "gustafsson");
         let bdf = SolverOptions::with_method(Method::Bdf);
-        assert_eq!(effective_controller(&bdf), None);
+        let j =
+            serde_json::to_value(Summary::new(&case, &bdf, 0.8, Stats::default(), 0.1, 0)).unwrap();
+        assert!(j["controller"].is_null());
     }
 
     #[test]

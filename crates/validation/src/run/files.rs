@@ -144,7 +144,7 @@ impl FailureError {
                 "budget_exhausted"
             }
             SolveError::InvalidOptions(m) => {
-                f.reason = Some(m.clone());
+                f.reason = Some(m.to_string());
                 "invalid_options"
             }
             // `lash run` exits 130 on a stop request and writes nothing; a library caller

@@ -440,10 +440,7 @@ impl Prepared {
         if self.info.is_some() {
             o.events = !o.method.is_fixed_step();
         }
-        o.validate(self.dim()).map_err(|e| match e {
-            lash_solver::SolveError::InvalidOptions(m) => Error::Usage(m),
-            other => Error::Solver(other),
-        })
+        Ok(o.validate(self.dim())?)
     }
 
     /// The crank period, if the scene has a crank driver.

@@ -1,0 +1,471 @@
+//! Solver options: the flat form users fill ([`SolverOptions`]), the rules it obeys, and the
+//! per-family configuration its validation produces ([`SolverOptions::configure`] →
+//! [`Config`]), which the steppers consume.
+//!
+//! # The rules
+//!
+//! This is the one place they are written. The engine and `lash` call them instead of
+//! checking on their own (the Python binding still keeps copies of the rtol range, the
+//! default controllers and the dense-output degrees, to be replaced by these and
+//! [`Method::info`]), and each front end spells the typed error ([`OptionError`]: which
+//! field, what is wrong, the value, what is allowed) its own way.
+//!
+//! Which option fits which method follows the method's family ([`Method::info`],
+//! [`Family::takes`]):
+//!
+//! ```text
+//! option                     fixed step (rk4)   one-step (pairs, rodas5p)   diffsol (bdf, trbdf2, esdirk34)
+//! step                       required           rejected                    rejected
+//! rtol, atol                 ignored            used                        used
+//! h0                         rejected           used                        used
+//! h_min, h_max               ignored            used                        used
+//! controller                 rejected           used (None: the default)    rejected
+//! limits                     ignored            used                        ignored
+//! adaptive = false           (always fixed)     needs h0: every step h0     rejected
+//! rk4_instability_steps      used               ignored                     ignored
+//! max_steps, max_wall_time, output, events, event_rtol, event_samples, divergence_bound: every method
+//! ```
+//!
+//! An option that can be absent (`step`, `h0`, `controller`, `adaptive = false`) is rejected
+//! when it is given for a method it does not fit; an option that always has a value (a
+//! number, the limits) is checked and used by the families it fits and ignored by the
+//! others, so one set of options can be switched between methods.
+//!
+//! Values (each an [`Allowed`] set of a [`Rule`]; h in s):
+//!
+//! ```text
+//! rtol                   [1e-14, 1)                      Rule::RTOL
+//! atol                   finite and > 0, each entry; a vector has one entry per component
+//! step, h0               finite and > 0
+//! h_min                  finite and >= 0
+//! h_max                  > h_min
+//! max_steps              >= 1
+//! max_wall_time          finite and > 0
+//! event_rtol             [1e-15, 1e-3]
+//! event_samples          <= 64
+//! divergence_bound       > 0
+//! output times           finite and non-decreasing
+//! limits                 StepLimits (each field's range on the field)
+//! ```
+//!
+//! The default controller of a one-step method is [`Method::default_controller`] (`pi` for
+//! the explicit pairs, `gustafsson` for Rodas5P); [`SolverOptions::controller_in_use`] says
+//! which one a run uses.
+
+mod config;
+mod error;
+
+pub use config::{
+    AdaptiveControl, Budgets, Config, DiffsolConfig, FixedConfig, OneStepConfig, StepBounds,
+    StepControl, Tolerances,
+};
+pub use error::{Allowed, Num, OptionError, OptionField, Part, Reason};
+
+use crate::controller::{ControllerKind, StepLimits};
+use crate::method::{Family, Method};
+
+/// Absolute tolerance: one number for every component, or one per component.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Atol {
+    /// The same absolute tolerance for every component.
+    Scalar(f64),
+    /// One absolute tolerance per component (length n).
+    Vector(Vec<f64>),
+}
+
+impl Atol {
+    /// The absolute tolerance of component `i`.
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        match self {
+            Atol::Scalar(a) => *a,
+            Atol::Vector(v) => v[i],
+        }
+    }
+}
+
+impl Default for Atol {
+    fn default() -> Self {
+        Atol::Scalar(1e-9)
+    }
+}
+
+/// What the solution records.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Output {
+    /// The state after every accepted step (and at every event). Default.
+    #[default]
+    Steps,
+    /// The state at these times only (increasing, inside the time span), from the dense output.
+    Times(Vec<f64>),
+    /// Only the final state.
+    Final,
+}
+
+/// Options of one integration: the flat form users fill, every field with a default.
+/// [`SolverOptions::configure`] checks it against the rules (module documentation) and
+/// builds the configuration of the method's family.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverOptions {
+    /// Method. Default `dopri54`.
+    pub method: Method,
+    /// Relative tolerance of adaptive methods. Default 1e-6; in [1e-14, 1) ([`Rule::RTOL`]).
+    pub rtol: f64,
+    /// Absolute tolerance of adaptive methods, scalar or one per component. Default 1e-9;
+    /// each entry finite and > 0 (> 0 so that a component that passes through 0 keeps a
+    /// finite error weight).
+    pub atol: Atol,
+    /// Fixed step of fixed-step methods (s). Required for `rk4`, rejected otherwise; finite
+    /// and > 0.
+    pub step: Option<f64>,
+    /// Initial step of adaptive methods (rejected for `rk4`). Default None: chosen by
+    /// Hairer's starting-step algorithm (HNW I, II.4). With `adaptive = false` it is the
+    /// fixed step of every step.
+    pub h0: Option<f64>,
+    /// Whether adaptive methods control the step size. Default true. When false, an adaptive
+    /// method of ours (the explicit pairs, Rosenbrock) takes `h0` (required) on every step,
+    /// shortening only the last one to land on the end time, computes no error estimate and
+    /// never rejects a step: the mode of fixed-step convergence-order tests. `rk4` is always
+    /// fixed-step; rejected for diffsol's methods.
+    pub adaptive: bool,
+    /// Smallest step of adaptive methods before failing with `StepSizeTooSmall`. Default 0
+    /// (then 16·ε·|t| is the floor); finite and ≥ 0.
+    pub h_min: f64,
+    /// Largest step of adaptive methods. Default +∞; > h_min.
+    pub h_max: f64,
+    /// Most step attempts before failing with `TooManySteps`. Default 1 000 000; ≥ 1.
+    pub max_steps: usize,
+    /// Step-size controller of our one-step methods (rejected for fixed-step and diffsol's
+    /// methods). Default None: the method's own ([`Method::default_controller`]: `pi` for
+    /// the explicit pairs, `gustafsson` for Rodas5P).
+    pub controller: Option<ControllerKind>,
+    /// Safety factor, growth/shrink caps, dead-band of our controllers (ignored by the
+    /// other methods).
+    pub limits: StepLimits,
+    /// What the solution records. Default every step.
+    pub output: Output,
+    /// Whether event functions are monitored. Default true.
+    pub events: bool,
+    /// Relative time tolerance within which roots of several event functions count as one
+    /// event (reported together at the earliest): `event_rtol · max(|t|, |h|)`. Each root
+    /// itself is located to a few ulps of t (crate::integrator). Default 1e-13; range
+    /// [1e-15, 1e-3].
+    pub event_rtol: f64,
+    /// Interior points of every step at which the event functions are also evaluated (on the
+    /// dense output), to catch two crossings inside one step: an excursion of g to the other
+    /// side and back that lasts longer than h/(s + 1) cannot hide inside a step of size h.
+    /// Default 4; ≤ 64; 0 looks at the step ends only. Costs s dense-output and event
+    /// evaluations per step, and nothing for a system without event functions.
+    pub event_samples: usize,
+    /// Wall-clock budget in seconds, counted from the construction of the integrator; None for
+    /// no budget. When it runs out the solve fails with `BudgetExhausted`.
+    pub max_wall_time: Option<f64>,
+    /// Divergence bound: a state component larger in magnitude than this is treated as
+    /// non-finite (`NonFiniteState`). Default 1e100.
+    pub divergence_bound: f64,
+    /// Stability check of fixed-step RK4: fail with `Rk4Unstable` once this many
+    /// consecutive steps lie outside RK4's stability region (suspected from the stages,
+    /// h·ρ > [`crate::rk4::RK4_STABILITY_RADIUS`], and confirmed by the eigenvalues of ∂f/∂y:
+    /// `rk4` module doc). Default 0: off (the paper's RK4
+    /// unchanged); `lash` turns it on (15) for mechanism runs. Ignored by the other methods.
+    pub rk4_instability_steps: usize,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        SolverOptions {
+            method: Method::Dopri54,
+            rtol: 1e-6,
+            atol: Atol::default(),
+            step: None,
+            h0: None,
+            adaptive: true,
+            h_min: 0.0,
+            h_max: f64::INFINITY,
+            max_steps: 1_000_000,
+            controller: None,
+            limits: StepLimits::default(),
+            output: Output::Steps,
+            events: true,
+            event_rtol: 1e-13,
+            event_samples: 4,
+            max_wall_time: None,
+            divergence_bound: 1e100,
+            rk4_instability_steps: 0,
+        }
+    }
+}
+
+impl SolverOptions {
+    /// Options for a method with default settings.
+    pub fn with_method(method: Method) -> Self {
+        SolverOptions {
+            method,
+            ..Default::default()
+        }
+    }
+
+    /// Checks the options against the rules (module documentation) for a system of
+    /// dimension `n` and builds the configuration of the method's family.
+    pub fn configure(&self, n: usize) -> Result<Config, OptionError> {
+        self.configure_for(Some(n))
+    }
+
+    /// Checks every rule that does not need the system: all of them but the length of a
+    /// vector `atol` (a front end that lays a choice over a case's options checks them
+    /// before it knows the system).
+    pub fn check(&self) -> Result<(), OptionError> {
+        self.configure_for(None).map(|_| ())
+    }
+
+    /// [`SolverOptions::configure`]; without `n`, a vector `atol` has the length it has.
+    fn configure_for(&self, n: Option<usize>) -> Result<Config, OptionError> {
+        let method = self.method;
+        let family = method.info().family;
+        for (field, given) in [
+            (OptionField::Step, self.step.is_some()),
+            (OptionField::H0, self.h0.is_some()),
+            (OptionField::Adaptive, !self.adaptive),
+            (OptionField::Controller, self.controller.is_some()),
+        ] {
+            if given {
+                family.check_takes(field, method)?;
+            }
+        }
+        let budgets = Budgets::new(self.max_steps, self.max_wall_time)?;
+        let config = match family {
+            Family::FixedStep => Config::Fixed(FixedConfig::new(
+                method,
+                self.step,
+                self.rk4_instability_steps,
+                budgets,
+            )?),
+            Family::Explicit | Family::Rosenbrock => {
+                let tolerances = self.tolerances(n)?;
+                let bounds = StepBounds::new(self.h0, self.h_min, self.h_max)?;
+                let control = if self.adaptive {
+                    StepControl::Adaptive(AdaptiveControl::new(
+                        method,
+                        self.controller,
+                        self.limits.clone(),
+                        bounds,
+                    )?)
+                } else {
+                    let h = self.h0.ok_or(OptionError::new(
+                        OptionField::H0,
+                        Reason::RequiredBy {
+                            other: OptionField::Adaptive,
+                        },
+                    ))?;
+                    StepControl::Fixed { h }
+                };
+                Config::OneStep(OneStepConfig::new(method, tolerances, control, budgets)?)
+            }
+            Family::Diffsol => {
+                let tolerances = self.tolerances(n)?;
+                let bounds = StepBounds::new(self.h0, self.h_min, self.h_max)?;
+                Config::Diffsol(DiffsolConfig::new(method, tolerances, bounds, budgets)?)
+            }
+        };
+        Rule::EVENT_RTOL.check(self.event_rtol)?;
+        Rule::EVENT_SAMPLES.check(self.event_samples as f64)?;
+        Rule::DIVERGENCE_BOUND.check(self.divergence_bound)?;
+        if let Output::Times(ts) = &self.output {
+            for (i, t) in ts.iter().enumerate() {
+                Rule::OUTPUT_TIME.check_entry(i, *t)?;
+                if i > 0 && !(*t >= ts[i - 1]) {
+                    return Err(OptionError::new(
+                        OptionField::Output,
+                        Reason::Decreasing { index: i },
+                    ));
+                }
+            }
+        }
+        Ok(config)
+    }
+
+    /// The tolerances, for a system of dimension `n` (None: a vector atol's own length).
+    fn tolerances(&self, n: Option<usize>) -> Result<Tolerances, OptionError> {
+        let n = match (&self.atol, n) {
+            (_, Some(n)) => n,
+            (Atol::Vector(v), None) => v.len(),
+            (Atol::Scalar(_), None) => 1,
+        };
+        Tolerances::new(self.rtol, self.atol.clone(), n)
+    }
+
+    /// Checks the options against the rules for a system of dimension `n`
+    /// ([`SolverOptions::configure`] without keeping the configuration).
+    pub fn validate(&self, n: usize) -> Result<(), OptionError> {
+        self.configure(n).map(|_| ())
+    }
+
+    /// The controller a run with these options uses: the one named, else the method's
+    /// default; None for methods that take no controller of ours (RK4, diffsol's methods).
+    pub fn controller_in_use(&self) -> Option<ControllerKind> {
+        self.method
+            .default_controller()
+            .map(|default| self.controller.unwrap_or(default))
+    }
+}
+
+impl Family {
+    /// Whether the family's methods take `field` (the table of the module documentation):
+    /// `step` and `rk4_instability_steps` only the fixed-step family; tolerances, `h0`,
+    /// `h_min`, `h_max` every adaptive family; `controller` and `limits` our one-step
+    /// methods only; `adaptive = false` every family but diffsol's; everything else every
+    /// family.
+    pub const fn takes(self, field: OptionField) -> bool {
+        use OptionField as F;
+        let fixed = matches!(self, Family::FixedStep);
+        match field {
+            F::Step | F::Rk4InstabilitySteps => fixed,
+            F::Rtol | F::Atol | F::H0 | F::HMin | F::HMax => !fixed,
+            F::Controller
+            | F::Safety
+            | F::MaxGrowth
+            | F::MaxFirstGrowth
+            | F::MinShrink
+            | F::MaxAfterReject
+            | F::MaxGrowthAfterReject
+            | F::MaxAfterRepeatedReject
+            | F::Deadband => self.is_one_step(),
+            F::Adaptive => !matches!(self, Family::Diffsol),
+            _ => true,
+        }
+    }
+
+    /// [`Family::takes`] as a check: the typed error of `field` given for `method` (of this
+    /// family) when the family does not take it.
+    pub fn check_takes(self, field: OptionField, method: Method) -> Result<(), OptionError> {
+        if self.takes(field) {
+            Ok(())
+        } else {
+            Err(OptionError::not_for(field, method))
+        }
+    }
+}
+
+/// A numeric rule: a field and the values it allows. The constants are the rules of the
+/// module documentation; a front end checks a value with the same rule
+/// (`Rule::RTOL.check(v)`) and spells the error its own way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rule {
+    /// The field.
+    pub field: OptionField,
+    /// What it allows.
+    pub allowed: Allowed,
+}
+
+/// (0, 1]: the range of the step-limit factors below 1.
+const UNIT: Allowed = Allowed::Range {
+    lo: 0.0,
+    lo_closed: false,
+    hi: 1.0,
+    hi_closed: true,
+};
+
+impl Rule {
+    /// `rtol` ∈ [1e-14, 1).
+    pub const RTOL: Rule = Rule {
+        field: OptionField::Rtol,
+        allowed: Allowed::Range {
+            lo: 1e-14,
+            lo_closed: true,
+            hi: 1.0,
+            hi_closed: false,
+        },
+    };
+    /// `atol` (each entry) finite and > 0.
+    pub const ATOL: Rule = Rule::new(OptionField::Atol, Allowed::FiniteAbove(0.0));
+    /// `step` finite and > 0.
+    pub const STEP: Rule = Rule::new(OptionField::Step, Allowed::FiniteAbove(0.0));
+    /// `h0` finite and > 0.
+    pub const H0: Rule = Rule::new(OptionField::H0, Allowed::FiniteAbove(0.0));
+    /// `h_min` finite and ≥ 0 (`h_max` > `h_min` is a relation: [`StepBounds::new`]).
+    pub const H_MIN: Rule = Rule::new(OptionField::HMin, Allowed::FiniteAtLeast(0.0));
+    /// `max_steps` ≥ 1.
+    pub const MAX_STEPS: Rule = Rule::new(OptionField::MaxSteps, Allowed::AtLeast(1.0));
+    /// `max_wall_time` finite and > 0.
+    pub const MAX_WALL_TIME: Rule = Rule::new(OptionField::MaxWallTime, Allowed::FiniteAbove(0.0));
+    /// `event_rtol` ∈ [1e-15, 1e-3].
+    pub const EVENT_RTOL: Rule = Rule {
+        field: OptionField::EventRtol,
+        allowed: Allowed::Range {
+            lo: 1e-15,
+            lo_closed: true,
+            hi: 1e-3,
+            hi_closed: true,
+        },
+    };
+    /// `event_samples` ≤ 64.
+    pub const EVENT_SAMPLES: Rule = Rule::new(OptionField::EventSamples, Allowed::AtMost(64.0));
+    /// `divergence_bound` > 0 (+∞ allowed: no bound).
+    pub const DIVERGENCE_BOUND: Rule = Rule::new(OptionField::DivergenceBound, Allowed::Above(0.0));
+    /// Output times (each) finite.
+    pub const OUTPUT_TIME: Rule = Rule::new(OptionField::Output, Allowed::Finite);
+    /// `limits.safety` ∈ (0, 1].
+    pub const SAFETY: Rule = Rule::new(OptionField::Safety, UNIT);
+    /// `limits.max_growth` finite and > 1.
+    pub const MAX_GROWTH: Rule = Rule::new(OptionField::MaxGrowth, Allowed::FiniteAbove(1.0));
+    /// `limits.max_first_growth` finite and > 1.
+    pub const MAX_FIRST_GROWTH: Rule =
+        Rule::new(OptionField::MaxFirstGrowth, Allowed::FiniteAbove(1.0));
+    /// `limits.min_shrink` ∈ (0, 1).
+    pub const MIN_SHRINK: Rule = Rule {
+        field: OptionField::MinShrink,
+        allowed: Allowed::Range {
+            lo: 0.0,
+            lo_closed: false,
+            hi: 1.0,
+            hi_closed: false,
+        },
+    };
+    /// `limits.max_after_reject` ∈ (0, 1].
+    pub const MAX_AFTER_REJECT: Rule = Rule::new(OptionField::MaxAfterReject, UNIT);
+    /// `limits.max_growth_after_reject` finite and ≥ 1.
+    pub const MAX_GROWTH_AFTER_REJECT: Rule = Rule::new(
+        OptionField::MaxGrowthAfterReject,
+        Allowed::FiniteAtLeast(1.0),
+    );
+    /// `limits.max_after_repeated_reject` ∈ (0, 1].
+    pub const MAX_AFTER_REPEATED_REJECT: Rule =
+        Rule::new(OptionField::MaxAfterRepeatedReject, UNIT);
+    /// `limits.deadband` lower end (entry 0) ∈ (0, 1].
+    pub const DEADBAND_LOWER: Rule = Rule::new(OptionField::Deadband, UNIT);
+    /// `limits.deadband` upper end (entry 1) finite and ≥ 1.
+    pub const DEADBAND_UPPER: Rule = Rule::new(OptionField::Deadband, Allowed::FiniteAtLeast(1.0));
+
+    /// The rule of `field` allowing `allowed`.
+    pub const fn new(field: OptionField, allowed: Allowed) -> Self {
+        Rule { field, allowed }
+    }
+
+    /// `value` if allowed, else the typed error.
+    pub fn check(&self, value: f64) -> Result<f64, OptionError> {
+        if self.allowed.contains(value) {
+            Ok(value)
+        } else {
+            Err(OptionError::out_of_range(self.field, value, self.allowed))
+        }
+    }
+
+    /// Entry `index` of a list, `value`, if allowed, else the typed error.
+    pub fn check_entry(&self, index: usize, value: f64) -> Result<f64, OptionError> {
+        if self.allowed.contains(value) {
+            Ok(value)
+        } else {
+            Err(OptionError::new(
+                self.field,
+                Reason::EntryOutOfRange {
+                    index,
+                    value,
+                    allowed: self.allowed,
+                },
+            ))
+        }
+    }
+}
