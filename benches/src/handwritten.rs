@@ -1,5 +1,6 @@
 //! A hand-written right-hand side of the paper's press in minimal coordinates: the comparator
-//! of the performance goals (BENCHMARKS.md, "Against a hand-written model").
+//! of the performance goals (BENCHMARKS.md, "(g) Close to the limit: lash against a
+//! hand-written model").
 //!
 //! ```text
 //! crank prescribed: θ = θ₀ + ω t,  A = r (cos θ, sin θ),  Ä = −r ω² (cos θ, sin θ)

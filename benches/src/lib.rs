@@ -56,12 +56,14 @@ pub fn options(method: Method, rtol: f64, atol: f64, step: f64, output: Output) 
     o
 }
 
-/// The options of the press tests: rtol 1e-6, atol 1e-9, 2 event samples; RK4 at its stable
-/// step (`lash_model::cases::rk4_step`); final state only. Panics for a stem outside the
-/// catalogue.
+/// The options of the press tests: rtol 1e-6, atol 1e-9, 2 event samples; RK4 at the step the
+/// engine runs the case at (`lash_validation::PressCase::rk4_step`); final state only. Panics
+/// for a stem that is not a press case.
 pub fn test_options(method: Method, stem: &str) -> SolverOptions {
-    let step = lash_model::cases::rk4_step(stem)
-        .unwrap_or_else(|| panic!("{stem} is not a press case of the catalogue"));
+    let step = stem
+        .parse::<lash_validation::PressCase>()
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rk4_step();
     options(method, 1e-6, 1e-9, step, Output::Final)
 }
 

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! Run.animate() ── scene text, column names, column-major f64 bytes ──▶ animation_html
-//!     ──▶ Table::from_columns ──▶ Animation::from_scene_text ──▶ the page's HTML (str)
+//!     ──▶ lash_validation::animate_in_memory ──▶ the page's HTML (str)
 //! ```
 //!
 //! Errors as `lash.run`'s: a scene the model rejects → `lash.SceneError`; a trajectory that
@@ -13,7 +13,7 @@
 
 use pyo3::prelude::*;
 
-use lash_validation::animation::{Animation, AnimationOptions, Table};
+use lash_validation::AnimateOptions;
 
 use crate::convert::f64s_from_bytes;
 use crate::scene::engine_error;
@@ -41,13 +41,12 @@ pub fn animation_html(
     let data: Vec<Vec<f64>> = (0..names.len())
         .map(|k| values.get(k * rows..(k + 1) * rows).unwrap_or(&[]).to_vec())
         .collect();
-    let o = AnimationOptions {
+    let o = AnimateOptions {
         trace,
         column,
         max_frames,
+        ..Default::default()
     };
-    Table::from_columns(names, data)
-        .and_then(|t| Animation::from_scene_text(scene_json, &t, title, &o))
-        .map(|a| a.html)
+    lash_validation::animate_in_memory(scene_json, names, data, title, &o)
         .map_err(|e| engine_error(py, e))
 }

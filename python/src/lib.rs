@@ -9,8 +9,8 @@
 //! lash.run (python/lash/_run.py)             checks the options as `lash run` does, builds
 //!        │                                    Run (summary dict, numpy columns, events)
 //!        ▼
-//! _lash.run_core (scene.rs)                   lash_validation::commands::run_in_memory with
-//!                                             the GIL released
+//! _lash.run_core (scene.rs)                   lash_validation::run_in_memory with the GIL
+//!                                             released
 //!
 //! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's
 //!        │                                    meaning), builds OdeResult / OdeSolution

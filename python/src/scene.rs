@@ -23,34 +23,17 @@ use pyo3::types::{PyDict, PyList};
 
 use lash_model::SceneError;
 use lash_solver::{Atol, ControllerKind, Method, SolveError};
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::report::metrics::EventRecord;
-use lash_validation::run::case::Case;
-use lash_validation::run::simulate::RunResult;
-use lash_validation::{Error, SolverChoice};
+use lash_validation::{Case, Error, EventRecord, RunOptions, RunResult, SolverChoice};
 
 use crate::convert::bytearray_from_f64s;
 use crate::errors::{failure_kind, scene_error, solve_error, usage_error};
 
-/// The kind of a located event, as `lash.run` reports it: what crossed zero
-/// (`lash_model::Mechanism::event_name`, docs/model.md §7) and in which direction.
-///
-/// ```text
-/// contact        δ = |e| − c of a clearance joint      rising: contact_onset, falling: contact_loss
-/// eps_cap        ε − ε_cap of a lubricated joint       eps_cap_reached / eps_cap_left
-/// corner_contact δ_i of a prismatic joint's corner     corner_contact_onset / corner_contact_loss
-/// kink_*         a kink of a force law (kink_events)   kink_*_rising / kink_*_falling
-/// ```
+/// The kind of a located event, as `lash.run` reports it: the label of its crossing that the
+/// joint or element owning the event function declares (`lash_model::event_label`: a
+/// clearance joint's `contact` rising is `contact_onset`, falling `contact_loss`; docs/model.md
+/// §7).
 pub fn event_kind(kind: &str, rising: bool) -> String {
-    match (kind, rising) {
-        ("contact", true) => "contact_onset".into(),
-        ("contact", false) => "contact_loss".into(),
-        ("eps_cap", true) => "eps_cap_reached".into(),
-        ("eps_cap", false) => "eps_cap_left".into(),
-        ("corner_contact", true) => "corner_contact_onset".into(),
-        ("corner_contact", false) => "corner_contact_loss".into(),
-        (other, r) => format!("{other}_{}", if r { "rising" } else { "falling" }),
-    }
+    lash_model::event_label(kind, rising)
 }
 
 /// A scene error's JSON path and reason (docs/scene-format.md, "Errors"): `str(e)` of the
@@ -97,9 +80,7 @@ pub(crate) fn engine_error(py: Python<'_>, e: Error) -> PyErr {
         e @ Error::Io { .. } => PyOSError::new_err(e.to_string()),
         // A stop requested through lash_solver's interrupt flag: what Ctrl-C is in Python.
         e @ Error::Interrupted(_) => PyKeyboardInterrupt::new_err(e.to_string()),
-        e @ (Error::NotYetAvailable(_) | Error::Internal(_)) => {
-            PyRuntimeError::new_err(e.to_string())
-        }
+        e @ Error::Internal(_) => PyRuntimeError::new_err(e.to_string()),
     }
 }
 
@@ -194,9 +175,9 @@ pub fn run_core<'py>(
             (None, Some(t)) => Case::from_json_bytes(&name, t)?,
             (None, None) => return Err(Error::Internal("run_core: no scene".into())),
         };
-        let (prepared, r) = commands::run_in_memory(case, &o)?;
+        let r = lash_validation::run_in_memory(case, &o)?;
         // Built-in test problems have no events.
-        let names = prepared.info.map(|i| i.event_names).unwrap_or_default();
+        let names = r.event_names.clone();
         Ok((r, names, start.elapsed().as_secs_f64()))
     });
     let (r, event_names, engine_s) = outcome.map_err(|e| engine_error(py, e))?;

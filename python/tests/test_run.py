@@ -1,10 +1,10 @@
 """lash.run: scenes run by lash's engine from Python, against the command line's own files.
 
 The command line (`lash run`) and lash.run call the same engine
-(lash_validation::commands::run and run_in_memory) with the same options, so every number of
+(lash_validation::run and run_in_memory) with the same options, so every number of
 summary.json except the measured wall time, and every cell of trajectory.csv, must be equal
 bit for bit: trajectory.csv writes each number in the shortest form that reads back to the
-same f64 (crates/validation/src/trajectory.rs), so float() of a cell is the f64 the run made.
+same f64 (crates/validation/src/report/trajectory.rs), so float() of a cell is the f64 the run made.
 The command is the release binary of this checkout: $LASH_BIN, else target/release/lash
 (.ci/run builds it first).
 """

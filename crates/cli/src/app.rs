@@ -13,25 +13,17 @@
 //!                   scene's assembly and initial check, one factorisation of a large system)
 //! ```
 //!
-//! Source: docs/outputs.md ("Exit codes of `lash`"). Commands whose engine (the model, the
-//! adaptive and stiff solvers) is not wired in yet check all their input and then fail with
-//! [`Error::NotYetAvailable`].
+//! Source: docs/outputs.md ("Exit codes of `lash`").
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
-use lash_validation::commands::{self, describe_run, SweepOutcome, WorkPrecisionResult};
-use lash_validation::compare::reference::Comparison;
-use lash_validation::compare::workprecision::WpTable;
-use lash_validation::diagnostics::poincare::PoincareResult;
-use lash_validation::diagnostics::stiffness::StiffnessResult;
-use lash_validation::run::simulate::RunResult;
-use lash_validation::store::io::Written;
-use lash_validation::studies::extremes::{self, Matrix};
-use lash_validation::studies::headline::Headline;
-use lash_validation::studies::paper as study;
-use lash_validation::sweep::{PointResult, SweepPoint, SweepReport};
-use lash_validation::Error;
+use lash_validation::extremes::Matrix;
+use lash_validation::{
+    self as engine, describe_run, Comparison, Error, Headline, PoincareResult, PointResult,
+    RunResult, StiffnessResult, SweepOutcome, SweepPoint, SweepReport, WorkPrecisionResult,
+    WpTable, Written,
+};
 
 use crate::args::{
     self, Command, CompareArgs, ExtremesArgs, Parsed, PoincareArgs, RunArgs, StiffnessArgs,
@@ -91,27 +83,25 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Run(a) => run_command(&a).map(|_| ()),
         Command::Study(a) if a.robustness => {
             let progress = StderrProgress::new();
-            let w = commands::study_robustness(&a.options(), &progress);
+            let w = engine::study_robustness(&a.options(), &progress);
             progress.clear();
             let w = w?;
-            outln(&lash_validation::studies::robustness::describe(
-                &w.result, &w.dir,
-            ));
+            outln(&w.result.describe(&w.dir));
             Ok(())
         }
         Command::Study(a) => {
             let progress = StderrProgress::new();
-            let w = commands::study_paper(&a.options(), &progress);
+            let w = engine::study_paper(&a.options(), &progress);
             progress.clear();
             let w = w?;
-            outln(&study::describe_paper(&w.result, &w.dir));
+            outln(&w.result.describe(&w.dir));
             Ok(())
         }
         Command::Compare(a) => compare_command(&a).map(|_| ()),
         Command::WorkPrecision(a) => work_precision_command(&a).map(|_| ()),
         Command::Sweep(a) => {
             let progress = StderrProgress::new();
-            let outcome = commands::sweep(&a.options(), &progress);
+            let outcome = engine::sweep(&a.options(), &progress);
             progress.clear();
             print_sweep(&outcome?);
             Ok(())
@@ -122,7 +112,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Animate(a) => crate::viz::animate_command(&a).map(|_| ()),
         Command::Plot(a) => crate::viz::plot_command(&a).map(|_| ()),
         Command::Merge(a) => {
-            let m = commands::merge(&a.options()).map_err(flagged)?;
+            let m = engine::merge(&a.options()).map_err(flagged)?;
             let missing = m.table.unfinished.len() + m.table.corrupt.len();
             outln(&format!(
                 "merged {} points into {} and {}",
@@ -144,7 +134,7 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
 /// The default run: notes each case on standard error, prints the table and the files
 /// written (into `validation/reports/default`).
 pub fn default_command() -> Result<Written<Headline>, Error> {
-    let w = commands::default_run(None, &StderrProgress::new())?;
+    let w = engine::default_run(None, &StderrProgress::new())?;
     out(&w.result.to_markdown());
     outln(&format!(
         "\nwrote {} files to {}",
@@ -158,16 +148,14 @@ pub fn default_command() -> Result<Written<Headline>, Error> {
 /// Returns the result and the output directory. With `--max-wall-time` a watchdog stops the
 /// process (exit 3) if the engine overruns the budget inside work it cannot interrupt.
 pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
-    if a.animate
-        && a.case
-            .starts_with(lash_validation::run::case::BUILTIN_PREFIX)
-    {
+    // `testset:NAME` (docs/outputs.md, "`lash run CASE`"): a test problem, no mechanism.
+    if a.animate && a.case.starts_with("testset:") {
         return Err(Error::Usage(
             "--animate needs a scene: a built-in test problem has no mechanism to draw".into(),
         ));
     }
     let _watchdog = a.solver.max_wall_time.map(Watchdog::start);
-    let w = commands::run(&a.options(), &StderrProgress::new())?;
+    let w = engine::run(&a.options(), &StderrProgress::new())?;
     out(&describe_run(&w.result));
     outln(&format!(
         "wrote {} files to {}",
@@ -226,7 +214,7 @@ impl Drop for Watchdog {
 /// compare.md and compare.json and prints the table.
 pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
     let progress = StderrProgress::new();
-    let w = commands::compare(&a.options(), &progress);
+    let w = engine::compare(&a.options(), &progress);
     progress.clear();
     let w = w?;
     out(&w.result.to_markdown());
@@ -243,7 +231,7 @@ pub fn compare_command(a: &CompareArgs) -> Result<Comparison, Error> {
 /// error, writes the markdown and JSON tables and the log–log figures, prints the table.
 pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
     let progress = StderrProgress::new();
-    let w = commands::work_precision(&a.options(), &progress);
+    let w = engine::work_precision(&a.options(), &progress);
     progress.clear();
     let w = w?;
     let WorkPrecisionResult { table, reference } = w.result;
@@ -260,10 +248,10 @@ pub fn work_precision_command(a: &WorkPrecisionArgs) -> Result<WpTable, Error> {
 /// `lash stiffness`: the engine's analysis, then the two limits and the verdict.
 pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf), Error> {
     let progress = StderrProgress::new();
-    let w = commands::stiffness(&a.options(), &progress);
+    let w = engine::stiffness(&a.options(), &progress);
     progress.clear();
     let w = w?;
-    out(&w.result.report.describe());
+    out(&w.result.describe());
     outln(&format!(
         "wrote {} files to {}",
         w.files.len(),
@@ -275,7 +263,7 @@ pub fn stiffness_command(a: &StiffnessArgs) -> Result<(StiffnessResult, PathBuf)
 /// `lash poincare`: the engine's section and Lyapunov exponent, then the estimate.
 pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), Error> {
     let progress = StderrProgress::new();
-    let w = commands::poincare(&a.options(), &progress);
+    let w = engine::poincare(&a.options(), &progress);
     progress.clear();
     let w = w?;
     out(&w.result.describe());
@@ -293,22 +281,22 @@ pub fn poincare_command(a: &PoincareArgs) -> Result<(PoincareResult, PathBuf), E
 /// written first, to show which).
 pub fn extremes_command(a: &ExtremesArgs) -> Result<Matrix, Error> {
     let progress = StderrProgress::new();
-    let w = commands::extremes(&a.options(), &progress);
+    let w = engine::extremes(&a.options(), &progress);
     progress.clear();
     let w = w?;
-    out(&extremes::describe(&w.result, &w.files[0], &w.files[1]));
-    extremes::check(&w.result, &w.files[0])?;
+    out(&w.result.describe(&w.files[0], &w.files[1]));
+    w.result.check(&w.files[0])?;
     Ok(w.result)
 }
 
-/// `lash sweep` with a point runner: the engine's sweep ([`commands::sweep_with`]) with a
+/// `lash sweep` with a point runner: the engine's sweep ([`engine::sweep_with`]) with a
 /// progress bar when standard error is a terminal, then one line of counts.
 pub fn sweep_command<F>(a: &SweepArgs, runner: F) -> Result<SweepReport, Error>
 where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
 {
     let progress = StderrProgress::new();
-    let outcome = commands::sweep_with(&a.options(), runner, &progress);
+    let outcome = engine::sweep_with(&a.options(), runner, &progress);
     progress.clear();
     let outcome = outcome?;
     print_sweep(&outcome);
@@ -337,7 +325,7 @@ fn print_sweep(o: &SweepOutcome) {
 mod tests {
     use super::*;
     use crate::args::MergeArgs;
-    use lash_validation::sweep::Shard;
+    use lash_validation::Shard;
 
     #[test]
     fn sweep_shards_then_merge_through_the_commands() {

@@ -25,7 +25,7 @@
 //! comma-separated, `--step` only for fixed-step methods, `--rtol`/`--atol`/`--controller` only for
 //! adaptive ones. Every parse error becomes one line and exit code 2 ([`parse`]).
 //!
-//! Each argument struct converts into the engine's options (`lash_validation::commands`):
+//! Each argument struct converts into the engine's options (`lash_validation::RunOptions`, …):
 //! `SolverFlags` → [`SolverChoice`], `RunArgs` → `RunOptions`, and so on. The checks that are
 //! facts of the engine (which option fits which method, the work–precision lists) are the
 //! engine's; their errors name options by the engine's names, spelled here as flags
@@ -36,14 +36,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lash_solver::{Atol, ControllerKind, Method, Rule, SolverOptions};
-use lash_validation::commands::{
-    CompareOptions, ExtremesOptions, MergeOptions, PoincareOptions, RunOptions, StiffnessOptions,
-    StudyOptions, SweepRunOptions, WorkPrecisionOptions,
+use lash_validation::{
+    CompareOptions, Error, ExtremesOptions, MergeOptions, PoincareOptions, RunOptions, Shard,
+    SolverChoice, StiffnessOptions, StudyOptions, SweepRunOptions, UntilPeriodic,
+    WorkPrecisionOptions, WorkPrecisionPlan, DEFAULT_MAX_REVOLUTIONS, MIN_REVOLUTIONS,
 };
-use lash_validation::compare::workprecision::WorkPrecisionPlan;
-use lash_validation::run::steady::{self, UntilPeriodic};
-use lash_validation::sweep::Shard;
-use lash_validation::{Error, SolverChoice};
 
 use crate::exit::flagged;
 
@@ -250,9 +247,7 @@ impl RunArgs {
             out: self.out.clone(),
             until_periodic: self.until_periodic.map(|tol| UntilPeriodic {
                 tol,
-                max_revolutions: self
-                    .max_revolutions
-                    .unwrap_or(steady::DEFAULT_MAX_REVOLUTIONS),
+                max_revolutions: self.max_revolutions.unwrap_or(DEFAULT_MAX_REVOLUTIONS),
             }),
         }
     }
@@ -268,7 +263,7 @@ fn parse_until_periodic(s: &str) -> Result<f64, String> {
 }
 
 fn parse_max_revolutions(s: &str) -> Result<usize, String> {
-    parse_whole(s, "max-revolutions", steady::MIN_REVOLUTIONS)
+    parse_whole(s, "max-revolutions", MIN_REVOLUTIONS)
 }
 
 /// The studies `lash study` knows.
@@ -313,6 +308,7 @@ impl StudyArgs {
         StudyOptions {
             out: self.out.clone(),
             robustness: self.robustness,
+            plan: None,
         }
     }
 }
@@ -494,6 +490,7 @@ impl ExtremesArgs {
             max_steps: self.max_steps,
             max_wall_time: self.max_wall_time,
             out: self.out.clone(),
+            ..Default::default()
         }
     }
 }
@@ -802,7 +799,6 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 mod tests {
     use super::*;
     use crate::exit::ExitStatus;
-    use lash_validation::compare::workprecision::DEFAULT_TOLERANCES;
 
     fn cli(args: &[&str]) -> Result<Cli, Error> {
         let mut v = vec!["lash"];
@@ -1076,7 +1072,8 @@ mod tests {
         );
         let p = wp(&[]).unwrap();
         assert_eq!(p.methods, Method::ALL.to_vec());
-        assert_eq!(p.tolerances, DEFAULT_TOLERANCES.to_vec());
+        // The engine's default tolerances of work-precision.
+        assert_eq!(p.tolerances, [1e-4, 1e-6, 1e-8]);
         assert_eq!(p.controllers, ControllerKind::ALL.to_vec());
         let p = wp(&["--methods", "rk4"]).unwrap();
         assert!(p.tolerances.is_empty() && p.controllers.is_empty());

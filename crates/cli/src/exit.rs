@@ -2,9 +2,10 @@
 //!
 //! ```text
 //! exit code = 0  success
-//!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Io)
+//!             2  bad input or usage      (ErrorKind::BadInput: Usage, Option, Input, Scene,
+//!                                         Io)
 //!             3  the solver failed       (ErrorKind::Solver)
-//!             1  a bug                   (ErrorKind::Bug: NotYetAvailable, Internal; a panic)
+//!             1  a bug                   (ErrorKind::Bug: Internal; a panic)
 //!           130  interrupted             (ErrorKind::Interrupted: SIGINT or SIGTERM; the item
 //!                                         in flight abandoned, what had finished kept)
 //! ```
@@ -86,20 +87,22 @@ impl ExitStatus for Error {
 mod tests {
     use super::*;
     use lash_solver::SolveError;
-    use lash_validation::error::OptionError;
+    use lash_validation::OptionError;
 
     #[test]
     fn exit_codes_follow_interfaces() {
         assert_eq!(Error::Usage("x".into()).exit_code(), 2);
         assert_eq!(Error::Input("x".into()).exit_code(), 2);
-        let io = Error::io("a/b", std::io::Error::from(std::io::ErrorKind::NotFound));
+        let io = Error::Io {
+            path: "a/b".into(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        };
         assert_eq!(io.exit_code(), 2);
         assert!(io.to_string().starts_with("a/b: "));
         let s = Error::Solver(SolveError::InvalidOptions(
             lash_solver::Rule::RTOL.check(0.0).unwrap_err(),
         ));
         assert_eq!(s.exit_code(), 3);
-        assert_eq!(Error::NotYetAvailable("lash run".into()).exit_code(), 1);
         assert_eq!(Error::Internal("x".into()).exit_code(), 1);
         let i = Error::from(SolveError::Interrupted {
             t: 0.5,

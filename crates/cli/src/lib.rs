@@ -5,7 +5,7 @@
 //! progress display.
 //!
 //! ```text
-//! argv ──args::parse──▶ Command ──args: .options()──▶ lash_validation::commands::*
+//! argv ──args::parse──▶ Command ──args: .options()──▶ lash_validation::{run, compare, …}
 //!      ──Written<result> | Error──▶ app: print (stdout), exit: report (stderr) + exit code
 //! engine notes, progress ──Progress──▶ progress::StderrProgress (bar on a terminal, else lines)
 //! SIGINT, SIGTERM ──signals──▶ lash_solver::interrupt::request_stop() → exit code 130

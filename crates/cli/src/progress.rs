@@ -20,7 +20,7 @@ use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use lash_validation::error::Message;
+use lash_validation::Message;
 use lash_validation::Progress;
 
 use crate::exit::flag;

@@ -12,11 +12,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use lash_validation::animation::{AnimateOptions, Animated, AnimationOptions};
-use lash_validation::commands;
-use lash_validation::report::column_plot::{PlotOptions, Plotted};
-use lash_validation::store::io::Written;
-use lash_validation::Error;
+use lash_validation::{self as engine, AnimateOptions, Animated, Error, PlotOptions, Written};
 
 use crate::out::outln;
 
@@ -60,11 +56,9 @@ impl AnimateArgs {
     pub fn options(&self) -> AnimateOptions {
         AnimateOptions {
             run_dir: self.run_dir.clone(),
-            animation: AnimationOptions {
-                trace: self.trace.clone(),
-                column: self.column.clone(),
-                max_frames: self.max_frames,
-            },
+            trace: self.trace.clone(),
+            column: self.column.clone(),
+            max_frames: self.max_frames,
             out: self.out.clone(),
         }
     }
@@ -124,14 +118,14 @@ fn describe_animation(w: &Written<Animated>) -> String {
 
 /// `lash animate`: writes the page, says where and how big.
 pub fn animate_command(a: &AnimateArgs) -> Result<Written<Animated>, Error> {
-    let w = commands::animate(&a.options())?;
+    let w = engine::animate(&a.options())?;
     outln(&describe_animation(&w));
     Ok(w)
 }
 
 /// What `lash run --animate` adds after the run: the page of `dir`, with the defaults.
 pub fn animate_run(dir: &Path) -> Result<Written<Animated>, Error> {
-    let w = commands::animate(&AnimateOptions {
+    let w = engine::animate(&AnimateOptions {
         run_dir: dir.to_path_buf(),
         ..Default::default()
     })?;
@@ -140,8 +134,8 @@ pub fn animate_run(dir: &Path) -> Result<Written<Animated>, Error> {
 }
 
 /// `lash plot`: writes the figure, says where.
-pub fn plot_command(a: &PlotArgs) -> Result<Written<Plotted>, Error> {
-    let w = commands::plot(&a.options())?;
+pub fn plot_command(a: &PlotArgs) -> Result<Written<()>, Error> {
+    let w = engine::plot(&a.options())?;
     outln(&format!(
         "wrote {} and {}",
         w.files[0].display(),

@@ -250,7 +250,7 @@ fn poincare_and_stiffness_commands_write_their_files() {
         d.path(),
     );
     assert!(
-        out.contains("measured RK4 limit: not measured (--no-measure)"),
+        out.contains("measured RK4 limit: not measured (measure off)"),
         "{out}"
     );
     let st = json(&d.path().join("st/stiffness.json"));

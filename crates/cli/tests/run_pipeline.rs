@@ -81,7 +81,8 @@ fn peak_rss_kib(mut cmd: Command) -> Option<(u64, bool)> {
 /// 1 ms, 2000 rows per revolution, for 5 and 50 revolutions (10 001 and 100 001 rows of 41
 /// columns). Before streaming (every row held, then the whole CSV as one string) the peak
 /// grew by about 0.9 MB per revolution: 21 MB at 10 revolutions, 105 MB at 100
-/// (BENCHMARKS.md, "Memory of long runs"); streamed, both peaks are about 11 MB.
+/// (BENCHMARKS.md, "Streamed output: peak memory of long runs"); streamed, both peaks are
+/// about 11 MB.
 #[test]
 fn peak_memory_does_not_grow_with_the_simulated_time() {
     let d = tempfile::tempdir().unwrap();

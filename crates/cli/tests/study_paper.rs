@@ -5,17 +5,81 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
-use lash_validation::studies::paper::{
-    self as study, claims, markdown, Kind, Setting, StudyResult, Verdict,
+use lash_validation::study::{
+    CaseResult, CaseStats, Claim, Ensemble, Kind, Setting, StudyResult, Verdict,
 };
+
+/// The study's cases, in the order study.json lists them: the speed and clearance studies,
+/// dry then lubricated, then the ideal mechanism (docs/model.md §6).
+const CASES: [&str; 18] = [
+    "dry_120rpm_c0.1",
+    "dry_150rpm_c0.1",
+    "dry_180rpm_c0.1",
+    "dry_200rpm_c0.1",
+    "dry_150rpm_c0.2",
+    "dry_150rpm_c0.3",
+    "dry_150rpm_c0.5",
+    "lubricated_120rpm_c0.1",
+    "lubricated_150rpm_c0.1",
+    "lubricated_180rpm_c0.1",
+    "lubricated_200rpm_c0.1",
+    "lubricated_150rpm_c0.2",
+    "lubricated_150rpm_c0.3",
+    "lubricated_150rpm_c0.5",
+    "ideal_120rpm",
+    "ideal_150rpm",
+    "ideal_180rpm",
+    "ideal_200rpm",
+];
+/// The speed study (0.1 mm), dry and lubricated, in increasing speed.
+const DRY_SPEEDS: [&str; 4] = [CASES[0], CASES[1], CASES[2], CASES[3]];
+const LUB_SPEEDS: [&str; 4] = [CASES[7], CASES[8], CASES[9], CASES[10]];
+/// The clearance study (150 rpm), dry and lubricated, in increasing clearance.
+const DRY_CLEARANCES: [&str; 4] = [CASES[1], CASES[4], CASES[5], CASES[6]];
+const LUB_CLEARANCES: [&str; 4] = [CASES[8], CASES[11], CASES[12], CASES[13]];
+/// The study's three solver settings.
+const SETTINGS: [Setting; 3] = [Setting::Study, Setting::Reference, Setting::Loose];
+
+/// A case's realisations at one of the settings.
+fn ensemble(c: &CaseResult, s: Setting) -> &Ensemble {
+    match s {
+        Setting::Study => &c.study,
+        Setting::Reference => &c.reference,
+        Setting::Loose => &c.loose,
+    }
+}
+
+/// A verdict as study.json and the report spell it (HOLDS, DOES NOT HOLD).
+fn spelled(v: Verdict) -> String {
+    serde_json::to_value(v)
+        .unwrap()
+        .as_str()
+        .unwrap()
+        .to_string()
+}
+/// Claims: P1–P25 from the paper, M1–M4 from docs/model.md.
+const CLAIMS: usize = 29;
+/// Figures drawn after the paper's Figures 5–16, one file pair per panel (the engine's own
+/// test pins the same count).
+const FIGURES: usize = 44;
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
     let v: Vec<f64> = v.collect();
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-fn ensemble_mean(r: &StudyResult, case: &str, f: impl Fn(&study::CaseStats) -> f64) -> f64 {
-    mean(r.case(case).unwrap().study.members.iter().map(f))
+fn ensemble_mean(r: &StudyResult, case: &str, f: impl Fn(&CaseStats) -> f64) -> f64 {
+    let c = r.cases.iter().find(|c| c.name == case).unwrap();
+    mean(c.study.members.iter().map(f))
+}
+
+/// HOLDS for true.
+fn verdict(holds: bool) -> Verdict {
+    if holds {
+        Verdict::Holds
+    } else {
+        Verdict::DoesNotHold
+    }
 }
 
 fn verdict_of(r: &StudyResult, id: &str) -> Verdict {
@@ -24,7 +88,7 @@ fn verdict_of(r: &StudyResult, id: &str) -> Verdict {
 
 /// The same claims: equal text, verdicts and counts; numbers equal up to the last bit that
 /// serde_json's default float parser may change (it is not correctly rounded).
-fn same_claims(a: &[claims::Claim], b: &[claims::Claim]) {
+fn same_claims(a: &[Claim], b: &[Claim]) {
     assert_eq!(a.len(), b.len());
     for (x, y) in a.iter().zip(b) {
         assert_eq!(
@@ -79,18 +143,18 @@ fn study_paper_writes_consistent_results() {
     assert!(stdout.starts_with("study paper: 18 cases"), "{stdout}");
 
     // study.json reads back into the typed result.
-    let json = std::fs::read_to_string(out.join(study::JSON_FILE)).unwrap();
+    let json = std::fs::read_to_string(out.join("study.json")).unwrap();
     let r: StudyResult = serde_json::from_str(&json).unwrap();
     let names: Vec<&str> = r.cases.iter().map(|c| c.name.as_str()).collect();
-    assert_eq!(names, study::case_names());
+    assert_eq!(names, CASES);
     for c in &r.cases {
         let n = if c.kind == Kind::Ideal {
             1
         } else {
             r.plan.realisations
         };
-        for s in Setting::ALL {
-            assert_eq!(c.ensemble(s).members.len(), n, "{} {s:?}", c.name);
+        for s in SETTINGS {
+            assert_eq!(ensemble(c, s).members.len(), n, "{} {s:?}", c.name);
         }
     }
 
@@ -101,9 +165,9 @@ fn study_paper_writes_consistent_results() {
         (Setting::Reference, &r.reference_claims),
         (Setting::Loose, &r.loose_claims),
     ] {
-        same_claims(&claims::evaluate(&r.ensembles(s)).unwrap(), stored);
+        same_claims(&r.judge(s).unwrap(), stored);
     }
-    assert_eq!(r.claims.len(), claims::count());
+    assert_eq!(r.claims.len(), CLAIMS);
     let agree = r
         .claims
         .iter()
@@ -113,30 +177,30 @@ fn study_paper_writes_consistent_results() {
 
     // Three verdicts recomputed here from the stored metrics, independently of the claims
     // module. P9: lubricated RMS deviation below dry at every speed.
-    let rms = |s: &study::CaseStats| s.metrics.slider_acc_rms_dev_ideal.unwrap();
-    let p9 = claims::DRY_SPEEDS
+    let rms = |s: &CaseStats| s.metrics.slider_acc_rms_dev_ideal.unwrap();
+    let p9 = DRY_SPEEDS
         .iter()
-        .zip(claims::LUB_SPEEDS)
+        .zip(LUB_SPEEDS)
         .all(|(dry, lub)| ensemble_mean(&r, lub, rms) < ensemble_mean(&r, dry, rms));
-    assert_eq!(verdict_of(&r, "P9"), Verdict::of(p9));
+    assert_eq!(verdict_of(&r, "P9"), verdict(p9));
     // P18: dry penetration strictly increasing with the clearance.
-    let pen: Vec<f64> = claims::DRY_CLEARANCES
+    let pen: Vec<f64> = DRY_CLEARANCES
         .iter()
         .map(|c| ensemble_mean(&r, c, |s| s.metrics.penetration_max.unwrap()))
         .collect();
     let p18 = pen.windows(2).all(|w| w[1] > w[0]);
-    assert_eq!(verdict_of(&r, "P18"), Verdict::of(p18));
+    assert_eq!(verdict_of(&r, "P18"), verdict(p18));
     // P23: lubricated eps_max below 1 at every clearance.
-    let p23 = claims::LUB_CLEARANCES
+    let p23 = LUB_CLEARANCES
         .iter()
         .all(|c| ensemble_mean(&r, c, |s| s.metrics.eps_max.unwrap()) < 1.0);
-    assert_eq!(verdict_of(&r, "P23"), Verdict::of(p23));
+    assert_eq!(verdict_of(&r, "P23"), verdict(p23));
 
     // The stored metrics agree with each other: on the same grid δ = c (ε − 1), so
     // penetration_max = max(0, c (eps_max − 1)); film_thickness_min = c (1 − min(eps_max, 1)).
     for c in r.cases.iter().filter(|c| c.kind != Kind::Ideal) {
         let cl = c.clearance_m.unwrap();
-        for m in Setting::ALL.iter().flat_map(|&s| &c.ensemble(s).members) {
+        for m in SETTINGS.iter().flat_map(|&s| &ensemble(c, s).members) {
             let m = &m.metrics;
             let eps = m.eps_max.unwrap();
             let pen = m.penetration_max.unwrap();
@@ -160,7 +224,7 @@ fn study_paper_writes_consistent_results() {
     }
 
     // report.md: every case, every claim with its verdict (heading and summary row).
-    let report = std::fs::read_to_string(out.join(study::REPORT_FILE)).unwrap();
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     for c in &r.cases {
         assert!(
             report.contains(&format!("\n| {} | ", c.name)),
@@ -169,22 +233,22 @@ fn study_paper_writes_consistent_results() {
         );
     }
     for c in &r.claims {
-        let heading = format!("\n### {} — {} (", c.id, c.verdict.as_str());
+        let heading = format!("\n### {} — {} (", c.id, spelled(c.verdict));
         assert!(report.contains(&heading), "no '{heading}' in the report");
         let row = format!(
             "\n| {} | {} | {} | **{}** | ",
             c.id,
-            markdown::cell(&c.figure),
-            markdown::cell(&c.statement),
-            c.verdict.as_str()
+            c.figure.replace('|', "\\|"),
+            c.statement.replace('|', "\\|"),
+            spelled(c.verdict)
         );
         assert!(report.contains(&row), "no summary row for {}", c.id);
         assert!(report.contains(&c.source), "{}: source not quoted", c.id);
     }
 
     // Figures: an SVG and a PNG per record, nothing else, no temporary file.
-    assert_eq!(r.figures.len(), study::figure_count());
-    let dir = out.join(study::FIGURES_DIR);
+    assert_eq!(r.figures.len(), FIGURES);
+    let dir = out.join("figures");
     let files: BTreeSet<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -207,15 +271,10 @@ fn study_paper_writes_consistent_results() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     // cache/ holds the finished runs a stopped study resumes from.
-    let expected: BTreeSet<String> = [
-        study::FIGURES_DIR,
-        study::JSON_FILE,
-        study::REPORT_FILE,
-        lash_validation::store::cache::CACHE_DIR,
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let expected: BTreeSet<String> = ["figures", "study.json", "report.md", "cache"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     assert_eq!(top, expected);
     assert!(Path::new(&dir.join("fig06a.svg")).is_file());
 }

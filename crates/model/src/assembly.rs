@@ -12,6 +12,7 @@
 //!             velocities of the scene (joint initial_rate, body initial_velocity):
 //!             q̇ = q̇₀ − M^{-1/2} (J M^{-1/2})⁺ Φ̇(q̇₀)   (one exact step: Φ̇ is affine in q̇)
 //! rank check: Φ_q of the ideal equations must have full row rank at the assembled state
+//!             (when the formulation needs it: Lagrange multipliers do)
 //! ```
 //! Φ⁺ is the Moore–Penrose pseudo-inverse (faer's SVD). The minimum-norm position step keeps
 //! the bodies as near their guessed pose as the constraints allow; the velocity projection is
@@ -20,87 +21,15 @@
 //! Analysis of Mechanical Systems (1988), §4 (Newton–Raphson position analysis); docs/model.md
 //! §1 ("Initial conditions").
 
-use std::fmt;
-
 use faer::Mat;
-use serde::Serialize;
 
-use crate::mechanism::constraints::{Row, Term, TermKind};
-use crate::mechanism::{Mechanism, Owner};
-use crate::scene::{JointSpec, SceneError, GROUND};
-
-/// Changes below this (SI units, or relative to the given value) are not reported.
-const REPORT_TOL: f64 = 1e-9;
-
-/// One coordinate of an integrated body that the assembly moved.
-///
-/// ```text
-/// change = assembled − given   (coordinate: x, y, theta, vx, vy, omega; SI units)
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CoordinateChange {
-    /// Body name.
-    pub body: String,
-    /// `x`, `y`, `theta` (positions) or `vx`, `vy`, `omega` (velocities).
-    pub coordinate: &'static str,
-    /// The scene's value (its guess, or its exact `initial_velocity`).
-    pub given: f64,
-    /// The value of the assembled initial state.
-    pub assembled: f64,
-    /// assembled − given.
-    pub change: f64,
-}
-
-/// What the assembly changed in the scene's initial guesses (docs/model.md §1, "Initial
-/// conditions").
-///
-/// ```text
-/// positions: Newton's minimum-norm steps onto Φ = 0
-/// velocities: the mass-weighted projection min ½ (q̇ − q̇₀)ᵀ M (q̇ − q̇₀) s.t. Φ̇ = targets
-/// changes: every coordinate with |assembled − given| > 1e-9 · max(1, |given|)
-/// ```
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct ProjectionReport {
-    /// The changed coordinates, in body order, positions before velocities.
-    pub changes: Vec<CoordinateChange>,
-    /// Largest |change| of a position coordinate (m or rad).
-    pub max_position_change: f64,
-    /// Largest |change| of a velocity coordinate (m/s or rad/s).
-    pub max_velocity_change: f64,
-    /// Kinetic energy of the given velocities (J, integrated bodies).
-    pub kinetic_energy_given: f64,
-    /// Kinetic energy of the assembled velocities (J, integrated bodies).
-    pub kinetic_energy_assembled: f64,
-}
-
-impl ProjectionReport {
-    /// Whether the assembly changed nothing beyond the reporting tolerance.
-    pub fn is_empty(&self) -> bool {
-        self.changes.is_empty()
-    }
-}
-
-impl fmt::Display for ProjectionReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.changes.is_empty() {
-            return write!(f, "initial conditions: the scene's values are consistent");
-        }
-        write!(
-            f,
-            "initial conditions moved onto the constraints (velocities by the mass-weighted \
-             projection; kinetic energy {:.6e} J → {:.6e} J):",
-            self.kinetic_energy_given, self.kinetic_energy_assembled
-        )?;
-        for c in &self.changes {
-            write!(
-                f,
-                "\n  {}.{}: {:.9e} → {:.9e} (change {:+.3e})",
-                c.body, c.coordinate, c.given, c.assembled, c.change
-            )?;
-        }
-        Ok(())
-    }
-}
+use crate::mechanism::bodies::Owner;
+use crate::mechanism::constraints::{describe, eval_row, Row, Term, TermKind};
+use crate::mechanism::Mechanism;
+use crate::projection::{CoordinateChange, ProjectionReport, REPORT_TOL};
+use crate::scene::error::SceneError;
+use crate::scene::format::JointSpec;
+use crate::scene::refs::GROUND;
 
 /// Position tolerance of the assembly (m or rad).
 const POS_TOL: f64 = 1e-12;
@@ -111,66 +40,19 @@ const MAX_ITER: usize = 50;
 /// Relative singular-value threshold of the rank check.
 const RANK_TOL: f64 = 1e-9;
 
-/// Sets a row's target rate Φ̇ = v at t₀ without changing Φ(t₀): rate −v, constant + v t₀.
-fn with_rate(mut row: Row, v: f64, t0: f64) -> Row {
-    row.rate -= v;
-    row.konst += v * t0;
-    row
-}
-
-/// The equations held during assembly: the mechanism's rows, then two per clearance joint and
-/// two per prismatic clearance joint (its offset and tilt), with their target rates.
+/// The equations held during assembly: the mechanism's constraint equations, then each
+/// clearance joint's own (its initial eccentricity, or its initial offset and tilt), with
+/// their target rates.
 fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
-    let t0 = mech.t_start;
-    let mut rows = mech.rows.clone();
-    for c in &mech.clr {
-        if !c
-            .bearing
-            .body
-            .is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
-            && !c
-                .journal
-                .body
-                .is_some_and(|k| matches!(mech.bodies[k].owner, Owner::Int(_)))
-        {
-            continue;
-        }
-        for (axis, label) in [(0usize, "eccentricity x"), (1, "eccentricity y")] {
-            let mut w = [0.0; 2];
-            w[axis] = 1.0;
-            let mut row = Row::new(c.joint, label);
-            row.konst = -c.e0[axis];
-            for (end, sign) in [(&c.journal, 1.0), (&c.bearing, -1.0)] {
-                let ws = [sign * w[0], sign * w[1]];
-                match end.body {
-                    None => row.konst += ws[0] * end.s[0] + ws[1] * end.s[1],
-                    Some(k) => row.push(Term {
-                        body: k,
-                        kind: TermKind::Point { s: end.s, w: ws },
-                    }),
-                }
-            }
-            rows.push(with_rate(row, c.e0_rate[axis], t0));
-        }
+    let t0 = mech.t_start();
+    let info = mech.body_info();
+    let integrated = |k: usize| matches!(info[k].owner, Owner::Int(_));
+    let mut rows = mech.constraints().rows.clone();
+    for c in &mech.forces().revolute {
+        rows.extend(c.assembly_rows(&integrated, t0));
     }
-    for p in &mech.prismatic {
-        if !matches!(mech.bodies[p.body].owner, Owner::Int(_)) {
-            continue;
-        }
-        let mut r1 = Row::new(p.joint, "offset");
-        r1.push(Term {
-            body: p.body,
-            kind: TermKind::Point { s: p.s_c, w: p.n },
-        });
-        r1.konst = -(p.n[0] * p.o[0] + p.n[1] * p.o[1]) - p.offset0;
-        rows.push(with_rate(r1, p.offset_rate0, t0));
-        let mut r2 = Row::new(p.joint, "tilt");
-        r2.push(Term {
-            body: p.body,
-            kind: TermKind::Angle { c: 1.0 },
-        });
-        r2.konst = p.angle_offset - p.tilt0;
-        rows.push(with_rate(r2, p.tilt_rate0, t0));
+    for p in &mech.forces().prismatic {
+        rows.extend(p.assembly_rows(&integrated, t0));
     }
     rows
 }
@@ -178,8 +60,8 @@ fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
 /// Velocity-only equations: the exact initial velocities the scene asks for (joint
 /// `initial_rate`, body `initial_velocity`), each with its JSON path and a description.
 fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
-    let scene = &mech.scene;
-    let t0 = mech.t_start;
+    let scene = mech.scene();
+    let t0 = mech.t_start();
     let mut out = Vec::new();
     for (ji, j) in scene.joints.iter().enumerate() {
         match j {
@@ -195,7 +77,7 @@ fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
                     }
                 }
                 out.push((
-                    with_rate(row, v, t0),
+                    row.with_rate(v, t0),
                     format!("joints[{ji}].initial_rate"),
                     format!("the initial rate {v} rad/s of {j}"),
                 ));
@@ -213,7 +95,7 @@ fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
                     },
                 });
                 out.push((
-                    with_rate(row, v, t0),
+                    row.with_rate(v, t0),
                     format!("joints[{ji}].initial_rate"),
                     format!("the initial rate {v} m/s of {j}"),
                 ));
@@ -248,7 +130,7 @@ fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
             let mut row = Row::new(usize::MAX, "initial velocity");
             row.push(Term { body: k, kind });
             out.push((
-                with_rate(row, v, t0),
+                row.with_rate(v, t0),
                 format!("bodies[{k}].initial_velocity.{name}"),
                 format!("the initial velocity {name} = {v} of body '{}'", b.name),
             ));
@@ -260,17 +142,17 @@ fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
 /// Evaluates rows at (t, y): values, rates, and the Jacobian on integrated columns.
 fn eval(mech: &Mechanism, rows: &[Row], t: f64, y: &[f64]) -> (Vec<f64>, Vec<f64>, Mat<f64>) {
     let nq = mech.nq();
-    let mut sc = mech.scratch.borrow_mut();
-    mech.kinematics(t, y, &mut sc);
+    let mut sc = mech.scratch();
+    mech.bodies().kinematics(t, y, &mut sc);
     let mut phi = vec![0.0; rows.len()];
     let mut phid = vec![0.0; rows.len()];
     let mut jac = Mat::<f64>::zeros(rows.len(), nq);
     for (r, row) in rows.iter().enumerate() {
-        let ev = mech.eval_row(row, t, &sc);
+        let ev = eval_row(row, mech.body_info(), t, &sc);
         phi[r] = ev.phi;
         phid[r] = ev.phid;
         for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-            if let Owner::Int(i) = mech.bodies[term.body].owner {
+            if let Owner::Int(i) = mech.body_info()[term.body].owner {
                 for c in 0..3 {
                     jac[(r, 3 * i + c)] += ev.jrows[ti][c];
                 }
@@ -294,10 +176,9 @@ fn pinv_apply(jac: &Mat<f64>, v: &[f64]) -> Option<Vec<f64>> {
 }
 
 fn row_name(mech: &Mechanism, row: &Row) -> (String, String) {
-    let j = &mech.scene.joints[row.joint];
     (
         format!("joints[{}]", row.joint),
-        format!("equation '{}' of {}", row.label, j),
+        describe(row, mech.scene()),
     )
 }
 
@@ -339,8 +220,8 @@ fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
     let nq = mech.nq();
     let mut r = ProjectionReport::default();
     const NAMES: [&str; 6] = ["x", "y", "theta", "vx", "vy", "omega"];
-    for (i, &k) in mech.int_bodies.iter().enumerate() {
-        let b = &mech.bodies[k];
+    for (i, &k) in mech.bodies().int_bodies.iter().enumerate() {
+        let b = &mech.body_info()[k];
         let m = [b.mass, b.mass, b.inertia];
         for c in 0..3 {
             let (vg, va) = (given[nq + 3 * i + c], y[nq + 3 * i + c]);
@@ -376,10 +257,10 @@ fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
 /// the assembly changed.
 pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
     let nq = mech.nq();
-    let t0 = mech.t_start;
+    let t0 = mech.t_start();
     let mut y = vec![0.0; 2 * nq];
-    for (i, &k) in mech.int_bodies.iter().enumerate() {
-        let b = &mech.scene.bodies[k];
+    for (i, &k) in mech.bodies().int_bodies.iter().enumerate() {
+        let b = &mech.scene().bodies[k];
         let iv = b.initial_velocity.clone().unwrap_or_default();
         y[3 * i] = b.position[0];
         y[3 * i + 1] = b.position[1];
@@ -440,7 +321,12 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
     let mut all = rows.clone();
     all.extend(vrows.iter().map(|v| v.0.clone()));
     // J M^{-1/2}: the projection of least kinetic energy (docs/model.md §1).
-    let w: Vec<f64> = mech.minv.iter().map(|v| v.sqrt()).collect();
+    let w: Vec<f64> = mech
+        .bodies()
+        .inverse_masses()
+        .iter()
+        .map(|v| v.sqrt())
+        .collect();
     // The projected state and whether it meets the equations `eqs`.
     let project = |eqs: &[Row], y: &[f64]| -> (Vec<f64>, bool) {
         let mut y = y.to_vec();
@@ -491,11 +377,14 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         return fail(mech, &phid, &jac, "velocities", 1);
     }
     y = yp;
-    let (_, _, jac) = eval(mech, &all, t0, &y);
-    // Rank of the ideal equations (the KKT system) at the assembled state.
-    let m = mech.rows.len();
-    let ideal = jac.subrows(0, m).to_owned();
-    check_rank(mech, &mech.rows, &ideal)?;
+    // Rank of the ideal equations at the assembled state, when the formulation needs it
+    // (Lagrange multipliers: the KKT system).
+    if mech.formulation().needs_full_rank() {
+        let (_, _, jac) = eval(mech, &all, t0, &y);
+        let rows = &mech.constraints().rows;
+        let ideal = jac.subrows(0, rows.len()).to_owned();
+        check_rank(mech, rows, &ideal)?;
+    }
     let rep = report(mech, &given, &y);
     Ok((y, rep))
 }

@@ -271,33 +271,3 @@ pub fn press_catalogue() -> Vec<(String, Scene)> {
     }
     out
 }
-
-/// The fixed RK4 step of a press case of the catalogue (by file stem), s: the largest step
-/// found stable that keeps the constraint violation ‖Φ‖ below 1e-8 over the case
-/// (`cargo run --release -p lash-model --example rk4_scan`; the model tests run every case
-/// with it).
-///
-/// ```text
-/// ideal 1e-3 s;  dry 2e-4 s;  lubricated: c = 0.1, 0.5 mm 2e-6 s, c = 0.3 mm 5e-7 s,
-/// c = 0.2 mm 2e-7 s (the film's radial damping grows as (1 − ε²)^{−3/2} up to
-/// ε_cap = 0.99, which bounds the RK4 step)
-/// ```
-///
-/// None for a name that is not in [`press_catalogue`].
-/// Source: the rk4_scan measurements (crates/model/tests/press_cases.rs checks ‖Φ‖).
-pub fn rk4_step(stem: &str) -> Option<f64> {
-    if !press_catalogue().iter().any(|(n, _)| n == stem) {
-        return None;
-    }
-    Some(if stem.starts_with("ideal") {
-        1e-3
-    } else if stem.starts_with("dry") {
-        2e-4
-    } else if stem.ends_with("c0.2") {
-        2e-7
-    } else if stem.ends_with("c0.3") {
-        5e-7
-    } else {
-        2e-6
-    })
-}

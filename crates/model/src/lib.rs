@@ -1,19 +1,43 @@
 //! # lash-model
 //!
-//! Planar multibody scenes with dry and lubricated revolute clearance joints (docs/model.md),
-//! turned into an index-1 ODE `y' = f(t, y)` with y = (q, q̇) for the integrators of `lash-solver`.
+//! Planar multibody scenes with dry and lubricated clearance joints (docs/model.md), turned
+//! into an index-1 ODE `y' = f(t, y)` for the integrators of `lash-solver`.
 //!
 //! ```text
-//! Scene (JSON, validated) → Mechanism::from_scene (prescribed bodies, constraints, assembly,
-//!   the equations checked once at the initial state)
-//!   → impl OdeSystem (rhs: KKT of docs/model.md §1; events δ, ε − ε_cap; FD Jacobian)
+//! Scene (JSON, validated) → Mechanism::from_scene (prescribed bodies, constraints, forces,
+//!   formulation, assembly, the equations checked once at the initial state)
+//!   → impl OdeSystem (rhs, Jacobian, events of docs/model.md §1, §7)
 //!   → Mechanism::outputs / power / point_kinematics / ideal_slider_crank
 //! ```
-//! - [`scene`]: the JSON format and its validation ([`Scene`], [`SceneError`]).
-//! - [`mechanism`]: the ODE ([`Mechanism`]).
+//! - [`scene`]: the JSON format, its deserialisation and its validation ([`Scene`],
+//!   [`SceneError`]).
+//! - [`clearance`]: both clearance joints side by side (revolute, prismatic), their contact
+//!   laws, the revolute joint's kinematics ([`geometry`]) and force laws ([`laws`]).
+//! - [`elements`]: force elements, one file per kind behind one interface.
+//! - [`mechanism`]: the ODE ([`Mechanism`]): bodies, constraint equations, forces, the
+//!   formulation (the state layout and the acceleration solve), events.
 //! - [`outputs`]: named outputs, energy terms, the closed-form ideal slider-crank.
-//! - [`geometry`], [`laws`]: clearance kinematics and force laws.
 //! - [`cases`]: generators of the paper's press scenes (`cases/press/`).
+//!
+//! # Layers
+//!
+//! Each module uses only the modules listed before it (line by line, and left to right within
+//! a line): no import circle, unit tests included.
+//!
+//! ```text
+//! 0  planar, linalg, labels, projection; clearance::{geometry, laws}
+//! 1  scene::{error, check, de}; elements::input
+//! 2  scene::refs (the SceneRefs seam: joints and elements check and compile against it)
+//! 3  elements::{table, interface}; clearance::contact; mechanism::row
+//! 4  elements::<one file per kind>; clearance::{revolute, prismatic, revolute_jacobian}
+//! 5  elements (the registry)
+//! 6  scene::{format, validate, parse}; scene (the public facade)
+//! 7  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
+//! 8  mechanism (the struct, its views and its evaluation)
+//! 9  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases
+//! ```
+//! Inside the crate, parts name the scene's submodules (`scene::format`, `scene::refs`, …),
+//! never the facade `scene`, which re-exports them for users.
 //!
 //! # A scene, built and solved
 //!
@@ -61,18 +85,24 @@ pub mod cases;
 pub mod clearance;
 pub mod elements;
 mod initial_check;
-pub mod jacobian;
+mod jacobian;
+mod labels;
 mod linalg;
 pub mod mechanism;
 pub mod outputs;
 mod planar;
+mod projection;
+mod roles;
 pub mod scene;
 
-pub use assembly::{CoordinateChange, ProjectionReport};
 pub use clearance::{geometry, laws};
+pub use labels::{Column, EventLabels};
+pub use mechanism::events::event_label;
 pub use mechanism::Mechanism;
 pub use outputs::{
     BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,
-    PowerTerms, PrismaticOutput, Roles,
+    PowerTerms, PrismaticOutput,
 };
+pub use projection::{CoordinateChange, ProjectionReport};
+pub use roles::Roles;
 pub use scene::{Scene, SceneError, GROUND};

@@ -107,3 +107,10 @@ pub(crate) fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
         b[i] = s * l[i * m + i];
     }
 }
+
+/// `v` resized to `len` and zeroed (no allocation once it has been that long).
+pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
+    v.clear();
+    v.resize(len, T::default());
+    v
+}

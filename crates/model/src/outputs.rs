@@ -16,62 +16,14 @@
 //! ```
 //! Source: docs/model.md §1–§5, docs/outputs.md ("`energy`", "`trajectory.csv`").
 
-use crate::clearance::revolute::{Clr, End};
-use crate::mechanism::{Mechanism, Scratch};
+use crate::elements::interface::Account;
+use crate::labels::Column;
+use crate::mechanism::Mechanism;
 use crate::planar::{cross, perp, rot};
-use crate::scene::{JointSpec, Scene, SceneError};
+use crate::scene::error::SceneError;
+use crate::scene::format::JointSpec;
 
-/// The parts that the press metrics need, resolved to indices (docs/outputs.md, "Scene roles").
-///
-/// ```text
-/// slider → body index,  crank_driver → joint index,  clearance_joint → joint index and its
-/// position among the clearance joints (the index into `Outputs::clearance`)
-/// ```
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct Roles {
-    /// Scene index of the slider body.
-    pub slider: Option<usize>,
-    /// Scene index of the crank driver joint.
-    pub crank_driver: Option<usize>,
-    /// Scene index of the clearance joint.
-    pub clearance_joint: Option<usize>,
-    /// Index of the role's clearance joint in [`Outputs::clearance`].
-    pub clearance_index: Option<usize>,
-    /// Scene index of the body turned by the crank driver.
-    pub crank_body: Option<usize>,
-}
-
-impl Roles {
-    pub(crate) fn resolve(scene: &Scene, clr: &[Clr]) -> Roles {
-        let slider = scene
-            .roles
-            .slider
-            .as_ref()
-            .and_then(|s| scene.body_index(s));
-        let crank_driver = scene
-            .roles
-            .crank_driver
-            .as_ref()
-            .and_then(|s| scene.joint_index(s));
-        let crank_body = crank_driver.and_then(|j| match &scene.joints[j] {
-            JointSpec::Driver(d) => scene.body_index(&d.body),
-            _ => None,
-        });
-        let clearance_joint = scene
-            .roles
-            .clearance_joint
-            .as_ref()
-            .and_then(|s| scene.joint_index(s));
-        let clearance_index = clearance_joint.and_then(|j| clr.iter().position(|c| c.joint == j));
-        Roles {
-            slider,
-            crank_driver,
-            clearance_joint,
-            clearance_index,
-            crank_body,
-        }
-    }
-}
+pub use crate::roles::Roles;
 
 /// Position, velocity and acceleration of a body point (global frame).
 ///
@@ -161,6 +113,16 @@ pub const DRIVER_COLUMNS: [&str; 1] = ["torque"];
 /// Column suffixes of a prismatic clearance joint, in the order of [`Outputs::column_values`].
 pub const PRISMATIC_COLUMNS: [&str; 5] =
     ["offset", "tilt", "delta", "contact_force", "friction_force"];
+/// SI units of [`BODY_COLUMNS`].
+pub const BODY_UNITS: [&str; 9] = [
+    "m", "m", "rad", "m/s", "m/s", "rad/s", "m/s²", "m/s²", "rad/s²",
+];
+/// SI units of [`CLEARANCE_COLUMNS`] (`1`: a ratio).
+pub const CLEARANCE_UNITS: [&str; 6] = ["1", "1", "m", "N", "N", "N"];
+/// SI unit of [`DRIVER_COLUMNS`].
+pub const DRIVER_UNITS: [&str; 1] = ["N·m"];
+/// SI units of [`PRISMATIC_COLUMNS`].
+pub const PRISMATIC_UNITS: [&str; 5] = ["m", "rad", "m", "N", "N"];
 
 /// One force element at one instant (docs/model.md §10).
 ///
@@ -175,9 +137,10 @@ pub const PRISMATIC_COLUMNS: [&str; 5] =
 pub struct ElementOutput {
     /// Element name.
     pub name: String,
-    /// Column suffixes of the element (`force`, `length`; `torque`, `angle`; `force`;
-    /// `torque`; `torque`, `speed`): the first is `load`, the second `coordinate`.
-    pub columns: &'static [&'static str],
+    /// Columns of the element, suffix and unit (`force` N, `length` m; `torque` N·m, `angle`
+    /// rad; `force` N; `torque` N·m; `torque` N·m, `speed` rad/s): the first is `load`, the
+    /// second `coordinate`.
+    pub columns: &'static [Column],
     /// The element's force or torque.
     pub load: f64,
     /// Its coordinate: length, angle or speed (NaN for forces and torques).
@@ -393,63 +356,7 @@ impl IdealSliderCrank {
     }
 }
 
-/// Everything of one full evaluation.
-struct Full {
-    sc: Scratch,
-    ok: bool,
-    /// Driver torques in scene order of the driver joints: (joint index, τ).
-    torques: Vec<(usize, f64)>,
-}
-
-fn end_omega(e: &End, sc: &Scratch) -> f64 {
-    e.body.map_or(0.0, |b| sc.vel[b][2])
-}
-
 impl Mechanism {
-    fn full(&self, t: f64, y: &[f64]) -> Full {
-        let mut sc = self.scratch.borrow().clone();
-        let ok = self.evaluate(t, y, &mut sc, true);
-        let nb = self.bodies.len();
-        // Constraint forces −Σ J_r,kᵀ λ_r on every body.
-        let mut cf = vec![[0.0f64; 3]; nb];
-        for (r, row) in self.rows.iter().enumerate() {
-            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-                let j = sc.term_jac[r][ti];
-                for c in 0..3 {
-                    cf[term.body][c] -= j[c] * sc.lam[r];
-                }
-            }
-        }
-        let mut torques: Vec<(usize, f64)> = Vec::new();
-        for (r, row) in self.rows.iter().enumerate() {
-            if matches!(self.scene.joints[row.joint], JointSpec::Driver(_)) {
-                torques.push((row.joint, -sc.lam[r]));
-            }
-        }
-        // Newton–Euler of the prescribed bodies, children before parents.
-        for p in self.pres.iter().rev() {
-            let k = p.body;
-            let b = &self.bodies[k];
-            let m = [b.mass, b.mass, b.inertia];
-            let mut res = [0.0; 3];
-            for c in 0..3 {
-                res[c] = sc.gb[k][c] + cf[k][c] - m[c] * sc.acc[k][c];
-            }
-            let bs = perp(rot(sc.cs[k], p.s_own));
-            let lam_pin = [res[0], res[1]];
-            let lam_d = res[2] - (bs[0] * lam_pin[0] + bs[1] * lam_pin[1]);
-            torques.push((p.driver_joint, -lam_d));
-            if let Some((kp, sp)) = p.parent {
-                let a = rot(sc.cs[kp], sp);
-                cf[kp][0] += lam_pin[0];
-                cf[kp][1] += lam_pin[1];
-                cf[kp][2] += cross(a, lam_pin);
-            }
-        }
-        torques.sort_by_key(|x| x.0);
-        Full { sc, ok, torques }
-    }
-
     /// Names of the per-element output columns, in the order of [`Outputs::column_values`]:
     ///
     /// ```text
@@ -458,40 +365,72 @@ impl Mechanism {
     ///        .friction_force .film_force                       every clearance joint
     /// <driver>.torque                                          every driver joint
     /// <spring>.force .length | <rotational spring>.torque .angle | <force>.force
-    /// | <torque>.torque | <motor>.torque .speed                every force element
+    /// | <torque>.torque | <motor>.torque .speed
+    /// | <bushing>.force .stretch                               every force element
     /// <joint>.offset .tilt .delta .contact_force .friction_force
     ///                                                          every prismatic clearance joint
     /// ```
     pub fn output_columns(&self) -> Vec<String> {
         let mut names = Vec::new();
-        for b in &self.scene.bodies {
+        for b in &self.scene().bodies {
             names.extend(BODY_COLUMNS.iter().map(|c| format!("{}.{c}", b.name)));
         }
-        for c in &self.clr {
+        for c in &self.forces().revolute {
             names.extend(CLEARANCE_COLUMNS.iter().map(|s| format!("{}.{s}", c.name)));
         }
-        for j in &self.scene.joints {
+        for j in &self.scene().joints {
             if let JointSpec::Driver(d) = j {
                 names.extend(DRIVER_COLUMNS.iter().map(|s| format!("{}.{s}", d.name)));
             }
         }
-        for e in &self.elements {
-            names.extend(e.columns().iter().map(|s| format!("{}.{s}", e.name)));
+        let forces = self.forces();
+        for (e, f) in forces.elements.iter().zip(&self.scene().forces) {
+            names.extend(
+                e.columns()
+                    .iter()
+                    .map(|s| format!("{}.{}", f.name(), s.suffix)),
+            );
         }
-        for p in &self.prismatic {
+        for p in &forces.prismatic {
             names.extend(PRISMATIC_COLUMNS.iter().map(|s| format!("{}.{s}", p.name)));
         }
         names
     }
 
+    /// The SI unit of every column of [`Mechanism::output_columns`], in the same order (`1`
+    /// for a ratio): the parts' own tables, and each force element's
+    /// ([`crate::Column::unit`]).
+    pub fn output_units(&self) -> Vec<&'static str> {
+        let mut units = Vec::new();
+        for _ in &self.scene().bodies {
+            units.extend(BODY_UNITS);
+        }
+        for _ in &self.forces().revolute {
+            units.extend(CLEARANCE_UNITS);
+        }
+        for j in &self.scene().joints {
+            if let JointSpec::Driver(_) = j {
+                units.extend(DRIVER_UNITS);
+            }
+        }
+        let forces = self.forces();
+        for e in &forces.elements {
+            units.extend(e.columns().iter().map(|c| c.unit));
+        }
+        for _ in &forces.prismatic {
+            units.extend(PRISMATIC_UNITS);
+        }
+        units
+    }
+
     /// One evaluation of every output at (t, y). Non-finite values (a singular KKT matrix)
     /// come out as NaN.
     pub fn outputs(&self, t: f64, y: &[f64]) -> Outputs {
-        let f = self.full(t, y);
-        let sc = &f.sc;
+        let f = self.full_evaluation(t, y);
+        let (sc, forces, roles) = (&f.sc, self.forces(), self.roles());
         let nan_if = |v: f64| if f.ok { v } else { f64::NAN };
-        let crank_angle = self.roles.crank_body.map(|k| sc.pose[k][2]);
-        let (slider_x, slider_v, slider_a) = match self.roles.slider {
+        let crank_angle = roles.crank_body.map(|k| sc.pose[k][2]);
+        let (slider_x, slider_v, slider_a) = match roles.slider {
             Some(k) => (
                 Some(sc.pose[k][0]),
                 Some(sc.vel[k][0]),
@@ -499,10 +438,10 @@ impl Mechanism {
             ),
             None => (None, None, None),
         };
-        let clearance = self
-            .clr
+        let clearance = forces
+            .revolute
             .iter()
-            .zip(&sc.clr)
+            .zip(&sc.revolute)
             .map(|(c, ev)| ClearanceOutput {
                 name: c.name.clone(),
                 ex_over_c: ev.st.e[0] / c.c,
@@ -516,7 +455,7 @@ impl Mechanism {
                 film_ft: ev.f_tf,
             })
             .collect();
-        let bodies = (0..self.bodies.len())
+        let bodies = (0..self.body_info().len())
             .map(|k| {
                 let ([x, y, theta], [vx, vy, omega]) = (sc.pose[k], sc.vel[k]);
                 let [ax, ay, alpha] = sc.acc[k].map(nan_if);
@@ -533,26 +472,27 @@ impl Mechanism {
                 }
             })
             .collect();
-        let constraint_violation = sc.phi.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let constraint_violation = f.violation;
         let driver_torques = f.torques.iter().map(|x| nan_if(x.1)).collect();
         let mut kinetic = 0.0;
         let mut potential = 0.0;
-        for (k, b) in self.bodies.iter().enumerate() {
+        for (k, b) in self.body_info().iter().enumerate() {
             let [vx, vy, w] = sc.vel[k];
             kinetic += 0.5 * b.mass * (vx * vx + vy * vy) + 0.5 * b.inertia * w * w;
-            if let Some(g) = self.gravity {
+            if let Some(g) = forces.gravity {
                 potential -= b.mass * (g[0] * sc.pose[k][0] + g[1] * sc.pose[k][1]);
             }
         }
-        for (c, ev) in self.clr.iter().zip(&sc.clr) {
+        for (c, ev) in forces.revolute.iter().zip(&sc.revolute) {
             potential += c.normal.potential(ev.st.delta);
         }
-        let elements: Vec<ElementOutput> = self
+        let elements: Vec<ElementOutput> = forces
             .elements
             .iter()
             .zip(&sc.el)
-            .map(|(e, ev)| ElementOutput {
-                name: e.name.clone(),
+            .zip(&self.scene().forces)
+            .map(|((e, ev), f)| ElementOutput {
+                name: f.name().to_string(),
                 columns: e.columns(),
                 load: ev.load,
                 coordinate: ev.coord,
@@ -562,7 +502,7 @@ impl Mechanism {
             })
             .collect();
         potential += elements.iter().map(|e| e.potential).sum::<f64>();
-        let prismatic: Vec<PrismaticOutput> = self
+        let prismatic: Vec<PrismaticOutput> = forces
             .prismatic
             .iter()
             .zip(&sc.pr)
@@ -601,19 +541,20 @@ impl Mechanism {
     /// film (W). The caller integrates them along the trajectory (no quadrature components are
     /// added to the state, so the state stays (q, q̇) for every method).
     pub fn power(&self, t: f64, y: &[f64]) -> PowerTerms {
-        let f = self.full(t, y);
-        let sc = &f.sc;
+        let f = self.full_evaluation(t, y);
+        let (sc, forces, scene) = (&f.sc, self.forces(), self.scene());
         let mut p = PowerTerms::default();
         for &(j, tau) in &f.torques {
-            if let JointSpec::Driver(d) = &self.scene.joints[j] {
-                let k = self.scene.body_index(&d.body).expect("validated");
+            if let JointSpec::Driver(d) = &scene.joints[j] {
+                let k = scene.body_index(&d.body).expect("validated");
                 p.driver += tau * sc.vel[k][2];
             }
         }
         if !f.ok {
             p.driver = f64::NAN;
         }
-        for (c, ev) in self.clr.iter().zip(&sc.clr) {
+        let kin = sc.kin();
+        for (c, ev) in forces.revolute.iter().zip(&sc.revolute) {
             let st = &ev.st;
             if st.delta > 0.0 {
                 p.contact_damping += (ev.f_n - ev.elastic) * st.delta_dot;
@@ -621,14 +562,13 @@ impl Mechanism {
             }
             if c.film.is_some() {
                 // t·ė = v_T − R_J φ̇_J + R_B φ̇_B
-                let ed_t =
-                    st.v_t - c.rj * end_omega(&c.journal, sc) + c.rb * end_omega(&c.bearing, sc);
+                let ed_t = st.v_t - c.rj * c.journal.omega(&kin) + c.rb * c.bearing.omega(&kin);
                 p.film -= ev.f_r * st.delta_dot + ev.f_tf * ed_t;
             }
         }
-        for (e, ev) in self.elements.iter().zip(&sc.el) {
-            match e.kind {
-                crate::elements::Kind::Motor { .. } => p.motor += ev.power,
+        for (e, ev) in forces.elements.iter().zip(&sc.el) {
+            match e.account() {
+                Account::Motor => p.motor += ev.power,
                 _ => p.load += ev.power,
             }
             p.damper += ev.dissipation;
@@ -653,14 +593,14 @@ impl Mechanism {
         y: &[f64],
     ) -> Result<PointKinematics, SceneError> {
         let k = self
-            .scene
+            .scene()
             .body_index(body)
             .ok_or_else(|| SceneError::Unknown(format!("body '{body}'")))?;
-        let s = *self.bodies[k]
+        let s = *self.body_info()[k]
             .points
             .get(point)
             .ok_or_else(|| SceneError::Unknown(format!("point '{point}' on body '{body}'")))?;
-        let mut sc = self.scratch.borrow_mut();
+        let mut sc = self.scratch();
         let ok = self.evaluate(t, y, &mut sc, false);
         let a = rot(sc.cs[k], s);
         let b = perp(a);
@@ -680,9 +620,9 @@ impl Mechanism {
     /// a rod pinned to the crank and joined (revolute or clearance joint) to the slider, and
     /// the slider on a translational joint whose line passes through O, on the +x branch.
     pub fn ideal_slider_crank(&self) -> Option<IdealSliderCrank> {
-        let scene = &self.scene;
-        let crank = self.roles.crank_body?;
-        let slider = self.roles.slider?;
+        let scene = self.scene();
+        let crank = self.roles().crank_body?;
+        let slider = self.roles().slider?;
         let omega = self.crank_speed()?;
         let crank_name = &scene.bodies[crank].name;
         let slider_name = &scene.bodies[slider].name;
@@ -767,7 +707,7 @@ impl Mechanism {
         }
         let angle_u = u[1].atan2(u[0]);
         let offset = d[1].atan2(d[0]) - angle_u;
-        let JointSpec::Driver(drv) = &scene.joints[self.roles.crank_driver?] else {
+        let JointSpec::Driver(drv) = &scene.joints[self.roles().crank_driver?] else {
             return None;
         };
         let ideal = IdealSliderCrank {
@@ -778,9 +718,9 @@ impl Mechanism {
             offset,
         };
         // The slider pin must be on the +S branch at the initial state.
-        let t0 = self.t_start;
-        let mut sc = self.scratch.borrow_mut();
-        self.kinematics(t0, &self.y0, &mut sc);
+        let t0 = self.t_start();
+        let mut sc = self.scratch();
+        self.kinematics(t0, &self.initial_state(), &mut sc);
         let ps = rot(sc.cs[slider], p_s);
         let pin = [sc.pose[slider][0] + ps[0], sc.pose[slider][1] + ps[1]];
         let along = u[0] * (pin[0] - ground_o[0]) + u[1] * (pin[1] - ground_o[1]);

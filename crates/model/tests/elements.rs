@@ -988,3 +988,215 @@ fn scenes_with_repeated_keys_or_a_journal_outside_its_clearance_are_rejected() {
         }
     }
 }
+
+/// A free body (no joint) of mass m carrying a linear bushing from its centre of mass to the
+/// ground origin, and any other force elements.
+fn on_a_bushing(m: f64, k: f64, c: f64, pos: [f64; 2], vel: [f64; 2], t_end: f64) -> Value {
+    json!({
+        "bodies": [{"name": "m", "mass": m, "inertia": 0.3, "position": pos, "velocity": vel,
+                    "points": {"C": [0.0, 0.0]}}],
+        "forces": [{"type": "linear_bushing", "name": "bush",
+                    "a": {"body": "m", "point": "C"}, "b": {"body": "ground", "at": [0.0, 0.0]},
+                    "stiffness": k, "damping": c}],
+        "t_end": t_end
+    })
+}
+
+#[test]
+fn a_mass_on_a_linear_bushing_orbits_with_period_two_pi_root_m_over_k() {
+    // m r̈ = −k r: x = x₀ cos ω t, y = (v₀/ω) sin ω t, ω = √(k/m), period T = 2π √(m/k).
+    let (m, k, x0, v0): (f64, f64, f64, f64) = (2.0, 800.0, 0.01, 0.3);
+    let w = (k / m).sqrt();
+    let period = 2.0 * std::f64::consts::PI * (m / k).sqrt();
+    let mech = build(&on_a_bushing(m, k, 0.0, [x0, 0.0], [0.0, v0], period));
+    let times: Vec<f64> = (1..=8).map(|i| i as f64 * period / 8.0).collect();
+    for method in [Method::Dop853, Method::Rodas5p] {
+        let opts = SolverOptions {
+            output: Output::Times(times.clone()),
+            ..tight(method)
+        };
+        let sol = solve(&mech, (0.0, period), &mech.initial_state(), &opts).unwrap();
+        for (i, &t) in sol.t.iter().enumerate() {
+            let o = mech.outputs(t, sol.state(i));
+            let (x, y) = (o.bodies[0].x, o.bodies[0].y);
+            assert!(
+                (x - x0 * (w * t).cos()).abs() < 1e-8 * x0,
+                "{method:?} t = {t}: x = {x}"
+            );
+            assert!(
+                (y - v0 / w * (w * t).sin()).abs() < 1e-8 * v0 / w,
+                "{method:?} t = {t}: y = {y}"
+            );
+            // Its columns: |F| = k |d|, the stretch |d|; its potential ½ k |d|².
+            let (e, r) = (&o.elements[0], x.hypot(y));
+            assert!((e.coordinate - r).abs() < 1e-15 && (e.load - k * r).abs() < 1e-9 * k * r);
+            assert!((e.potential - 0.5 * k * r * r).abs() < 1e-12 * k * r * r);
+        }
+        // After one period it is back where it started.
+        let end = mech.outputs(period, &sol.y_final).bodies[0];
+        assert!((end.x - x0).abs() < 1e-8 * x0 && end.y.abs() < 1e-8 * v0 / w);
+    }
+}
+
+#[test]
+fn a_damped_bushing_decays_at_rate_c_over_2m() {
+    // m ẍ + c ẋ + k x = 0 from (x₀, 0): x = x₀ e^{−σ t}(cos ω_d t + σ/ω_d sin ω_d t),
+    // σ = c/(2m) the decay rate, ω_d = √(k/m − σ²).
+    let (m, k, c, x0): (f64, f64, f64, f64) = (2.0, 800.0, 8.0, 0.01);
+    let sigma = c / (2.0 * m);
+    let wd = (k / m - sigma * sigma).sqrt();
+    let exact = |t: f64| x0 * (-sigma * t).exp() * ((wd * t).cos() + sigma / wd * (wd * t).sin());
+    let mech = build(&on_a_bushing(m, k, c, [x0, 0.0], [0.0, 0.0], 1.0));
+    let times: Vec<f64> = (1..=20).map(|i| i as f64 * 0.05).collect();
+    let opts = SolverOptions {
+        output: Output::Times(times),
+        ..tight(Method::Rodas5p)
+    };
+    let sol = solve(&mech, (0.0, 1.0), &mech.initial_state(), &opts).unwrap();
+    for (i, &t) in sol.t.iter().enumerate() {
+        let o = mech.outputs(t, sol.state(i));
+        let x = o.bodies[0].x;
+        assert!(
+            (x - exact(t)).abs() < 1e-8 * x0,
+            "t = {t}: x = {x}, {}",
+            exact(t)
+        );
+        // Its damper dissipates c ẋ².
+        let p = mech.power(t, sol.state(i));
+        let v = o.bodies[0].vx;
+        assert!((p.damper - c * v * v).abs() <= 1e-12 * c * v * v + 1e-300);
+        assert_eq!(p.input(), 0.0);
+    }
+}
+
+/// Two free bodies joined by a bushing between off-centre points, the first also held by a
+/// bushing to the ground, under gravity: the bushings turn the bodies too.
+fn two_bushings(c: f64) -> Value {
+    json!({
+        "bodies": [
+            {"name": "p", "mass": 1.5, "inertia": 0.02, "position": [0.0, -0.1], "angle": 0.3,
+             "velocity": [0.4, 0.0], "angular_velocity": 2.0,
+             "points": {"A": [0.05, 0.02], "B": [-0.04, 0.03]}},
+            {"name": "q", "mass": 0.7, "inertia": 0.004, "position": [0.1, -0.25],
+             "angular_velocity": -1.0, "points": {"C": [0.02, -0.01]}}
+        ],
+        "forces": [
+            {"type": "linear_bushing", "name": "hang", "a": {"body": "p", "point": "A"},
+             "b": {"body": "ground", "at": [0.0, 0.0]}, "stiffness": 3000.0, "damping": c},
+            {"type": "linear_bushing", "name": "link", "a": {"body": "p", "point": "B"},
+             "b": {"body": "q", "point": "C"}, "stiffness": 1500.0, "damping": 0.5 * c}
+        ],
+        "gravity": [0.0, -9.81],
+        "t_end": 0.5
+    })
+}
+
+#[test]
+fn the_energy_balance_of_damped_bushings_closes() {
+    // T + V (gravity and ½ k |d|² of each bushing) + ∫ c |ḋ|² dt stays constant.
+    let mech = build(&two_bushings(2.0));
+    let sys = WithEnergy(&mech);
+    let mut y0 = mech.initial_state();
+    y0.push(0.0);
+    let opts = SolverOptions {
+        rtol: 1e-11,
+        atol: Atol::Scalar(1e-13),
+        ..SolverOptions::with_method(Method::Dop853)
+    };
+    let sol = solve(&sys, (0.0, 0.5), &y0, &opts).unwrap();
+    let n = mech.dim();
+    let (o0, o1) = (
+        mech.outputs(0.0, &y0[..n]),
+        mech.outputs(0.5, &sol.y_final[..n]),
+    );
+    let change =
+        (o1.kinetic_energy + o1.potential_energy) - (o0.kinetic_energy + o0.potential_energy);
+    let dissipated = -sol.y_final[n];
+    assert!(
+        dissipated > 1e-3,
+        "the dampers must dissipate: {dissipated}"
+    );
+    let scale = o0.kinetic_energy + dissipated;
+    assert!(
+        (change + dissipated).abs() < 1e-9 * scale,
+        "Δ(T + V) = {change:e} J, dissipated {dissipated:e} J"
+    );
+}
+
+#[test]
+fn the_bushings_closed_form_jacobian_matches_differences_of_the_right_hand_side() {
+    let mech = build(&two_bushings(2.0));
+    let y = {
+        let mut y = mech.initial_state();
+        for (i, v) in y.iter_mut().enumerate() {
+            *v += 1e-2 * ((i as f64) * 1.3).sin();
+        }
+        y
+    };
+    let n = mech.dim();
+    let mut jac = faer::Mat::<f64>::zeros(n, n);
+    mech.jacobian(0.1, &y, jac.as_mut());
+    for j in 0..n {
+        // Every entry is linear in y_j but for sin and cos of the angles: central differences
+        // err by h² ‖∂³f‖ ≈ 1e-12 relative.
+        let h = 1e-6;
+        let (mut yp, mut ym) = (y.clone(), y.clone());
+        yp[j] += h;
+        ym[j] -= h;
+        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+        mech.rhs(0.1, &yp, &mut fp);
+        mech.rhs(0.1, &ym, &mut fm);
+        for i in 0..n {
+            let d = (fp[i] - fm[i]) / (2.0 * h);
+            assert!(
+                (jac[(i, j)] - d).abs() <= 1e-6 * d.abs().max(1.0),
+                "∂f{i}/∂y{j}: closed form {:e}, differences {d:e}",
+                jac[(i, j)]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_bad_bushing_names_its_path() {
+    let bushing = |extra: Value| {
+        let mut v = on_a_bushing(1.0, 10.0, 0.0, [0.1, 0.0], [0.0, 0.0], 1.0);
+        for (k, x) in extra.as_object().unwrap() {
+            v["forces"][0][k] = x.clone();
+        }
+        v
+    };
+    for (extra, path, words) in [
+        (
+            json!({"stiffness": -1.0}),
+            "forces[0].stiffness",
+            "stiffness must be >= 0",
+        ),
+        (
+            json!({"damping": -2.0}),
+            "forces[0].damping",
+            "damping must be >= 0",
+        ),
+        (
+            json!({"a": {"body": "ground", "at": [1.0, 0.0]}}),
+            "forces[0].b.body",
+            "a bushing needs two different bodies (or a body and the ground), both are 'ground'",
+        ),
+        (
+            json!({"a": {"body": "m", "point": "Z"}}),
+            "forces[0].a.point",
+            "no point named 'Z'",
+        ),
+        (
+            json!({"stiffness": null}),
+            "forces[0].stiffness",
+            "invalid type: null, expected f64",
+        ),
+    ] {
+        let msg = error_of(&bushing(extra)).to_string();
+        assert!(
+            msg.starts_with(&format!("{path}: ")) && msg.contains(words),
+            "expected {path}: … {words}, got {msg}"
+        );
+    }
+}

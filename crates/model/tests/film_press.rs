@@ -124,7 +124,7 @@ fn mirrored_long_gumbel_press_finishes_two_revolutions() {
 
 /// The mirrored short-bearing law on the 0.1 mm press, the same budget. Here the journal stays
 /// near the centre (|e| ≈ 1e-5 m), where the Jacobian's differences in ė move Ω by
-/// 2 h_ė/|e|: unless they are capped to a small fraction of Ω₀ (crates/model/src/jacobian.rs),
+/// 2 h_ė/|e|: unless they are capped to a small fraction of Ω₀ (crates/model/src/clearance/revolute_jacobian.rs),
 /// BDF's Newton iteration sees the wrong slope of tanh(Ω/Ω₀) and needs about 150 000 steps.
 #[test]
 fn mirrored_short_ocvirk_press_finishes_two_revolutions() {

@@ -1,4 +1,4 @@
-//! Writes the scenes of `lash_validation::studies::extremes::catalogue` as JSON files into the
+//! Writes the scenes of `lash_validation::extremes::catalogue` as JSON files into the
 //! directory given as the only argument (the repository keeps them in `cases/extremes/`).
 //!
 //! ```text
@@ -10,7 +10,7 @@ fn main() {
         std::process::exit(2);
     };
     std::fs::create_dir_all(&dir).expect("create the output directory");
-    for s in lash_validation::studies::extremes::catalogue() {
+    for s in lash_validation::extremes::catalogue() {
         let path = std::path::Path::new(&dir).join(format!("{}.json", s.stem));
         std::fs::write(&path, s.json()).expect("write a case file");
         println!("{}", path.display());

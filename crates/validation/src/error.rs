@@ -1,9 +1,9 @@
 //! The errors of the engine and the kind of each.
 //!
 //! ```text
-//! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Io)
+//! kind = BadInput  a wrong request or input file   (Usage, Option, Input, Scene, Io)
 //!        Solver    the solver failed               (Solver)
-//!        Bug       an internal inconsistency       (NotYetAvailable, Internal)
+//!        Bug       a broken invariant              (Internal)
 //!        Interrupted  a stop was requested (SIGINT, SIGTERM)   (Interrupted)
 //! ```
 //!
@@ -24,7 +24,7 @@ use lash_solver::SolveError;
 ///
 /// ```text
 /// Error → kind:  Usage | Option | Input | Scene | Io → BadInput,  Solver → Solver,
-///                NotYetAvailable | Internal → Bug,  Interrupted → Interrupted
+///                Internal → Bug,  Interrupted → Interrupted
 /// SolveError::Interrupted → Error::Interrupted (From), every other SolveError → Error::Solver
 /// ```
 ///
@@ -70,10 +70,7 @@ pub enum Error {
     /// flight was abandoned, what had finished is kept; the message says what and where.
     #[error("interrupted: {0}")]
     Interrupted(String),
-    /// The command exists but its engine (the model, a solver) is not wired in yet.
-    #[error("{0} is not yet available in this build")]
-    NotYetAvailable(String),
-    /// An internal inconsistency: a bug.
+    /// A broken invariant of the engine: a bug (never a consequence of the input).
     #[error("internal error: {0}")]
     Internal(String),
 }
@@ -91,7 +88,7 @@ pub enum ErrorKind {
     BadInput,
     /// The solver failed.
     Solver,
-    /// A bug: an internal inconsistency, or an engine not built yet.
+    /// A bug: a broken invariant of the engine.
     Bug,
     /// A stop was requested (SIGINT, SIGTERM) and the work abandoned.
     Interrupted,
@@ -107,18 +104,18 @@ impl Error {
             | Error::Scene { .. }
             | Error::Io { .. } => ErrorKind::BadInput,
             Error::Solver(_) => ErrorKind::Solver,
-            Error::NotYetAvailable(_) | Error::Internal(_) => ErrorKind::Bug,
+            Error::Internal(_) => ErrorKind::Bug,
             Error::Interrupted(_) => ErrorKind::Interrupted,
         }
     }
 
     /// Whether this is an interruption ([`Error::Interrupted`]).
-    pub fn is_interrupted(&self) -> bool {
+    pub(crate) fn is_interrupted(&self) -> bool {
         matches!(self, Error::Interrupted(_))
     }
 
     /// Wraps an I/O error with the path it concerns.
-    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.as_ref().to_path_buf(),
             source,
@@ -152,7 +149,7 @@ impl From<SolveError> for Error {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Piece {
+pub(crate) enum Piece {
     /// Text, as is.
     Text(String),
     /// An option, by its engine name (`rtol`, `t_end`, …).
@@ -172,24 +169,24 @@ pub enum Piece {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Message {
     /// The pieces, in order.
-    pub pieces: Vec<Piece>,
+    pub(crate) pieces: Vec<Piece>,
 }
 
 impl Message {
     /// Appends text.
-    pub fn text(mut self, s: impl Into<String>) -> Self {
+    pub(crate) fn text(mut self, s: impl Into<String>) -> Self {
         self.pieces.push(Piece::Text(s.into()));
         self
     }
 
     /// Appends an option name.
-    pub fn name(mut self, option: &'static str) -> Self {
+    pub(crate) fn name(mut self, option: &'static str) -> Self {
         self.pieces.push(Piece::Option(option));
         self
     }
 
     /// The same message with `text` before it.
-    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+    pub(crate) fn prefixed(mut self, text: impl Into<String>) -> Self {
         self.pieces.insert(0, Piece::Text(text.into()));
         self
     }
@@ -244,7 +241,7 @@ pub struct OptionError {
 
 impl OptionError {
     /// An empty message about `option`.
-    pub fn new(option: &'static str) -> Self {
+    pub(crate) fn new(option: &'static str) -> Self {
         OptionError {
             option,
             message: Message::default(),
@@ -257,19 +254,19 @@ impl OptionError {
     }
 
     /// Appends text.
-    pub fn text(mut self, s: impl Into<String>) -> Self {
+    pub(crate) fn text(mut self, s: impl Into<String>) -> Self {
         self.message = self.message.text(s);
         self
     }
 
     /// Appends an option name.
-    pub fn name(mut self, option: &'static str) -> Self {
+    pub(crate) fn name(mut self, option: &'static str) -> Self {
         self.message = self.message.name(option);
         self
     }
 
     /// The same error with `text` before its message.
-    pub fn prefixed(mut self, text: impl Into<String>) -> Self {
+    pub(crate) fn prefixed(mut self, text: impl Into<String>) -> Self {
         self.message = self.message.prefixed(text);
         self
     }
@@ -333,10 +330,6 @@ mod tests {
             lash_solver::Rule::RTOL.check(0.0).unwrap_err(),
         ));
         assert_eq!(s.kind(), ErrorKind::Solver);
-        assert_eq!(
-            Error::NotYetAvailable("lash run".into()).kind(),
-            ErrorKind::Bug
-        );
         assert_eq!(Error::Internal("x".into()).kind(), ErrorKind::Bug);
         assert_eq!(
             Error::from(OptionError::leading("t_end", " must be > 0")).kind(),

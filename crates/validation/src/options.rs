@@ -102,7 +102,7 @@ impl SolverChoice {
 }
 
 /// Checks that a list names no item twice: the error names the list's option.
-pub fn no_duplicates<T>(
+pub(crate) fn no_duplicates<T>(
     option: &'static str,
     v: &[T],
     name: impl Fn(&T) -> String,

@@ -57,7 +57,7 @@ impl Progress for NoProgress {}
 ///
 /// More threads than cores only make every run slower (and a per-run wall-clock budget run
 /// out sooner), so a larger request is a mistake worth a note, not an error.
-pub fn jobs_within_parallelism(requested: Option<usize>, progress: &dyn Progress) -> usize {
+pub(crate) fn jobs_within_parallelism(requested: Option<usize>, progress: &dyn Progress) -> usize {
     let available = std::thread::available_parallelism().map_or(1, |n| n.get());
     match requested {
         Some(n) if n > available => {

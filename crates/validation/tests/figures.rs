@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::NoProgress;
+use lash_validation::{NoProgress, RunOptions};
 
 fn case(rel: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -15,7 +14,7 @@ fn case(rel: &str) -> String {
 }
 
 fn joint_forces_svg(scene: &str, dir: &Path) -> String {
-    commands::run(
+    lash_validation::run(
         &RunOptions {
             case: case(scene),
             out: Some(dir.to_path_buf()),

@@ -1,12 +1,14 @@
 //! The default run (`cargo run --release`): its table, its files, and the claims it makes.
 
 use lash_solver::Method;
-use lash_validation::studies::headline;
+use lash_validation::NoProgress;
 
 #[test]
 fn default_run_compares_rk4_with_the_best_adaptive_method() {
     let d = tempfile::tempdir().unwrap();
-    let h = headline::run(Some(d.path().to_path_buf())).unwrap();
+    let h = lash_validation::default_run(Some(d.path().to_path_buf()), &NoProgress)
+        .unwrap()
+        .result;
     assert_eq!(h.cases.len(), 3);
     for c in &h.cases {
         let rk4 = &c.rk4;
@@ -64,7 +66,7 @@ fn readme_shows_the_table_the_run_prints(printed: &str) {
     let start = at + readme[at..].find('\n').unwrap() + 1;
     let end = start + readme[start..].find("\n\n").unwrap();
     let shown: Vec<&str> = readme[start..end].lines().collect();
-    let run = headline::comparison_table(printed);
+    let run = comparison_table(printed);
     if std::env::var_os("LASH_BLESS").is_some() {
         let text = format!("{}{}{}", &readme[..start], run.join("\n"), &readme[end..]);
         std::fs::write(&path, text).unwrap();
@@ -88,4 +90,15 @@ fn readme_shows_the_table_the_run_prints(printed: &str) {
         };
         assert_eq!(cells(a), cells(b), "README: {a}\nrun:    {b}");
     }
+}
+
+/// The comparison table of the default run's markdown (its first table: header, rule and one
+/// row per run), the one README.md shows.
+fn comparison_table(markdown: &str) -> Vec<String> {
+    markdown
+        .lines()
+        .skip_while(|l| !l.starts_with("| case | method |"))
+        .take_while(|l| l.starts_with('|'))
+        .map(str::to_string)
+        .collect()
 }

@@ -4,7 +4,8 @@
 //! finished.
 //!
 //! The stop request is one flag for the whole process, so every check lives in this one test
-//! binary and runs in one test, in sequence.
+//! binary and runs in one test, in sequence, through the engine's public API (the commands
+//! with their options, as a front end calls them).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -13,12 +14,11 @@ use std::sync::Mutex;
 
 use lash_solver::interrupt::{clear_stop, request_stop, stop_requested};
 use lash_solver::{solve, Method, OdeSystem, SolveError, SolverOptions};
-use lash_validation::error::Message;
-use lash_validation::store::cache::RunCache;
-use lash_validation::studies::extremes::{self, Plan as ExtremesPlan};
-use lash_validation::studies::paper::{self as study, Plan as StudyPlan};
-use lash_validation::sweep::{self, PointResult, SweepOptions, SweepPoint, SweepSpec};
-use lash_validation::{Error, Progress};
+use lash_validation::study::Plan as StudyPlan;
+use lash_validation::{
+    Error, ErrorKind, ExtremesOptions, Message, NoProgress, PointResult, Progress, StudyOptions,
+    SweepPoint, SweepRunOptions,
+};
 
 /// Records what the engine reports; raises the stop request once `stop_after` items finished.
 #[derive(Default)]
@@ -95,7 +95,7 @@ fn solver_stops_at_a_step_boundary() {
         t: 0.25,
         y: vec![1.0],
     });
-    assert!(e.is_interrupted() && e.kind() == lash_validation::ErrorKind::Interrupted);
+    assert_eq!(e.kind(), ErrorKind::Interrupted);
     clear_stop();
     assert!(solve(&Decay, (0.0, 1.0), &[1.0], &SolverOptions::default()).is_ok());
 }
@@ -107,10 +107,15 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
     // four lubricated 150 rpm cases again until periodic (the periodicity claim).
     let all = 18 * 3 + 4 * 3;
     let out = dir.join("study");
+    let options = |out: &Path| StudyOptions {
+        out: Some(out.to_path_buf()),
+        robustness: false,
+        plan: Some(plan),
+    };
     let first = Recorder::stopping_after(10);
-    let e = study::run_and_write_with(&plan, &out, &first).unwrap_err();
+    let e = lash_validation::study_paper(&options(&out), &first).unwrap_err();
     clear_stop();
-    assert!(e.is_interrupted(), "{e}");
+    assert_eq!(e.kind(), ErrorKind::Interrupted, "{e}");
     let kept = first.finished().len();
     assert!(kept >= 10, "{kept}");
     assert!(
@@ -119,11 +124,13 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
         "{e}"
     );
     // Nothing but the cache is written; it holds exactly the finished runs.
-    assert!(!out.join(study::JSON_FILE).exists() && !out.join(study::FIGURES_DIR).exists());
+    assert!(!out.join("study.json").exists() && !out.join("figures").exists());
     assert_eq!(std::fs::read_dir(out.join("cache")).unwrap().count(), kept);
     // The rerun does the other runs, and only those.
     let second = Recorder::default();
-    let resumed = study::run_and_write_with(&plan, &out, &second).unwrap();
+    let resumed = lash_validation::study_paper(&options(&out), &second)
+        .unwrap()
+        .result;
     assert_eq!(second.total("runs"), Some(all - kept));
     let redone: BTreeSet<String> = second.finished().into_iter().collect();
     assert_eq!(redone.len(), all - kept);
@@ -135,7 +142,9 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
         "study: {kept} of {all} runs finished before, reused from"
     )));
     // The numbers are those of an uninterrupted study (wall times aside).
-    let fresh = study::run_and_write(&plan, &dir.join("fresh")).unwrap();
+    let fresh = lash_validation::study_paper(&options(&dir.join("fresh")), &NoProgress)
+        .unwrap()
+        .result;
     for (a, b) in resumed.cases.iter().zip(&fresh.cases) {
         assert_eq!(
             (&a.study, &a.reference, &a.loose),
@@ -146,22 +155,25 @@ fn study_resumes_without_redoing_finished_runs(dir: &Path) {
     assert_eq!(resumed.claims, fresh.claims);
     // A third run reuses everything.
     let third = Recorder::default();
-    study::run_and_write_with(&plan, &out, &third).unwrap();
+    lash_validation::study_paper(&options(&out), &third).unwrap();
     assert_eq!((third.total("runs"), third.finished().len()), (Some(0), 0));
 }
 
 fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
-    let mut plan = ExtremesPlan::quick();
-    plan.scenes = vec!["dry_stiffness_1e14".into()];
-    plan.tolerances = vec![1e-3, 1e-6];
     // rk4 inside and beyond, 8 adaptive methods × 2 tolerances.
     let all = 2 + 8 * 2;
-    let cache = RunCache::new(&dir.join("extremes-cache"));
+    let options = ExtremesOptions {
+        quick: true,
+        scenes: Some(vec!["dry_stiffness_1e14".into()]),
+        tolerances: Some(vec![1e-3, 1e-6]),
+        out: Some(dir.join("extremes")),
+        ..Default::default()
+    };
     // Stop after the reference and 4 runs.
     let first = Recorder::stopping_after(5);
-    let e = extremes::run_cached(&plan, Some(&cache), &first).unwrap_err();
+    let e = lash_validation::extremes(&options, &first).unwrap_err();
     clear_stop();
-    assert!(e.is_interrupted(), "{e}");
+    assert_eq!(e.kind(), ErrorKind::Interrupted, "{e}");
     let done = first.finished();
     assert!(
         done[0].starts_with("dry_stiffness_1e14: reference"),
@@ -170,7 +182,7 @@ fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
     let runs_kept = done.len() - 1;
     assert!(runs_kept >= 4);
     let second = Recorder::default();
-    let m = extremes::run_cached(&plan, Some(&cache), &second).unwrap();
+    let w = lash_validation::extremes(&options, &second).unwrap();
     assert_eq!(second.total("references"), Some(0));
     assert_eq!(second.total("runs"), Some(all - runs_kept));
     // A run's name is what precedes its outcome ("scene method setting: outcome").
@@ -181,8 +193,16 @@ fn extremes_resume_without_redoing_finished_runs(dir: &Path) {
         done[1..].iter().all(|w| !redone.contains(&name(w))),
         "a finished run ran again"
     );
-    assert_eq!(m.cells.len(), all);
-    assert_eq!(m.failures, 0, "{:?}", m.failure_lines());
+    // extremes.json (the matrix as written, docs/outputs.md): every cell, no failure.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(w.dir.join("extremes.json")).unwrap()).unwrap();
+    assert_eq!(json["cells"].as_array().unwrap().len(), all);
+    assert_eq!(
+        json["failures"],
+        0,
+        "{}",
+        w.dir.join("extremes.md").display()
+    );
 }
 
 fn sweep_abandons_the_point_in_flight(dir: &Path) {
@@ -193,17 +213,18 @@ fn sweep_abandons_the_point_in_flight(dir: &Path) {
         br#"{"case": "base.json", "speed_rpm": [1, 2, 3, 4, 5, 6]}"#,
     )
     .unwrap();
-    let points = SweepSpec::load(&file).unwrap().points().unwrap();
     let root = dir.join("sweep");
-    let opts = SweepOptions {
+    let options = SweepRunOptions {
+        file,
         jobs: Some(1),
-        ..Default::default()
+        shard: None,
+        out: Some(root.clone()),
     };
-    let ran = AtomicUsize::new(0);
+    let ran = Mutex::new(Vec::new());
     // The third point is stopped in flight after writing a partial file, as a run whose
     // solver hits the stop request would be.
     let runner = |p: &SweepPoint, d: &Path| -> Result<PointResult, Error> {
-        ran.fetch_add(1, Ordering::SeqCst);
+        ran.lock().unwrap().push((p.index, p.id.clone()));
         if p.index == 2 {
             std::fs::write(d.join("summary.json"), b"partial").unwrap();
             request_stop();
@@ -211,27 +232,34 @@ fn sweep_abandons_the_point_in_flight(dir: &Path) {
         }
         Ok(PointResult::flatten(&serde_json::json!({"v": p.index})))
     };
-    let r = sweep::run_sweep(&points, &root, &opts, runner).unwrap();
+    let e = lash_validation::sweep_with(&options, runner, &NoProgress).unwrap_err();
     clear_stop();
-    assert_eq!((r.ok, r.abandoned, ran.load(Ordering::SeqCst)), (2, 4, 3));
-    // The abandoned point left nothing; the finished ones stay; no claim is left.
-    assert!(!root.join(&points[2].id).exists());
-    for p in &points[..2] {
-        assert!(sweep::is_finished(&root, p));
-        assert!(!root.join(&p.id).join("claim.json").exists());
-    }
-    let e = r.into_result().unwrap_err();
     assert!(
-        e.is_interrupted() && e.to_string().contains("2 of 6 in all are kept; 4 left"),
+        e.kind() == ErrorKind::Interrupted
+            && e.to_string().contains("2 of 6 in all are kept; 4 left"),
         "{e}"
     );
+    let mut ran = ran.into_inner().unwrap();
+    ran.sort();
+    assert_eq!(ran.iter().map(|r| r.0).collect::<Vec<_>>(), [0, 1, 2]);
+    // The abandoned point left nothing; the finished ones stay; no claim is left.
+    assert!(!root.join(&ran[2].1).exists());
+    for (_, id) in &ran[..2] {
+        assert!(root.join(id).join("result.json").is_file());
+        assert!(!root.join(id).join("claim.json").exists());
+    }
     // The rerun runs the four others only.
     let again = AtomicUsize::new(0);
-    let r = sweep::run_sweep(&points, &root, &opts, |p, _| {
-        again.fetch_add(1, Ordering::SeqCst);
-        Ok(PointResult::flatten(&serde_json::json!({"v": p.index})))
-    })
+    let o = lash_validation::sweep_with(
+        &options,
+        |p, _| {
+            again.fetch_add(1, Ordering::SeqCst);
+            Ok(PointResult::flatten(&serde_json::json!({"v": p.index})))
+        },
+        &NoProgress,
+    )
     .unwrap();
+    let r = o.report;
     assert_eq!((r.skipped, r.ok, again.load(Ordering::SeqCst)), (2, 4, 4));
 }
 

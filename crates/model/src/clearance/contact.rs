@@ -1,9 +1,18 @@
-//! The contact laws a clearance joint chooses (revolute or prismatic): their scene types.
+//! The contact laws a clearance joint chooses, revolute or prismatic (docs/model.md §3): their
+//! scene types, the checks they share, and their compiled laws.
+//!
+//! ```text
+//! normal   = impact {k | materials, c_max, d_max} | lankarani_nikravesh | flores |
+//!            hunt_crossley {k | materials, restitution}
+//! friction = none | coulomb {mu, v0, v1}
+//! ```
 
-use serde::de::Error as _;
-use serde::{Deserialize, Deserializer, Serialize};
+use serde::{Deserialize, Serialize};
 
-use crate::scene::de::{object, object_opt, tagged_object, variant, NoData, PATH_MARK};
+use crate::clearance::laws::{FrictionLaw, NormalLaw};
+use crate::scene::check::Checker;
+use crate::scene::de::{object, object_opt, tagged_kinds};
+use crate::scene::error::{invalid, SceneError};
 
 /// Elastic properties of one contacting body (for the Hertz stiffness of docs/model.md §3).
 ///
@@ -81,25 +90,25 @@ pub struct RestitutionSpec {
     pub restitution: f64,
 }
 
-/// Normal contact law (`"law"` selects the variant). See [`crate::laws::NormalLaw`].
-///
-/// ```text
-/// impact              K δ^{3/2} + STEP(δ,0,0,d_max,c_max) δ̇
-/// lankarani_nikravesh K δ^{3/2} [1 + 3(1 − c_r²) δ̇/(4 δ̇⁻)]
-/// flores              K δ^{3/2} [1 + 8(1 − c_r) δ̇/(5 c_r δ̇⁻)]
-/// hunt_crossley       K δ^{3/2} [1 + 3(1 − c_r) δ̇/(2 δ̇⁻)]
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "law", rename_all = "snake_case")]
-pub enum NormalSpec {
-    /// ADAMS IMPACT (the paper's law).
-    Impact(ImpactSpec),
-    /// Lankarani–Nikravesh.
-    LankaraniNikravesh(RestitutionSpec),
-    /// Flores et al. 2011.
-    Flores(RestitutionSpec),
-    /// Hunt–Crossley.
-    HuntCrossley(RestitutionSpec),
+tagged_kinds! {
+    /// Normal contact law (`"law"` selects the variant). See [`crate::laws::NormalLaw`].
+    ///
+    /// ```text
+    /// impact              K δ^{3/2} + STEP(δ,0,0,d_max,c_max) δ̇
+    /// lankarani_nikravesh K δ^{3/2} [1 + 3(1 − c_r²) δ̇/(4 δ̇⁻)]
+    /// flores              K δ^{3/2} [1 + 8(1 − c_r) δ̇/(5 c_r δ̇⁻)]
+    /// hunt_crossley       K δ^{3/2} [1 + 3(1 − c_r) δ̇/(2 δ̇⁻)]
+    /// ```
+    pub enum NormalSpec, tag "law", unknown "normal law" {
+        /// ADAMS IMPACT (the paper's law).
+        "impact" => Impact(ImpactSpec),
+        /// Lankarani–Nikravesh.
+        "lankarani_nikravesh" => LankaraniNikravesh(RestitutionSpec),
+        /// Flores et al. 2011.
+        "flores" => Flores(RestitutionSpec),
+        /// Hunt–Crossley.
+        "hunt_crossley" => HuntCrossley(RestitutionSpec),
+    }
 }
 
 /// Coulomb friction data.
@@ -118,50 +127,110 @@ pub struct CoulombSpec {
     pub v1: f64,
 }
 
-/// Friction law (`"law"` selects the variant). See [`crate::laws::FrictionLaw`].
-///
-/// ```text
-/// none     F_T = 0
-/// coulomb  F_T = −μ c_d(|v_T|) F_N sign(v_T)   (Ambrósio's c_d)
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize, Default)]
-#[serde(tag = "law", rename_all = "snake_case")]
-pub enum FrictionSpec {
-    /// Frictionless (default).
-    #[default]
-    None,
-    /// Coulomb with Ambrósio's dynamic correction.
-    Coulomb(CoulombSpec),
-}
-
-impl<'de> Deserialize<'de> for NormalSpec {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let (tag, obj) = tagged_object::<D>(d, "law")?;
-        match tag.as_str() {
-            "impact" => variant::<D, _>(obj, "law").map(NormalSpec::Impact),
-            "lankarani_nikravesh" => {
-                variant::<D, _>(obj, "law").map(NormalSpec::LankaraniNikravesh)
-            }
-            "flores" => variant::<D, _>(obj, "law").map(NormalSpec::Flores),
-            "hunt_crossley" => variant::<D, _>(obj, "law").map(NormalSpec::HuntCrossley),
-            other => Err(D::Error::custom(format!(
-                "{PATH_MARK}law{PATH_MARK}unknown normal law `{other}`, expected one of \
-                 `impact`, `lankarani_nikravesh`, `flores`, `hunt_crossley`"
-            ))),
-        }
+tagged_kinds! {
+    /// Friction law (`"law"` selects the variant). See [`crate::laws::FrictionLaw`].
+    ///
+    /// ```text
+    /// none     F_T = 0
+    /// coulomb  F_T = −μ c_d(|v_T|) F_N sign(v_T)   (Ambrósio's c_d)
+    /// ```
+    #[derive(Default)]
+    pub enum FrictionSpec, tag "law", unknown "friction law" {
+        /// Frictionless (default).
+        #[default]
+        "none" => None,
+        /// Coulomb with Ambrósio's dynamic correction.
+        "coulomb" => Coulomb(CoulombSpec),
     }
 }
 
-impl<'de> Deserialize<'de> for FrictionSpec {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let (tag, obj) = tagged_object::<D>(d, "law")?;
-        match tag.as_str() {
-            "none" => variant::<D, NoData>(obj, "law").map(|_| FrictionSpec::None),
-            "coulomb" => variant::<D, _>(obj, "law").map(FrictionSpec::Coulomb),
-            other => Err(D::Error::custom(format!(
-                "{PATH_MARK}law{PATH_MARK}unknown friction law `{other}`, expected `none` or \
-                 `coulomb`"
-            ))),
+/// `check_k(path of the normal law, k, materials)`: a joint's check of its contact stiffness.
+pub(crate) type StiffnessCheck<'a> =
+    dyn Fn(&str, &Option<f64>, &Option<Materials>) -> Result<(), SceneError> + 'a;
+
+/// The checks a clearance joint's normal and friction laws share, revolute or prismatic:
+/// `check_k(path of the normal law, k, materials)` checks the stiffness (a revolute joint may
+/// derive it from materials, a flat guide face may not); the rest is the same for both.
+pub(crate) fn check_contact_laws(
+    p: &str,
+    normal: &NormalSpec,
+    friction: &FrictionSpec,
+    check_k: &StiffnessCheck<'_>,
+) -> Result<(), SceneError> {
+    type C = Checker;
+    let np = format!("{p}.normal");
+    match normal {
+        NormalSpec::Impact(s) => {
+            check_k(&np, &s.k, &s.materials)?;
+            C::non_negative(&format!("{np}.c_max"), s.c_max, "c_max")?;
+            C::positive(&format!("{np}.d_max"), s.d_max, "d_max")?;
         }
+        NormalSpec::LankaraniNikravesh(s) | NormalSpec::Flores(s) | NormalSpec::HuntCrossley(s) => {
+            check_k(&np, &s.k, &s.materials)?;
+            let rp = format!("{np}.restitution");
+            C::finite(&rp, s.restitution)?;
+            if !(s.restitution > 0.0 && s.restitution <= 1.0) {
+                return Err(invalid(
+                    rp,
+                    format!(
+                        "the coefficient of restitution must lie in (0, 1], got {}",
+                        s.restitution
+                    ),
+                ));
+            }
+        }
+    }
+    if let FrictionSpec::Coulomb(f) = friction {
+        let fp = format!("{p}.friction");
+        C::non_negative(&format!("{fp}.mu"), f.mu, "mu")?;
+        C::non_negative(&format!("{fp}.v0"), f.v0, "v0")?;
+        C::finite(&format!("{fp}.v1"), f.v1)?;
+        if !(f.v1 >= f.v0) {
+            return Err(invalid(
+                format!("{fp}.v1"),
+                format!("v1 must be >= v0 = {}, got {}", f.v0, f.v1),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The compiled normal law; `stiffness(k, materials)` gives K (validated: exactly one given,
+/// or materials refused by the joint).
+pub(crate) fn normal_law(
+    spec: &NormalSpec,
+    stiffness: impl Fn(Option<f64>, Option<Materials>) -> f64,
+) -> NormalLaw {
+    match spec {
+        NormalSpec::Impact(s) => NormalLaw::Impact {
+            k: stiffness(s.k, s.materials),
+            c_max: s.c_max,
+            d_max: s.d_max,
+        },
+        NormalSpec::LankaraniNikravesh(s) => NormalLaw::LankaraniNikravesh {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+        NormalSpec::Flores(s) => NormalLaw::Flores {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+        NormalSpec::HuntCrossley(s) => NormalLaw::HuntCrossley {
+            k: stiffness(s.k, s.materials),
+            restitution: s.restitution,
+        },
+    }
+}
+
+/// The compiled friction law: None when there is none or μ = 0 (no code runs).
+pub(crate) fn friction_law(spec: &FrictionSpec) -> Option<FrictionLaw> {
+    match spec {
+        FrictionSpec::None => None,
+        FrictionSpec::Coulomb(f) if f.mu == 0.0 => None,
+        FrictionSpec::Coulomb(f) => Some(FrictionLaw::Coulomb {
+            mu: f.mu,
+            v0: f.v0,
+            v1: f.v1,
+        }),
     }
 }

@@ -7,3 +7,4 @@ pub mod geometry;
 pub mod laws;
 pub mod prismatic;
 pub mod revolute;
+mod revolute_jacobian;

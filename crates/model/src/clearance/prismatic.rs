@@ -5,11 +5,18 @@ use std::cell::Cell;
 
 use serde::{Deserialize, Serialize};
 
-use crate::clearance::contact::{FrictionSpec, NormalSpec};
+use crate::clearance::contact::{
+    check_contact_laws, friction_law, normal_law, FrictionSpec, Materials, NormalSpec,
+};
 use crate::clearance::laws::{FrictionLaw, NormalLaw};
-use crate::elements::{check_moving, point_state, Load, Pt};
+use crate::elements::input::{point_state, Input, Kin, Load, Pt};
+use crate::labels::EventLabels;
+use crate::mechanism::row::{Row, Term, TermKind};
 use crate::planar::{dot, perp, rot};
-use crate::scene::{invalid, object, Checker, Scene, SceneError, GROUND};
+use crate::scene::check::Checker;
+use crate::scene::de::object;
+use crate::scene::error::{invalid, SceneError};
+use crate::scene::refs::{check_moving, SceneRefs, GROUND};
 
 /// The guide of a prismatic clearance joint: a line through a ground point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -91,6 +98,21 @@ pub struct PrismaticClearanceSpec {
 }
 
 impl PrismaticClearanceSpec {
+    /// Its relative coordinate u·(r_C − o), the block centre along the guide (validated).
+    pub(crate) fn coordinate(&self, refs: &dyn SceneRefs) -> Input {
+        let k = refs.body_index(&self.block.body).expect("validated");
+        let d = self.guide.direction;
+        let l = d[0].hypot(d[1]);
+        Input::Along {
+            p: Pt {
+                body: Some(k),
+                s: refs.body_points(k)[&self.block.point],
+            },
+            o: self.guide.at,
+            u: [d[0] / l, d[1] / l],
+        }
+    }
+
     /// Radial clearance c = (h − w)/2 (m).
     pub fn clearance(&self) -> f64 {
         0.5 * (self.guide.width - self.block.width)
@@ -105,13 +127,23 @@ impl PrismaticClearanceSpec {
     }
 }
 
-/// Checks a prismatic clearance joint (docs/scene-format.md, "Prismatic clearance joint").
-pub(crate) fn validate_prismatic(
-    scene: &Scene,
+/// Checks a prismatic clearance joint (docs/scene-format.md, "Prismatic clearance joint"): its
+/// guide, its block, its contact laws, its initial pose.
+pub(crate) fn validate(
+    refs: &dyn SceneRefs,
     p: &str,
     s: &PrismaticClearanceSpec,
 ) -> Result<(), SceneError> {
-    type C = Checker;
+    check_guide(p, s)?;
+    check_block(refs, p, s)?;
+    check_contact_laws(p, &s.normal, &s.friction, &check_stiffness)?;
+    check_initial_pose(p, s)
+}
+
+type C = Checker;
+
+/// The guide: the ground, a finite line of non-zero direction, a positive width.
+fn check_guide(p: &str, s: &PrismaticClearanceSpec) -> Result<(), SceneError> {
     if s.guide.body != GROUND {
         return Err(invalid(
             format!("{p}.guide.body"),
@@ -131,8 +163,18 @@ pub(crate) fn validate_prismatic(
         ));
     }
     C::positive(&format!("{p}.guide.width"), s.guide.width, "guide width")?;
-    let k = check_moving(scene, &format!("{p}.block.body"), &s.block.body)?;
-    if !scene.bodies[k].points.contains_key(&s.block.point) {
+    Ok(())
+}
+
+/// The block: a point of a moving body, a non-zero axis, positive sizes narrower than the
+/// guide.
+fn check_block(
+    refs: &dyn SceneRefs,
+    p: &str,
+    s: &PrismaticClearanceSpec,
+) -> Result<(), SceneError> {
+    let k = check_moving(refs, &format!("{p}.block.body"), &s.block.body)?;
+    if !refs.body_points(k).contains_key(&s.block.point) {
         return Err(invalid(
             format!("{p}.block.point"),
             format!(
@@ -160,23 +202,30 @@ pub(crate) fn validate_prismatic(
             ),
         ));
     }
-    // A flat guide face has no radii: the stiffness is given, never derived from materials.
-    let k_of = |np: &str, k: &Option<f64>, m: &Option<crate::scene::Materials>| {
-        if m.is_some() {
-            return Err(invalid(
-                format!("{np}.materials"),
-                "a flat guide face has no radii for the Hertz stiffness: give k (N/m^1.5)",
-            ));
-        }
-        match k {
-            Some(k) => C::positive(&format!("{np}.k"), *k, "stiffness k"),
-            None => Err(invalid(
-                np.to_string(),
-                "the normal law needs its stiffness k (N/m^1.5)",
-            )),
-        }
-    };
-    crate::scene::check_contact_laws(p, &s.normal, &s.friction, &k_of)?;
+    Ok(())
+}
+
+/// The normal law's stiffness at `np`: a flat guide face has no radii, so the stiffness is
+/// given (k > 0), never derived from materials.
+fn check_stiffness(np: &str, k: &Option<f64>, m: &Option<Materials>) -> Result<(), SceneError> {
+    if m.is_some() {
+        return Err(invalid(
+            format!("{np}.materials"),
+            "a flat guide face has no radii for the Hertz stiffness: give k (N/m^1.5)",
+        ));
+    }
+    match k {
+        Some(k) => C::positive(&format!("{np}.k"), *k, "stiffness k"),
+        None => Err(invalid(
+            np.to_string(),
+            "the normal law needs its stiffness k (N/m^1.5)",
+        )),
+    }
+}
+
+/// The initial offset, tilt and their rates: finite, nearly aligned, and clear of the faces
+/// (or, allowed, in contact at most half the block's width deep).
+fn check_initial_pose(p: &str, s: &PrismaticClearanceSpec) -> Result<(), SceneError> {
     C::finite(&format!("{p}.initial_offset"), s.initial_offset)?;
     C::finite(&format!("{p}.initial_tilt"), s.initial_tilt)?;
     C::finite(&format!("{p}.initial_offset_rate"), s.initial_offset_rate)?;
@@ -227,6 +276,14 @@ pub(crate) fn validate_prismatic(
     Ok(())
 }
 
+/// The event function of each corner of a prismatic clearance joint: its gap δ_i
+/// (docs/model.md §7, §11).
+pub(crate) const CORNER_CONTACT: EventLabels = EventLabels {
+    kind: "corner_contact",
+    rising: "corner_contact_onset",
+    falling: "corner_contact_loss",
+};
+
 /// A compiled prismatic clearance joint (docs/model.md §11).
 #[derive(Debug)]
 pub(crate) struct Prismatic {
@@ -269,9 +326,9 @@ pub(crate) struct PrismaticEval {
 
 impl Prismatic {
     /// Builds the joint from its validated spec.
-    pub(crate) fn new(scene: &Scene, ji: usize, s: &PrismaticClearanceSpec) -> Prismatic {
-        let k = scene.body_index(&s.block.body).expect("validated");
-        let s_c = scene.bodies[k].points[&s.block.point];
+    pub(crate) fn new(refs: &dyn SceneRefs, ji: usize, s: &PrismaticClearanceSpec) -> Prismatic {
+        let k = refs.body_index(&s.block.body).expect("validated");
+        let s_c = refs.body_points(k)[&s.block.point];
         let la = s.block.axis[0].hypot(s.block.axis[1]);
         let a = [s.block.axis[0] / la, s.block.axis[1] / la];
         let ap = perp(a);
@@ -287,34 +344,8 @@ impl Prismatic {
         };
         let lu = s.guide.direction[0].hypot(s.guide.direction[1]);
         let u = [s.guide.direction[0] / lu, s.guide.direction[1] / lu];
-        let stiffness = |k: Option<f64>| k.expect("validated");
-        let normal = match &s.normal {
-            NormalSpec::Impact(n) => NormalLaw::Impact {
-                k: stiffness(n.k),
-                c_max: n.c_max,
-                d_max: n.d_max,
-            },
-            NormalSpec::LankaraniNikravesh(n) => NormalLaw::LankaraniNikravesh {
-                k: stiffness(n.k),
-                restitution: n.restitution,
-            },
-            NormalSpec::Flores(n) => NormalLaw::Flores {
-                k: stiffness(n.k),
-                restitution: n.restitution,
-            },
-            NormalSpec::HuntCrossley(n) => NormalLaw::HuntCrossley {
-                k: stiffness(n.k),
-                restitution: n.restitution,
-            },
-        };
-        let friction = match &s.friction {
-            FrictionSpec::Coulomb(f) if f.mu > 0.0 => Some(FrictionLaw::Coulomb {
-                mu: f.mu,
-                v0: f.v0,
-                v1: f.v1,
-            }),
-            _ => None,
-        };
+        let normal = normal_law(&s.normal, |k, _| k.expect("validated"));
+        let friction = friction_law(&s.friction);
         Prismatic {
             joint: ji,
             name: s.name.clone(),
@@ -342,24 +373,44 @@ impl Prismatic {
         }
     }
 
+    /// The equations held during the initial assembly (docs/model.md §1.6): the block's
+    /// offset and tilt at their initial values and rates (rows "offset", "tilt"); none when
+    /// its body is not integrated.
+    pub(crate) fn assembly_rows(&self, integrated: &dyn Fn(usize) -> bool, t0: f64) -> Vec<Row> {
+        if !integrated(self.body) {
+            return Vec::new();
+        }
+        let mut r1 = Row::new(self.joint, "offset");
+        r1.push(Term {
+            body: self.body,
+            kind: TermKind::Point {
+                s: self.s_c,
+                w: self.n,
+            },
+        });
+        r1.konst = -(self.n[0] * self.o[0] + self.n[1] * self.o[1]) - self.offset0;
+        let mut r2 = Row::new(self.joint, "tilt");
+        r2.push(Term {
+            body: self.body,
+            kind: TermKind::Angle { c: 1.0 },
+        });
+        r2.konst = self.angle_offset - self.tilt0;
+        vec![
+            r1.with_rate(self.offset_rate0, t0),
+            r2.with_rate(self.tilt_rate0, t0),
+        ]
+    }
+
     /// The gap δ_i and its rate δ̇_i of corner i.
     #[inline]
-    pub(crate) fn corner_gap(
-        &self,
-        i: usize,
-        pose: &[[f64; 3]],
-        vel: &[[f64; 3]],
-        cs: &[[f64; 2]],
-    ) -> (f64, f64) {
+    pub(crate) fn corner_gap(&self, i: usize, kin: &Kin<'_>) -> (f64, f64) {
         let (s, side) = self.corners[i];
         let (r, v, _) = point_state(
             &Pt {
                 body: Some(self.body),
                 s,
             },
-            pose,
-            vel,
-            cs,
+            kin,
         );
         let y = dot(self.n, [r[0] - self.o[0], r[1] - self.o[1]]);
         (side * y - self.half_h, side * dot(self.n, v))
@@ -367,18 +418,12 @@ impl Prismatic {
 
     /// Forces of the four corners; `apply` receives each contact load on the block.
     #[inline]
-    pub(crate) fn eval(
-        &self,
-        pose: &[[f64; 3]],
-        vel: &[[f64; 3]],
-        cs: &[[f64; 2]],
-        mut apply: impl FnMut(Load),
-    ) -> PrismaticEval {
+    pub(crate) fn eval(&self, kin: &Kin<'_>, mut apply: impl FnMut(Load)) -> PrismaticEval {
         let k = self.body;
         let mut ev = PrismaticEval::default();
         for i in 0..4 {
             let (s, side) = self.corners[i];
-            let (r, v, arm) = point_state(&Pt { body: Some(k), s }, pose, vel, cs);
+            let (r, v, arm) = point_state(&Pt { body: Some(k), s }, kin);
             let d = [r[0] - self.o[0], r[1] - self.o[1]];
             let delta = side * dot(self.n, d) - self.half_h;
             let ddot = side * dot(self.n, v);
@@ -401,10 +446,10 @@ impl Prismatic {
                 apply((k, arm, f, 0.0));
             }
         }
-        let c = rot(cs[k], self.s_c);
-        let rc = [pose[k][0] + c[0], pose[k][1] + c[1]];
+        let c = rot(kin.cs[k], self.s_c);
+        let rc = [kin.pose[k][0] + c[0], kin.pose[k][1] + c[1]];
         ev.offset = dot(self.n, [rc[0] - self.o[0], rc[1] - self.o[1]]);
-        ev.tilt = pose[k][2] + self.angle_offset;
+        ev.tilt = kin.pose[k][2] + self.angle_offset;
         ev
     }
 }

@@ -1,86 +1,176 @@
-//! Constraint equations: each scalar equation Φ = konst + rate·t + Σ terms, and its evaluation.
+//! The constraint equations of the ideal joints and the drivers that prescribe no body: each a
+//! scalar Φ = konst + rate·t + Σ terms, with its value, rate, γ and Jacobian blocks.
+//!
+//! ```text
+//! revolute       Φ = r_a^P − r_b^P              (rows "x", "y")
+//! translational  Φ = (n·(r^P − o), φ − φ₀)      (rows "across the line", "rotation")
+//! driver         Φ = φ − θ₀ − ω t               (row "angle")
+//! Φ̇ = Φ_q q̇ + Φ_t,   Φ̈ = Φ_q q̈ − γ   (prescribed accelerations folded into γ)
+//! ```
+//! Every formulation uses these equations (docs/model.md §1.2); how it enforces them is its own
+//! (mechanism/formulation).
 
-use crate::planar::dot;
-use crate::scene::{Attachment, Scene, GROUND};
+use crate::mechanism::bodies::{Bodies, BodyInfo, Owner};
+use crate::mechanism::scratch::Scratch;
+use crate::planar::{dot, perp, rot};
+use crate::scene::error::SceneError;
+use crate::scene::format::{JointSpec, Scene};
 
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum TermKind {
-    /// w · r^P, r^P = r + A(φ) s
-    Point { s: [f64; 2], w: [f64; 2] },
-    /// c · φ
-    Angle { c: f64 },
-}
+pub(crate) use crate::mechanism::row::{Row, RowEval, Term, TermKind};
 
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Term {
-    pub body: usize,
-    pub kind: TermKind,
-}
-
-/// One scalar constraint equation Φ = konst + rate·t + Σ terms.
-#[derive(Clone, Debug)]
-pub(crate) struct Row {
-    pub terms: [Term; 2],
-    pub n_terms: usize,
-    pub konst: f64,
-    pub rate: f64,
-    /// Scene joint index.
-    pub joint: usize,
-    /// Which equation of the joint ("x", "y", "across the line", ...).
-    pub label: &'static str,
-}
-
-/// One evaluated constraint row.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct RowEval {
-    pub phi: f64,
-    pub phid: f64,
-    pub gamma: f64,
-    /// ∂Φ/∂(x, y, φ) of the body of each term.
-    pub jrows: [[f64; 3]; 2],
-}
-
-impl Row {
-    pub(crate) fn new(joint: usize, label: &'static str) -> Row {
-        Row {
-            terms: [Term {
-                body: 0,
-                kind: TermKind::Angle { c: 0.0 },
-            }; 2],
-            n_terms: 0,
-            konst: 0.0,
-            rate: 0.0,
-            joint,
-            label,
-        }
+/// Value Φ, rate Φ̇, γ (Φ̈ = Φ_q q̈ − γ, prescribed accelerations folded in) and the Jacobian
+/// block of each term of one constraint row (after the kinematics of `sc`).
+#[inline]
+pub(crate) fn eval_row(row: &Row, info: &[BodyInfo], t: f64, sc: &Scratch) -> RowEval {
+    let mut out = RowEval {
+        phi: row.konst + row.rate * t,
+        phid: row.rate,
+        gamma: 0.0,
+        jrows: [[0.0; 3]; 2],
+    };
+    for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+        let k = term.body;
+        let [x, y, _] = sc.pose[k];
+        let [vx, vy, w] = sc.vel[k];
+        let owner = info[k].owner;
+        out.jrows[ti] = match term.kind {
+            TermKind::Point { s, w: wv } => {
+                let a = rot(sc.cs[k], s);
+                let b = perp(a);
+                out.phi += wv[0] * (x + a[0]) + wv[1] * (y + a[1]);
+                let jphi = dot(wv, b);
+                out.phid += wv[0] * vx + wv[1] * vy + jphi * w;
+                match owner {
+                    Owner::Int(_) => out.gamma += w * w * dot(wv, a),
+                    Owner::Pres(_) => {
+                        let [ax, ay, al] = sc.acc[k];
+                        out.gamma -= wv[0] * (ax + al * b[0] - w * w * a[0])
+                            + wv[1] * (ay + al * b[1] - w * w * a[1]);
+                    }
+                }
+                [wv[0], wv[1], jphi]
+            }
+            TermKind::Angle { c } => {
+                out.phi += c * sc.pose[k][2];
+                out.phid += c * w;
+                if let Owner::Pres(_) = owner {
+                    out.gamma -= c * sc.acc[k][2];
+                }
+                [0.0, 0.0, c]
+            }
+        };
     }
+    out
+}
 
-    pub(crate) fn push(&mut self, t: Term) {
-        self.terms[self.n_terms] = t;
-        self.n_terms += 1;
-    }
+/// `equation 'x' of revolute joint 'pin'`, for messages.
+pub(crate) fn describe(row: &Row, scene: &Scene) -> String {
+    format!("equation '{}' of {}", row.label, scene.joints[row.joint])
+}
 
-    /// Adds w · r^P of an attachment (folds a ground location into the constant).
-    pub(crate) fn add_attachment(&mut self, scene: &Scene, a: &Attachment, w: [f64; 2]) {
-        if a.body == GROUND {
-            self.konst += dot(w, a.at.expect("validated"));
-        } else {
-            let k = scene.body_index(&a.body).expect("validated");
-            self.push(Term {
-                body: k,
-                kind: TermKind::Point {
-                    s: point_of(scene, a),
-                    w,
-                },
+/// The constraint equations of a mechanism, and the integrated body of each of their terms.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Constraints {
+    pub rows: Vec<Row>,
+    /// Integrated body index of each term of each row (None: a prescribed body).
+    pub row_int: Vec<[Option<usize>; 2]>,
+}
+
+impl Constraints {
+    /// Build phase 2: the equations of every joint the prescriptions did not consume, in joint
+    /// order. A joint acting only on the ground and prescribed bodies is an error.
+    pub(crate) fn build(scene: &Scene, bodies: &Bodies) -> Result<Constraints, SceneError> {
+        let mut rows = Vec::new();
+        for (ji, joint) in scene.joints.iter().enumerate() {
+            if bodies.used[ji] {
+                continue;
+            }
+            let first = rows.len();
+            joint_rows(scene, ji, joint, &mut rows);
+            // A joint acting only on the ground and prescribed bodies constrains nothing that
+            // moves freely: it repeats or contradicts the prescription.
+            let only_prescribed = rows[first..].iter().all(|r| {
+                r.terms[..r.n_terms]
+                    .iter()
+                    .all(|t| matches!(bodies.info[t.body].owner, Owner::Pres(_)))
             });
+            if rows.len() > first && only_prescribed {
+                return Err(SceneError::Redundant {
+                    path: format!("joints[{ji}]"),
+                    reason: format!(
+                        "{joint} acts only on the ground and on bodies whose motion is already \
+                         prescribed by drivers and pins"
+                    ),
+                });
+            }
         }
+        let row_int = rows
+            .iter()
+            .map(|row| {
+                let mut o = [None; 2];
+                for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                    if let Owner::Int(i) = bodies.info[term.body].owner {
+                        o[ti] = Some(i);
+                    }
+                }
+                o
+            })
+            .collect();
+        Ok(Constraints { rows, row_int })
+    }
+
+    /// Number of equations.
+    pub(crate) fn len(&self) -> usize {
+        self.rows.len()
     }
 }
 
-pub(crate) fn point_of(scene: &Scene, a: &Attachment) -> [f64; 2] {
-    if a.body == GROUND {
-        return a.at.expect("validated");
+/// The equations of joint `ji` (none for a clearance joint: it is a force).
+fn joint_rows(scene: &Scene, ji: usize, joint: &JointSpec, rows: &mut Vec<Row>) {
+    match joint {
+        JointSpec::Revolute(r) => {
+            for (axis, label) in [(0usize, "x"), (1, "y")] {
+                let mut w = [0.0; 2];
+                w[axis] = 1.0;
+                let mut row = Row::new(ji, label);
+                row.add_attachment(scene, &r.a, w);
+                row.add_attachment(scene, &r.b, [-w[0], -w[1]]);
+                rows.push(row);
+            }
+        }
+        JointSpec::Translational(t) => {
+            let k = scene.body_index(&t.body).expect("validated");
+            let s = scene.bodies[k].points[&t.point];
+            let len = t.direction[0].hypot(t.direction[1]);
+            let u = [t.direction[0] / len, t.direction[1] / len];
+            let n = perp(u);
+            let mut r1 = Row::new(ji, "across the line");
+            r1.push(Term {
+                body: k,
+                kind: TermKind::Point { s, w: n },
+            });
+            r1.konst = -dot(n, t.origin);
+            rows.push(r1);
+            let mut r2 = Row::new(ji, "rotation");
+            r2.push(Term {
+                body: k,
+                kind: TermKind::Angle { c: 1.0 },
+            });
+            r2.konst = -t.angle.unwrap_or(scene.bodies[k].angle);
+            rows.push(r2);
+        }
+        JointSpec::Driver(d) => {
+            let k = scene.body_index(&d.body).expect("validated");
+            let mut row = Row::new(ji, "angle");
+            row.push(Term {
+                body: k,
+                kind: TermKind::Angle { c: 1.0 },
+            });
+            row.konst = -d.theta0;
+            row.rate = -d.omega_rad_s();
+            row.driver = true;
+            rows.push(row);
+        }
+        JointSpec::Clearance(_) | JointSpec::PrismaticClearance(_) => {}
     }
-    let k = scene.body_index(&a.body).expect("validated");
-    scene.bodies[k].points[a.point.as_ref().expect("validated")]
 }

@@ -1,172 +1,233 @@
-//! Event functions of a mechanism (docs/model.md §7): which they are, their values and names.
+//! The event functions of a mechanism (docs/model.md §7): which they are, their values and
+//! rates, and their names and labels (each declared by the joint or element that owns it).
+//!
+//! ```text
+//! order: δ of every revolute clearance joint, ε − ε_cap of every capped film, the four corner
+//!        gaps δ_i of every prismatic clearance joint, every force element's own functions,
+//!        and (kink_events) the kinks of every revolute clearance joint's force laws
+//! ```
+//! The kinks come last so that switching them keeps every other index.
 
 use crate::clearance::geometry::ClearanceState;
-use crate::clearance::laws::{FrictionLaw, NormalLaw};
-use crate::clearance::revolute::{Clr, Kink};
-use crate::mechanism::{Mechanism, Scratch};
+use crate::clearance::prismatic::{self, Prismatic};
+use crate::clearance::revolute::{self, Kink, Revolute};
+use crate::elements::Element;
+use crate::labels::EventLabels;
+use crate::mechanism::forces::Forces;
+use crate::mechanism::scratch::Scratch;
 
-/// What the event functions are.
+/// What an event function is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum EventKind {
-    /// δ of clearance joint k.
+    /// δ of revolute clearance joint k.
     Contact(usize),
-    /// ε − ε_cap of clearance joint k.
+    /// ε − ε_cap of revolute clearance joint k.
     EpsCap(usize),
     /// δ_i of corner i of prismatic clearance joint k (docs/model.md §11).
     Corner(usize, usize),
-    /// A point where a force law of clearance joint k is not smooth (docs/model.md §7).
+    /// Event function i of force element k (its [`crate::elements::interface::ForceElement`]).
+    Element(usize, usize),
+    /// A point where a force law of revolute clearance joint k is not smooth (§7).
     Kink(usize, Kink),
 }
-impl Mechanism {
-    /// Event functions at (t, y) and, when `g_dot` is given, their rates (after
-    /// `kinematics`): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i (docs/model.md §2,
-    /// §7, §11), all from positions and velocities.
-    pub(crate) fn event_values(&self, sc: &Scratch, g: &mut [f64], mut g_dot: Option<&mut [f64]>) {
-        // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
-        // the last one computed is kept.
-        let mut last: Option<(usize, ClearanceState)> = None;
-        let mut state = |k: usize| match last {
-            Some((j, st)) if j == k => st,
-            _ => {
-                let st = self.clearance_state(k, sc);
-                last = Some((k, st));
-                st
-            }
-        };
-        for (i, ev) in self.events.iter().enumerate() {
-            let (v, d) = match *ev {
-                EventKind::Contact(k) => {
-                    let st = state(k);
-                    (st.delta, st.delta_dot)
-                }
-                EventKind::EpsCap(k) => {
-                    let cap = self.clr[k].film.and_then(|f| f.eps_cap).unwrap_or(1.0);
-                    let st = state(k);
-                    (st.eps - cap, st.eps_dot)
-                }
-                EventKind::Corner(k, c) => {
-                    self.prismatic[k].corner_gap(c, &sc.pose, &sc.vel, &sc.cs)
-                }
-                EventKind::Kink(k, kink) => self.kink_value(k, kink, state(k)),
-            };
-            g[i] = v;
-            if let Some(gd) = g_dot.as_deref_mut() {
-                gd[i] = d;
-            }
-        }
-    }
 
-    /// Which event function index `i` is: ("contact" | "eps_cap", clearance joint name), or
-    /// ("corner_contact", prismatic clearance joint name) for the gap δ_i of one of its four
-    /// corners (docs/model.md §11).
-    pub fn event_name(&self, i: usize) -> Option<(&'static str, &str)> {
-        self.events.get(i).map(|e| match *e {
-            EventKind::Contact(k) => ("contact", self.clr[k].name.as_str()),
-            EventKind::EpsCap(k) => ("eps_cap", self.clr[k].name.as_str()),
-            EventKind::Corner(k, _) => ("corner_contact", self.prismatic[k].name.as_str()),
-            EventKind::Kink(k, kink) => (
-                match kink {
-                    Kink::FullDamping => "kink_full_damping",
-                    Kink::Clip => "kink_force_clip",
-                    Kink::SlipV0 => "kink_slip_v0",
-                    Kink::SlipV1 => "kink_slip_v1",
-                },
-                self.clr[k].name.as_str(),
-            ),
-        })
-    }
-
-    /// The value and rate of a kink function ([`Kink`]) of clearance joint `k` at its clearance
-    /// state `st`. The rate of δ − d_max is δ̇; the others need accelerations, so in contact
-    /// their rate is given as infinite (the step is always sampled) and outside contact, where
-    /// they are held at 1, as 0.
-    fn kink_value(&self, k: usize, kink: Kink, st: ClearanceState) -> (f64, f64) {
-        let c = &self.clr[k];
-        if kink == Kink::FullDamping {
-            let d_max = match c.normal {
-                NormalLaw::Impact { d_max, .. } => d_max,
-                _ => f64::INFINITY,
-            };
-            return (st.delta - d_max, st.delta_dot);
-        }
-        if st.delta <= 0.0 {
-            return (1.0, 0.0);
-        }
-        let (v0, v1) = match c.friction {
-            Some(FrictionLaw::Coulomb { v0, v1, .. }) => (v0, v1),
-            _ => (0.0, 0.0),
-        };
-        let g = match kink {
-            Kink::Clip => c
-                .normal
-                .unclipped_ratio(st.delta, st.delta_dot, c.impact_velocity.get()),
-            Kink::SlipV0 => st.v_t * st.v_t - v0 * v0,
-            _ => st.v_t * st.v_t - v1 * v1,
-        };
-        (g, f64::INFINITY)
-    }
-
-    /// Adds (or removes) the kink events of the revolute clearance joints' force laws
-    /// (δ = d_max, the clip of F_N at 0, |v_T| = v₀ and v₁; docs/model.md §7), as the scene
-    /// field `kink_events` does. With them an integration restarts at every kink, so a method
-    /// of high order keeps its order through a contact; every other event keeps its index.
-    pub fn set_kink_events(&mut self, on: bool) {
-        self.events = event_list(&self.clr, self.prismatic.len(), on);
-    }
-
-    /// Whether the kink events are on ([`Mechanism::set_kink_events`]).
-    pub fn kink_events(&self) -> bool {
-        self.events.iter().any(|e| matches!(e, EventKind::Kink(..)))
-    }
-
-    /// Sets the stored impact velocity δ̇⁻ of clearance joint `k` (m/s), as the contact-onset
-    /// event does. For tests and for restarting a run from a saved state.
-    pub fn set_impact_velocity(&self, k: usize, v: f64) {
-        if let Some(c) = self.clr.get(k) {
-            c.impact_velocity.set(v);
-        }
-    }
-}
-
-/// The event functions of a mechanism: every clearance joint's δ, the ε − ε_cap of each capped
-/// film, the four corner gaps of each prismatic clearance joint and, with `kinks`, the kinks of
-/// each revolute clearance joint's force laws ([`Kink`]).
-pub(crate) fn event_list(clr: &[Clr], n_prismatic: usize, kinks: bool) -> Vec<EventKind> {
+/// The event functions of a mechanism (module doc), with the kinks when `kinks`.
+pub(crate) fn event_list(
+    revolute: &[Revolute],
+    prismatic: &[Prismatic],
+    elements: &[Element],
+    kinks: bool,
+) -> Vec<EventKind> {
     let mut events = Vec::new();
-    for k in 0..clr.len() {
+    for k in 0..revolute.len() {
         events.push(EventKind::Contact(k));
     }
     // A capped film changes form at ε = ε_cap; a film without a cap has no such point
     // below contact (docs/model.md §7).
-    for (k, c) in clr.iter().enumerate() {
-        if c.film.is_some_and(|f| f.eps_cap.is_some()) {
+    for (k, c) in revolute.iter().enumerate() {
+        if c.has_eps_cap() {
             events.push(EventKind::EpsCap(k));
         }
     }
-    for k in 0..n_prismatic {
+    for k in 0..prismatic.len() {
         for i in 0..4 {
             events.push(EventKind::Corner(k, i));
         }
     }
+    for (k, e) in elements.iter().enumerate() {
+        for i in 0..e.events().len() {
+            events.push(EventKind::Element(k, i));
+        }
+    }
     if kinks {
-        for (k, c) in clr.iter().enumerate() {
-            if let NormalLaw::Impact { c_max, .. } = c.normal {
-                if c_max > 0.0 {
-                    events.push(EventKind::Kink(k, Kink::FullDamping));
-                }
-            }
-            if c.normal.can_clip() {
-                events.push(EventKind::Kink(k, Kink::Clip));
-            }
-            if let Some(FrictionLaw::Coulomb { mu, v0, v1 }) = c.friction {
-                if mu > 0.0 && v0 > 0.0 {
-                    events.push(EventKind::Kink(k, Kink::SlipV0));
-                }
-                if mu > 0.0 && v1 > v0 {
-                    events.push(EventKind::Kink(k, Kink::SlipV1));
+        for (k, c) in revolute.iter().enumerate() {
+            for kink in Kink::ALL {
+                if c.has_kink(kink) {
+                    events.push(EventKind::Kink(k, kink));
                 }
             }
         }
     }
     events
+}
+
+/// The event functions at t and, when `g_dot` is given, their rates, from the kinematics in
+/// `sc` (positions and velocities only): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i,
+/// an element's own, a kink's (docs/model.md §2, §7, §11).
+pub(crate) fn values(
+    events: &[EventKind],
+    forces: &Forces,
+    t: f64,
+    sc: &Scratch,
+    g: &mut [f64],
+    mut g_dot: Option<&mut [f64]>,
+) {
+    let kin = sc.kin();
+    // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
+    // the last one computed is kept.
+    let mut last: Option<(usize, ClearanceState)> = None;
+    let mut state = |k: usize| match last {
+        Some((j, st)) if j == k => st,
+        _ => {
+            let st = forces.revolute[k].state(&kin);
+            last = Some((k, st));
+            st
+        }
+    };
+    for (i, ev) in events.iter().enumerate() {
+        let (v, d) = match *ev {
+            EventKind::Contact(k) => {
+                let st = state(k);
+                (st.delta, st.delta_dot)
+            }
+            EventKind::EpsCap(k) => {
+                let st = state(k);
+                forces.revolute[k].eps_cap_value(&st)
+            }
+            EventKind::Corner(k, c) => forces.prismatic[k].corner_gap(c, &kin),
+            EventKind::Element(k, i) => forces.elements[k].event(i, t, &kin),
+            EventKind::Kink(k, kink) => forces.revolute[k].kink_value(kink, state(k)),
+        };
+        g[i] = v;
+        if let Some(gd) = g_dot.as_deref_mut() {
+            gd[i] = d;
+        }
+    }
+}
+
+/// The labels of an event function, and the index of its owner among the revolute clearance
+/// joints, the prismatic clearance joints or the force elements.
+pub(crate) fn labels(event: EventKind, forces: &Forces) -> (EventLabels, usize) {
+    match event {
+        EventKind::Contact(k) => (revolute::CONTACT, k),
+        EventKind::EpsCap(k) => (revolute::EPS_CAP, k),
+        EventKind::Corner(k, _) => (prismatic::CORNER_CONTACT, k),
+        EventKind::Element(k, i) => (forces.elements[k].events()[i], k),
+        EventKind::Kink(k, kink) => (kink.labels(), k),
+    }
+}
+
+/// The name of a crossing of an event function of kind `kind` (as
+/// [`crate::Mechanism::event_name`] names it) in the given direction: the label that the joint
+/// or element owning such events declares (`contact` rising: `contact_onset`, docs/model.md §7),
+/// or `<kind>_rising` / `<kind>_falling` for a kind none declares.
+pub fn event_label(kind: &str, rising: bool) -> String {
+    match labels_of_kind(kind) {
+        Some(l) => l.label(rising).to_string(),
+        None => format!("{kind}_{}", if rising { "rising" } else { "falling" }),
+    }
+}
+
+/// The labels of an event kind of any joint or element that has events: the clearance joints'
+/// kinds and every force element kind's.
+fn labels_of_kind(kind: &str) -> Option<EventLabels> {
+    let fixed = [
+        revolute::CONTACT,
+        revolute::EPS_CAP,
+        prismatic::CORNER_CONTACT,
+    ];
+    fixed
+        .into_iter()
+        .chain(Kink::ALL.map(Kink::labels))
+        .chain(Element::all_events())
+        .find(|l| l.kind == kind)
+}
+
+#[cfg(test)]
+mod tests {
+    //! Every event function's labels come from the joint that owns it, and are the names the
+    //! Python package has always reported (python/tests/test_run.py).
+    use super::*;
+    use crate::cases::{press_scene, PressJoint};
+    use crate::Mechanism;
+    use lash_solver::OdeSystem;
+
+    #[test]
+    fn each_kind_has_the_labels_its_owner_declares() {
+        for (kind, rising, falling) in [
+            ("contact", "contact_onset", "contact_loss"),
+            ("eps_cap", "eps_cap_reached", "eps_cap_left"),
+            (
+                "corner_contact",
+                "corner_contact_onset",
+                "corner_contact_loss",
+            ),
+            (
+                "kink_full_damping",
+                "kink_full_damping_rising",
+                "kink_full_damping_falling",
+            ),
+            (
+                "kink_force_clip",
+                "kink_force_clip_rising",
+                "kink_force_clip_falling",
+            ),
+            (
+                "kink_slip_v0",
+                "kink_slip_v0_rising",
+                "kink_slip_v0_falling",
+            ),
+            (
+                "kink_slip_v1",
+                "kink_slip_v1_rising",
+                "kink_slip_v1_falling",
+            ),
+            // A kind no joint or element declares.
+            ("event", "event_rising", "event_falling"),
+        ] {
+            assert_eq!(event_label(kind, true), rising);
+            assert_eq!(event_label(kind, false), falling);
+        }
+    }
+
+    #[test]
+    fn a_mechanism_names_and_labels_every_event_function_by_its_owner() {
+        // The dry press: δ of its clearance joint, then (kink_events) the kinks of its IMPACT
+        // law (c_max > 0; it can clip) and of its Coulomb friction (v₀ > 0, v₁ > v₀).
+        let mut m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        let kinds = |m: &Mechanism| -> Vec<(&'static str, String)> {
+            (0..m.n_events())
+                .map(|i| {
+                    let (k, owner) = m.event_name(i).unwrap();
+                    assert_eq!(m.event_labels(i).unwrap().kind, k);
+                    (k, owner.to_string())
+                })
+                .collect()
+        };
+        assert_eq!(kinds(&m), [("contact", "rod_slider".to_string())]);
+        m.set_kink_events(true);
+        let all: Vec<&str> = kinds(&m).iter().map(|k| k.0).collect();
+        assert_eq!(
+            all,
+            [
+                "contact",
+                "kink_full_damping",
+                "kink_force_clip",
+                "kink_slip_v0",
+                "kink_slip_v1"
+            ]
+        );
+        assert_eq!(m.event_labels(0).unwrap().label(true), "contact_onset");
+        assert!(m.event_name(5).is_none() && m.event_labels(5).is_none());
+    }
 }

@@ -115,3 +115,123 @@ pub(crate) fn tagged_object<'de, D: Deserializer<'de>>(
     };
     Ok((tag_value, obj))
 }
+
+/// The error of an unknown tag: "unknown WHAT `x`, expected one of `a`, `b`, …" (with two
+/// kinds: "expected `a` or `b`"), at the tag's own path.
+pub(crate) fn unknown_kind<'de, D: Deserializer<'de>>(
+    tag: &str,
+    what: &str,
+    other: &str,
+    kinds: &[&str],
+) -> D::Error {
+    let list: Vec<String> = kinds.iter().map(|k| format!("`{k}`")).collect();
+    let expected = match list.as_slice() {
+        [a, b] => format!("expected {a} or {b}"),
+        _ => format!("expected one of {}", list.join(", ")),
+    };
+    D::Error::custom(format!(
+        "{PATH_MARK}{tag}{PATH_MARK}unknown {what} `{other}`, {expected}"
+    ))
+}
+
+/// The table of an internally tagged enum of the scene format: one line per kind emits the
+/// variant (serialised with its tag), its entry in `KINDS` (the "expected one of" list, in
+/// order), its arm of `type_name()` and of the `Deserialize` that keeps the JSON path of an
+/// error inside the variant (module doc). With `named`, every variant holds a struct with a
+/// `name` field and `name()` is emitted too.
+///
+/// ```text
+/// tagged_kinds! {
+///     /// doc
+///     pub enum JointSpec named, tag "type", unknown "joint type" {
+///         /// doc
+///         "revolute" => Revolute(RevoluteSpec),
+///         …
+///     }
+/// }
+/// ```
+/// A kind without data (`"none" => None`) reads an empty object ([`NoData`]). A line may
+/// start with `@cfg(…)` (before its doc): the `#[cfg(…)]` of all that it emits.
+macro_rules! tagged_kinds {
+    (@variant $d:ident, $obj:ident, $tag:literal, $path:path, $ty:ty) => {
+        $crate::scene::de::variant::<$d, $ty>($obj, $tag).map($path)
+    };
+    (@variant $d:ident, $obj:ident, $tag:literal, $path:path) => {
+        $crate::scene::de::variant::<$d, $crate::scene::de::NoData>($obj, $tag).map(|_| $path)
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident named, tag $tag:literal, unknown $what:literal {
+            $(
+                $(@cfg($cfg:meta))?
+                $(#[$vmeta:meta])*
+                $kind:literal => $variant:ident($ty:ty)
+            ),+ $(,)?
+        }
+    ) => {
+        $crate::scene::de::tagged_kinds! {
+            $(#[$meta])*
+            $vis enum $name, tag $tag, unknown $what {
+                $( $(@cfg($cfg))? $(#[$vmeta])* $kind => $variant($ty) ),+
+            }
+        }
+        impl $name {
+            /// The name of the part (its `"name"` field).
+            pub fn name(&self) -> &str {
+                match self {
+                    $( $(#[cfg($cfg)])? $name::$variant(s) => &s.name, )+
+                }
+            }
+        }
+    };
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident, tag $tag:literal, unknown $what:literal {
+            $(
+                $(@cfg($cfg:meta))?
+                $(#[$vmeta:meta])*
+                $kind:literal => $variant:ident $(($ty:ty))?
+            ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug, PartialEq, serde::Serialize)]
+        #[serde(tag = $tag)]
+        $vis enum $name {
+            $(
+                $(#[cfg($cfg)])?
+                $(#[$vmeta])*
+                #[serde(rename = $kind)]
+                $variant $(($ty))?,
+            )+
+        }
+        impl $name {
+            /// Every kind's tag, in the order of the variants.
+            pub const KINDS: &'static [&'static str] = &[$( $(#[cfg($cfg)])? $kind ),+];
+
+            /// The tag of this kind.
+            pub fn type_name(&self) -> &'static str {
+                match self {
+                    $( $(#[cfg($cfg)])? $name::$variant { .. } => $kind, )+
+                }
+            }
+        }
+        impl<'de> serde::Deserialize<'de> for $name {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let (tag, obj) = $crate::scene::de::tagged_object::<D>(d, $tag)?;
+                match tag.as_str() {
+                    $(
+                        $(#[cfg($cfg)])?
+                        $kind => $crate::scene::de::tagged_kinds!(
+                            @variant D, obj, $tag, $name::$variant $(, $ty)?
+                        ),
+                    )+
+                    other => Err($crate::scene::de::unknown_kind::<D>(
+                        $tag, $what, other, Self::KINDS,
+                    )),
+                }
+            }
+        }
+    };
+}
+pub(crate) use tagged_kinds;

@@ -3,14 +3,14 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
-use serde::de::Error as _;
-use serde::{Deserialize, Deserializer, Serialize};
+use serde::{Deserialize, Serialize};
 
 use crate::clearance::prismatic::PrismaticClearanceSpec;
 use crate::clearance::revolute::ClearanceSpec;
+use crate::elements::input::{Input, Pt};
 use crate::elements::ForceElementSpec;
-use crate::scene::de::{object, object_opt, objects, tagged_object, variant, PATH_MARK};
-use crate::scene::refs::Attachment;
+use crate::scene::de::{object, object_opt, objects, tagged_kinds};
+use crate::scene::refs::{body_or_ground, Attachment, Lookup, SceneRefs};
 
 // ---------------------------------------------------------------------------------------------
 // Types
@@ -266,70 +266,107 @@ pub struct RoleNames {
     pub clearance_joint: Option<String>,
 }
 
-/// A joint of the scene (`"type"` selects the variant).
-///
-/// ```text
-/// revolute       Φ = r_a^P − r_b^P                      (2 equations)
-/// translational  Φ = (n·(r^P − o), φ − φ₀)              (2 equations)
-/// driver         Φ = φ − θ₀ − ω t                       (1 equation)
-/// clearance      no equation: the force pair of docs/model.md §2–§4
-/// prismatic_clearance  no equation: the corner contacts of docs/model.md §11
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
-pub enum JointSpec {
-    /// Ideal revolute joint.
-    Revolute(RevoluteSpec),
-    /// Translational joint along a global line.
-    Translational(TranslationalSpec),
-    /// Rotational driver.
-    Driver(DriverSpec),
-    /// Revolute clearance joint.
-    Clearance(ClearanceSpec),
-    /// Translational clearance joint (a block in a guide).
-    PrismaticClearance(PrismaticClearanceSpec),
-}
-
-impl JointSpec {
-    /// The joint's name.
-    pub fn name(&self) -> &str {
-        match self {
-            JointSpec::Revolute(j) => &j.name,
-            JointSpec::Translational(j) => &j.name,
-            JointSpec::Driver(j) => &j.name,
-            JointSpec::Clearance(j) => &j.name,
-            JointSpec::PrismaticClearance(j) => &j.name,
-        }
-    }
-
-    /// The `"type"` tag.
-    pub fn type_name(&self) -> &'static str {
-        match self {
-            JointSpec::Revolute(_) => "revolute",
-            JointSpec::Translational(_) => "translational",
-            JointSpec::Driver(_) => "driver",
-            JointSpec::Clearance(_) => "clearance",
-            JointSpec::PrismaticClearance(_) => "prismatic_clearance",
-        }
+tagged_kinds! {
+    /// A joint of the scene (`"type"` selects the variant).
+    ///
+    /// ```text
+    /// revolute       Φ = r_a^P − r_b^P                      (2 equations)
+    /// translational  Φ = (n·(r^P − o), φ − φ₀)              (2 equations)
+    /// driver         Φ = φ − θ₀ − ω t                       (1 equation)
+    /// clearance      no equation: the force pair of docs/model.md §2–§4
+    /// prismatic_clearance  no equation: the corner contacts of docs/model.md §11
+    /// ```
+    pub enum JointSpec named, tag "type", unknown "joint type" {
+        /// Ideal revolute joint.
+        "revolute" => Revolute(RevoluteSpec),
+        /// Translational joint along a global line.
+        "translational" => Translational(TranslationalSpec),
+        /// Rotational driver.
+        "driver" => Driver(DriverSpec),
+        /// Revolute clearance joint.
+        "clearance" => Clearance(ClearanceSpec),
+        /// Translational clearance joint (a block in a guide).
+        "prismatic_clearance" => PrismaticClearance(PrismaticClearanceSpec),
     }
 }
 
-impl<'de> Deserialize<'de> for JointSpec {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let (tag, obj) = tagged_object::<D>(d, "type")?;
-        match tag.as_str() {
-            "revolute" => variant::<D, _>(obj, "type").map(JointSpec::Revolute),
-            "translational" => variant::<D, _>(obj, "type").map(JointSpec::Translational),
-            "driver" => variant::<D, _>(obj, "type").map(JointSpec::Driver),
-            "clearance" => variant::<D, _>(obj, "type").map(JointSpec::Clearance),
-            "prismatic_clearance" => {
-                variant::<D, _>(obj, "type").map(JointSpec::PrismaticClearance)
-            }
-            other => Err(D::Error::custom(format!(
-                "{PATH_MARK}type{PATH_MARK}unknown joint type `{other}`, expected one of \
-                 `revolute`, `translational`, `driver`, `clearance`, `prismatic_clearance`"
-            ))),
+impl Scene {
+    /// Index of the body named `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Index of the joint named `name`.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name() == name)
+    }
+}
+
+impl RevoluteSpec {
+    /// Its relative coordinate φ_a − φ_b (validated).
+    fn coordinate(&self, refs: &dyn SceneRefs) -> Input {
+        Input::Relative(
+            body_or_ground(refs, &self.a.body),
+            body_or_ground(refs, &self.b.body),
+        )
+    }
+}
+
+impl TranslationalSpec {
+    /// Its relative coordinate u·(r^P − o) (validated).
+    fn coordinate(&self, refs: &dyn SceneRefs) -> Input {
+        let k = refs.body_index(&self.body).expect("validated");
+        let l = self.direction[0].hypot(self.direction[1]);
+        Input::Along {
+            p: Pt {
+                body: Some(k),
+                s: refs.body_points(k)[&self.point],
+            },
+            o: self.origin,
+            u: [self.direction[0] / l, self.direction[1] / l],
         }
+    }
+}
+
+impl SceneRefs for Scene {
+    fn body_index(&self, name: &str) -> Option<usize> {
+        Scene::body_index(self, name)
+    }
+
+    fn body_points(&self, k: usize) -> &BTreeMap<String, [f64; 2]> {
+        &self.bodies[k].points
+    }
+
+    fn joint_coordinate(&self, name: &str) -> Lookup {
+        match self.joint_index(name).map(|k| &self.joints[k]) {
+            Some(JointSpec::Revolute(_))
+            | Some(JointSpec::Translational(_))
+            | Some(JointSpec::PrismaticClearance(_)) => Lookup::Found,
+            Some(other) => Lookup::Other(other.type_name()),
+            None => Lookup::Missing,
+        }
+    }
+
+    fn joint_coordinate_input(&self, name: &str) -> Input {
+        match &self.joints[self.joint_index(name).expect("validated")] {
+            JointSpec::Revolute(r) => r.coordinate(self),
+            JointSpec::Translational(t) => t.coordinate(self),
+            JointSpec::PrismaticClearance(p) => p.coordinate(self),
+            _ => unreachable!("validated"),
+        }
+    }
+
+    fn element_length(&self, name: &str) -> Lookup {
+        match self.forces.iter().find(|f| f.name() == name) {
+            Some(f) if f.has_length() => Lookup::Found,
+            Some(f) => Lookup::Other(f.type_name()),
+            None => Lookup::Missing,
+        }
+    }
+
+    fn element_length_input(&self, name: &str) -> Input {
+        let f = self.forces.iter().find(|f| f.name() == name);
+        f.and_then(|f| f.length(self)).expect("validated")
     }
 }
 

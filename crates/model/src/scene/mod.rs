@@ -12,18 +12,21 @@
 //! Source: docs/model.md §1–§6 (after Peng et al. 2025, Lubricants 13(3) 124).
 //!
 //! Errors name the JSON path (`joints[3].bearing.radius`) and the reason; see [`SceneError`].
-mod check;
+
+pub(crate) mod check;
 pub(crate) mod de;
-mod error;
-mod format;
+pub(crate) mod error;
+pub(crate) mod format;
 mod parse;
-mod refs;
+pub(crate) mod refs;
 mod validate;
 
 pub use crate::clearance::contact::{
     CoulombSpec, FrictionSpec, ImpactSpec, Material, Materials, NormalSpec, RestitutionSpec,
 };
+pub use crate::clearance::prismatic::{BlockSpec, GuideSpec, PrismaticClearanceSpec};
 pub use crate::clearance::revolute::{ClearanceEnd, ClearanceSpec, FilmSpec};
+pub use crate::elements::ForceElementSpec;
 pub use check::{MAX_MAGNITUDE, MIN_MAGNITUDE};
 pub use de::NoData;
 pub use error::SceneError;
@@ -32,8 +35,3 @@ pub use format::{
     TranslationalSpec,
 };
 pub use refs::{Attachment, GROUND};
-
-pub(crate) use check::{check_name, Checker};
-pub(crate) use de::{object, tagged_object, variant, PATH_MARK};
-pub(crate) use error::invalid;
-pub(crate) use validate::check_contact_laws;

@@ -84,16 +84,6 @@ impl Scene {
     pub fn to_json_pretty(&self) -> String {
         serde_json::to_string_pretty(self).expect("a scene always serialises")
     }
-
-    /// Index of the body named `name`.
-    pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
-    }
-
-    /// Index of the joint named `name`.
-    pub fn joint_index(&self, name: &str) -> Option<usize> {
-        self.joints.iter().position(|j| j.name() == name)
-    }
 }
 
 /// The first key that an object of `text` repeats, as a [`SceneError::Schema`] at its path.
@@ -212,5 +202,100 @@ fn strip_position(msg: &str) -> String {
     match msg.rfind(" at line ") {
         Some(i) => msg[..i].to_string(),
         None => msg.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The tagged-kind table: its "expected one of" text, its `KINDS`, and that the tag a
+    //! variant serialises with is the one it reads back.
+    use crate::clearance::contact::{FrictionSpec, NormalSpec};
+    use crate::elements::ForceElementSpec;
+    use crate::scene::format::{JointSpec, Scene};
+
+    fn error(joints: &str, forces: &str) -> String {
+        let text = format!(
+            r#"{{"bodies": [{{"name": "b", "mass": 1.0, "inertia": 1.0, "points": {{"p": [0, 0]}}}}],
+                "joints": [{joints}], "forces": [{forces}], "t_end": 1.0}}"#
+        );
+        Scene::from_json_str(&text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn an_unknown_tag_lists_every_kind_in_table_order() {
+        let e = error(r#"{"type": "hinge", "name": "j"}"#, "");
+        assert!(
+            e.starts_with(
+                "joints[0].type: unknown joint type `hinge`, expected one of `revolute`, \
+                 `translational`, `driver`, `clearance`, `prismatic_clearance` at line"
+            ),
+            "{e}"
+        );
+        let e = error("", r#"{"type": "spring", "name": "s"}"#);
+        let list: Vec<String> = ForceElementSpec::KINDS
+            .iter()
+            .map(|k| format!("`{k}`"))
+            .collect();
+        assert!(
+            e.starts_with(&format!(
+                "forces[0].type: unknown force element type `spring`, expected one of {}",
+                list.join(", ")
+            )),
+            "{e}"
+        );
+        // A tagged kind inside a variant keeps its full path; with two kinds the list is
+        // "`a` or `b`".
+        let clearance = |friction: &str| {
+            format!(
+                r#"{{"type": "clearance", "name": "c",
+                    "bearing": {{"body": "ground", "at": [0, 0], "radius": 0.01}},
+                    "journal": {{"body": "b", "point": "p", "radius": 0.009}},
+                    "normal": {{"law": "impact", "k": 1e9, "c_max": 0, "d_max": 1e-5}},
+                    "friction": {friction}}}"#
+            )
+        };
+        let e = error(&clearance(r#"{"law": "viscous"}"#), "");
+        assert!(
+            e.starts_with(
+                "joints[0].friction.law: unknown friction law `viscous`, expected `none` or \
+                 `coulomb` at line"
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_tables_list_their_kinds_and_each_tag_round_trips() {
+        assert_eq!(
+            JointSpec::KINDS,
+            [
+                "revolute",
+                "translational",
+                "driver",
+                "clearance",
+                "prismatic_clearance"
+            ]
+        );
+        assert_eq!(
+            NormalSpec::KINDS,
+            ["impact", "lankarani_nikravesh", "flores", "hunt_crossley"]
+        );
+        assert_eq!(FrictionSpec::KINDS, ["none", "coulomb"]);
+        for kind in ForceElementSpec::KINDS {
+            assert!(!kind.is_empty());
+        }
+        // Serialised, a variant carries its tag; read back, the same variant.
+        let f: FrictionSpec = serde_json::from_str(r#"{"law": "none"}"#).unwrap();
+        assert_eq!(f, FrictionSpec::None);
+        assert_eq!(f.type_name(), "none");
+        assert_eq!(
+            serde_json::to_value(&f).unwrap(),
+            serde_json::json!({"law": "none"})
+        );
+        let n: NormalSpec =
+            serde_json::from_str(r#"{"law": "flores", "k": 1e9, "restitution": 0.5}"#).unwrap();
+        assert_eq!(n.type_name(), "flores");
+        let back: NormalSpec = serde_json::from_value(serde_json::to_value(&n).unwrap()).unwrap();
+        assert_eq!(back, n);
     }
 }

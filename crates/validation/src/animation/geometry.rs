@@ -37,7 +37,7 @@ use super::table::{unit, Table};
 use crate::error::Error;
 
 /// A number as the page receives it: rounded to 7 significant digits.
-pub fn round7(x: f64) -> f64 {
+pub(crate) fn round7(x: f64) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return x;
     }
@@ -66,7 +66,7 @@ fn ser7_opt<S: serde::Serializer>(v: &Option<Vec<f64>>, s: S) -> Result<S::Ok, S
 /// place = r_body + A(θ_body) s   (body = Some(k));   s   (body = None: the ground)
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Anchor {
+pub(crate) struct Anchor {
     /// Index into [`PageData::bodies`]; None for the ground.
     pub body: Option<usize>,
     /// The local offset on the body, or the global location on the ground, m.
@@ -83,7 +83,7 @@ pub struct Anchor {
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Shape {
+pub(crate) enum Shape {
     /// The convex hull of the points.
     Polygon,
     /// A bar between the two outline points.
@@ -96,7 +96,7 @@ pub enum Shape {
 
 /// A named point of a body.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct NamedPoint {
+pub(crate) struct NamedPoint {
     /// The point's name in the scene.
     pub name: String,
     /// Its offset from the centre of mass in the body frame, m.
@@ -105,7 +105,7 @@ pub struct NamedPoint {
 
 /// One body: its outline and its pose on every frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BodyData {
+pub(crate) struct BodyData {
     /// The body's name.
     pub name: String,
     /// How it is drawn.
@@ -129,7 +129,7 @@ pub struct BodyData {
 
 /// An ideal revolute joint, drawn as a pin where its first side is.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Pin {
+pub(crate) struct Pin {
     /// The joint's name.
     pub name: String,
     /// Side a.
@@ -140,7 +140,7 @@ pub struct Pin {
 
 /// A translational joint's line.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Guide {
+pub(crate) struct Guide {
     /// The joint's name.
     pub name: String,
     /// A point of the line, m.
@@ -151,7 +151,7 @@ pub struct Guide {
 
 /// A rotational driver, drawn as a turning arrow around its body's pivot.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Driver {
+pub(crate) struct Driver {
     /// The joint's name.
     pub name: String,
     /// The pivot (the driven body's point pinned to the ground or another body), or the
@@ -163,7 +163,7 @@ pub struct Driver {
 
 /// A point-to-point spring-damper, drawn as a zigzag.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Spring {
+pub(crate) struct Spring {
     /// The element's name.
     pub name: String,
     /// End a.
@@ -174,7 +174,7 @@ pub struct Spring {
 
 /// A prismatic clearance joint: the block on its body and the guide's two faces.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Block {
+pub(crate) struct Block {
     /// The joint's name.
     pub name: String,
     /// The block's centre on its body.
@@ -195,7 +195,7 @@ pub struct Block {
 
 /// A revolute clearance joint on every frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Clearance {
+pub(crate) struct Clearance {
     /// The joint's name.
     pub name: String,
     /// The bearing's centre.
@@ -232,7 +232,7 @@ pub struct Clearance {
 
 /// One trajectory column on the frames.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct SeriesData {
+pub(crate) struct SeriesData {
     /// The column's name in trajectory.csv.
     pub name: String,
     /// Its SI unit ([`unit()`]).
@@ -250,7 +250,7 @@ pub struct SeriesData {
 
 /// Everything the page receives (module doc).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct PageData {
+pub(crate) struct PageData {
     /// Heading of the page.
     pub title: String,
     /// The scene's description.
@@ -299,7 +299,7 @@ pub struct PageData {
 /// max_frames ≥ 2; default DEFAULT_MAX_FRAMES
 /// ```
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct AnimationOptions {
+pub(crate) struct AnimationOptions {
     /// The point whose path is drawn.
     pub trace: Option<String>,
     /// The column the time-series panel shows first.
@@ -310,10 +310,10 @@ pub struct AnimationOptions {
 
 /// Frames of an animation unless chosen: about 40 s of playback at 60 frames per second,
 /// more than a time axis of the page has pixels.
-pub const DEFAULT_MAX_FRAMES: usize = 2500;
+pub(crate) const DEFAULT_MAX_FRAMES: usize = 2500;
 
 /// The trajectory rows shown as frames (module doc): every `stride`-th and the last.
-pub fn frame_rows(rows: usize, max_frames: usize) -> (Vec<usize>, usize) {
+pub(crate) fn frame_rows(rows: usize, max_frames: usize) -> (Vec<usize>, usize) {
     if rows <= 1 {
         return (vec![0; rows.min(1)], 1);
     }
@@ -328,7 +328,7 @@ pub fn frame_rows(rows: usize, max_frames: usize) -> (Vec<usize>, usize) {
 
 /// The largest 1-2-5 number ≤ R_B / (2c), at least 1 (module doc): the magnified clearance
 /// M c is at most half the bearing's radius.
-pub fn magnification(rb: f64, c: f64) -> f64 {
+pub(crate) fn magnification(rb: f64, c: f64) -> f64 {
     let target = 0.5 * rb / c;
     if !(target > 1.0) || !target.is_finite() {
         return 1.0;
@@ -349,7 +349,7 @@ fn rot(th: f64, s: [f64; 2]) -> [f64; 2] {
 
 impl PageData {
     /// Where `a` is on frame `f`, m (module doc: place).
-    pub fn place(&self, f: usize, a: &Anchor) -> [f64; 2] {
+    pub(crate) fn place(&self, f: usize, a: &Anchor) -> [f64; 2] {
         match a.body {
             None => a.s,
             Some(k) => {
@@ -361,13 +361,13 @@ impl PageData {
     }
 
     /// The series named `name`.
-    pub fn series(&self, name: &str) -> Option<&SeriesData> {
+    pub(crate) fn series(&self, name: &str) -> Option<&SeriesData> {
         self.series.iter().find(|s| s.name == name)
     }
 
     /// The data as the page's JSON: numbers rounded as the module doc says; `</` written
     /// `<\/` so that the text can sit inside a script element.
-    pub fn to_json(&self) -> Result<String, Error> {
+    pub(crate) fn to_json(&self) -> Result<String, Error> {
         let s = serde_json::to_string(self)
             .map_err(|e| Error::Internal(format!("animation data: {e}")))?;
         Ok(s.replace("</", "<\\/"))
@@ -545,7 +545,7 @@ fn film_components(
 /// Errors: a column the scene needs is missing or the trajectory does not match the scene
 /// ([`Error::Input`]); an unknown trace point or column ([`Error::Usage`], listing the
 /// choices).
-pub fn page_data(
+pub(crate) fn page_data(
     scene: &Scene,
     table: &Table,
     title: &str,

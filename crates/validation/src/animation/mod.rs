@@ -20,8 +20,8 @@
 //!
 //! Source: docs/outputs.md ("`animation.html`"); README.md ("Seeing the mechanism").
 
-pub mod geometry;
-pub mod table;
+pub(crate) mod geometry;
+pub(crate) mod table;
 
 use std::path::{Path, PathBuf};
 
@@ -30,16 +30,16 @@ use lash_model::Scene;
 use crate::error::Error;
 use crate::report::summary::SUMMARY_FILE;
 use crate::report::trajectory::{PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
-use crate::store::io::{self, Written};
+use crate::store::io;
 
-pub use geometry::{AnimationOptions, PageData, DEFAULT_MAX_FRAMES};
-pub use table::{unit, Table};
+pub(crate) use geometry::{AnimationOptions, PageData};
+pub(crate) use table::{unit, Table};
 
 /// File name of the animation in a run directory.
-pub const ANIMATION_FILE: &str = "animation.html";
+pub(crate) const ANIMATION_FILE: &str = "animation.html";
 
 /// File name of the scene a run ran, kept in its directory.
-pub const SCENE_FILE: &str = "scene.json";
+pub(crate) const SCENE_FILE: &str = "scene.json";
 
 /// The page template (HTML, CSS and script; the data goes where `{{DATA}}` is).
 const PAGE: &str = include_str!("page.html");
@@ -52,9 +52,9 @@ const PAGE: &str = include_str!("page.html");
 ///
 /// Source: module doc.
 #[derive(Clone, Debug)]
-pub struct Animation {
+pub(crate) struct Animation {
     /// What the page receives.
-    pub data: PageData,
+    pub(crate) data: PageData,
     /// The page.
     pub html: String,
 }
@@ -69,7 +69,7 @@ fn escape(s: &str) -> String {
 
 impl Animation {
     /// The animation of `scene`'s run whose trajectory is `table`, headed `title`.
-    pub fn build(
+    pub(crate) fn build(
         scene: &Scene,
         table: &Table,
         title: &str,
@@ -86,7 +86,7 @@ impl Animation {
 
     /// The animation from a scene's JSON text (`scene.json`); errors of the scene name it
     /// as `scene.json`.
-    pub fn from_scene_text(
+    pub(crate) fn from_scene_text(
         scene_json: &str,
         table: &Table,
         title: &str,
@@ -98,41 +98,6 @@ impl Animation {
         })?;
         Animation::build(&scene, table, title, o)
     }
-}
-
-/// What `lash animate` does.
-///
-/// ```text
-/// run_dir   a run's directory: scene.json, trajectory.csv (summary.json for the title)
-/// out       the page; None = RUN_DIR/animation.html
-/// ```
-///
-/// Source: docs/outputs.md ("`lash animate RUN_DIR`").
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct AnimateOptions {
-    /// The run directory.
-    pub run_dir: PathBuf,
-    /// Trace point, first column, frames.
-    pub animation: AnimationOptions,
-    /// Output file; None = `RUN_DIR/animation.html`.
-    pub out: Option<PathBuf>,
-}
-
-/// What was written.
-///
-/// ```text
-/// frames of rows (stride), bytes of the page
-/// ```
-#[derive(Clone, Debug, PartialEq)]
-pub struct Animated {
-    /// Frames of the page.
-    pub frames: usize,
-    /// Rows of the trajectory.
-    pub rows: usize,
-    /// Rows per frame.
-    pub stride: usize,
-    /// Size of the page, bytes.
-    pub bytes: usize,
 }
 
 /// The title of a run's page: case, method and setting from its summary.json.
@@ -157,13 +122,16 @@ fn title_of(summary: &serde_json::Value, dir: &Path) -> String {
 }
 
 /// `lash animate RUN_DIR`: reads the run directory's scene and trajectory, writes the page
-/// (module doc). Errors ([`Error::Input`] unless said): no such directory; no trajectory.csv
+/// (to `out`, else RUN_DIR/animation.html; module doc) and returns its path and itself. Errors ([`Error::Input`] unless said): no such directory; no trajectory.csv
 /// (a failed run, or not a run directory); no scene.json (a run of a built-in test problem);
 /// a scene.json whose SHA-256 is not the summary's `scene_sha256`; a scene the model rejects
 /// ([`Error::Scene`]); a trajectory that does not fit the scene; an unknown trace point or
 /// column ([`Error::Usage`]).
-pub fn animate_dir(o: &AnimateOptions) -> Result<Written<Animated>, Error> {
-    let dir = &o.run_dir;
+pub(crate) fn animate_dir(
+    dir: &Path,
+    out: Option<&Path>,
+    o: &AnimationOptions,
+) -> Result<(PathBuf, Animation), Error> {
     if !dir.is_dir() {
         return Err(Error::Input(format!(
             "run directory {} not found",
@@ -210,17 +178,11 @@ pub fn animate_dir(o: &AnimateOptions) -> Result<Written<Animated>, Error> {
     let csv = std::fs::read_to_string(&traj).map_err(|e| Error::io(&traj, e))?;
     let table = Table::from_csv(&csv, &traj.display().to_string())?;
     let title = title_of(&summary, dir);
-    let a = Animation::from_scene_text(scene_text, &table, &title, &o.animation)?;
-    let out = o.out.clone().unwrap_or_else(|| dir.join(ANIMATION_FILE));
+    let a = Animation::from_scene_text(scene_text, &table, &title, o)?;
+    let out = out.map_or_else(|| dir.join(ANIMATION_FILE), Path::to_path_buf);
     io::write_atomic(&out, a.html.as_bytes())?;
-    Ok(Written {
-        result: Animated {
-            frames: a.data.t.len(),
-            rows: a.data.rows,
-            stride: a.data.stride,
-            bytes: a.html.len(),
-        },
-        dir: dir.clone(),
-        files: vec![out],
-    })
+    Ok((out, a))
 }
+
+#[cfg(test)]
+mod tests;

@@ -23,7 +23,7 @@ use crate::error::Error;
 ///
 /// Source: docs/outputs.md (`trajectory.csv`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Table {
+pub(crate) struct Table {
     names: Vec<String>,
     values: Vec<Vec<f64>>,
 }
@@ -32,7 +32,7 @@ impl Table {
     /// Reads the text of a trajectory.csv: the header, then rows of numbers (empty cells are
     /// missing values). `what` names the file in errors ([`Error::Input`]: a line with the
     /// wrong number of cells, a cell that is not a number, no header, no row).
-    pub fn from_csv(text: &str, what: &str) -> Result<Table, Error> {
+    pub(crate) fn from_csv(text: &str, what: &str) -> Result<Table, Error> {
         let mut lines = text.lines();
         let header = lines
             .next()
@@ -85,7 +85,7 @@ impl Table {
 
     /// A table of columns held in memory: `names[k]` with `values[k]` (NaN = missing). Errors
     /// ([`Error::Usage`]): unequal lengths, no column `t` first, no rows.
-    pub fn from_columns(names: Vec<String>, values: Vec<Vec<f64>>) -> Result<Table, Error> {
+    pub(crate) fn from_columns(names: Vec<String>, values: Vec<Vec<f64>>) -> Result<Table, Error> {
         if names.len() != values.len() {
             return Err(Error::Usage(format!(
                 "{} column names for {} columns",
@@ -111,24 +111,25 @@ impl Table {
     }
 
     /// Number of rows.
-    pub fn rows(&self) -> usize {
+    pub(crate) fn rows(&self) -> usize {
         self.values[0].len()
     }
 
     /// Column names, in order.
-    pub fn names(&self) -> &[String] {
+    #[cfg(test)]
+    pub(crate) fn names(&self) -> &[String] {
         &self.names
     }
 
     /// The values of column `name` when it exists and no row misses it.
-    pub fn column(&self, name: &str) -> Option<&[f64]> {
+    pub(crate) fn column(&self, name: &str) -> Option<&[f64]> {
         let k = self.names.iter().position(|n| n == name)?;
         let v = &self.values[k];
         v.iter().all(|x| !x.is_nan()).then_some(v.as_slice())
     }
 
     /// Names of the columns every row fills, in order.
-    pub fn present(&self) -> Vec<&str> {
+    pub(crate) fn present(&self) -> Vec<&str> {
         self.names
             .iter()
             .zip(&self.values)
@@ -138,12 +139,12 @@ impl Table {
     }
 
     /// Whether column `name` exists (filled or not).
-    pub fn has(&self, name: &str) -> bool {
+    pub(crate) fn has(&self, name: &str) -> bool {
         self.names.iter().any(|n| n == name)
     }
 
     /// The time column.
-    pub fn t(&self) -> &[f64] {
+    pub(crate) fn t(&self) -> &[f64] {
         &self.values[0]
     }
 }
@@ -158,7 +159,7 @@ impl Table {
 /// *_force, force N · torque, driver_torque N·m · constraint_violation m (and rad) ·
 /// ex_over_c, ey_over_c 1
 /// ```
-pub fn unit(name: &str) -> &'static str {
+pub(crate) fn unit(name: &str) -> &'static str {
     let q = match name {
         "t" => return "s",
         "crank_angle" => return "rad",

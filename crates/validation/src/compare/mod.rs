@@ -1,4 +1,4 @@
 //! Errors against a converged reference, and error against cost.
 
-pub mod reference;
-pub mod workprecision;
+pub(crate) mod reference;
+pub(crate) mod workprecision;

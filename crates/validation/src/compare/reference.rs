@@ -30,21 +30,24 @@ use lash_solver::{ControllerKind, Method};
 use crate::compare::workprecision::fmt_num;
 use crate::error::{Error, OptionError};
 use crate::report::metrics::{EventQuantity, Sample, GRID_POINTS};
-use crate::run::simulate::{simulate, uniform_grid, Prepared, RunRequest, RunResult};
+use crate::run::plan::{uniform_grid, RunRequest};
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::simulate;
 use crate::store::io;
 
 /// Relative tolerance of reference runs.
-pub const REFERENCE_RTOL: f64 = 1e-12;
+pub(crate) const REFERENCE_RTOL: f64 = 1e-12;
 
 /// Default tolerances of the adaptive methods in a comparison.
-pub const COMPARE_TOLERANCES: [f64; 2] = [1e-6, 1e-9];
+pub(crate) const COMPARE_TOLERANCES: [f64; 2] = [1e-6, 1e-9];
 
 /// The RK4 steps tried by [`stable_rk4_step`], as multiples of a power of ten (1–2–5 series).
-pub const STEP_SERIES: [f64; 3] = [5.0, 2.0, 1.0];
+pub(crate) const STEP_SERIES: [f64; 3] = [5.0, 2.0, 1.0];
 
 /// Largest ‖Φ‖ a stable RK4 run may reach on its trajectory (the model's criterion for the
 /// press cases, crates/model/tests/press_cases.rs).
-pub const STABLE_PHI_MAX: f64 = 1e-8;
+pub(crate) const STABLE_PHI_MAX: f64 = 1e-8;
 
 /// Where errors are measured.
 ///
@@ -65,7 +68,7 @@ pub struct ErrorWindow {
 
 impl ErrorWindow {
     /// The window of a case run from `t0` to `t_end` (module doc).
-    pub fn of(p: &Prepared, t0: f64, t_end: f64) -> ErrorWindow {
+    pub(crate) fn of(p: &Prepared, t0: f64, t_end: f64) -> ErrorWindow {
         let Some(info) = &p.info else {
             return ErrorWindow {
                 start: t_end,
@@ -93,7 +96,7 @@ impl ErrorWindow {
     }
 
     /// The 2001 sampling times (none for test problems, which compare end points).
-    pub fn grid(&self) -> Vec<f64> {
+    pub(crate) fn grid(&self) -> Vec<f64> {
         if self.end > self.start {
             uniform_grid(self.start, self.end, GRID_POINTS)
         } else {
@@ -130,7 +133,7 @@ impl ErrorNorms {
     }
 
     /// The norms of `run` (samples and states at the window grid) against `reference`.
-    pub fn between(
+    pub(crate) fn between(
         run: &[Sample],
         run_states: &[f64],
         reference: &[Sample],
@@ -206,7 +209,7 @@ impl ErrorNorms {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug)]
-pub struct Reference {
+pub(crate) struct Reference {
     /// How it was obtained, in words.
     pub how: String,
     /// Where errors are measured.
@@ -222,7 +225,7 @@ pub struct Reference {
 }
 
 /// Reference and check methods of a case (module doc).
-pub fn reference_methods(p: &Prepared) -> (Method, Method) {
+pub(crate) fn reference_methods(p: &Prepared) -> (Method, Method) {
     let film = p
         .scene()
         .map(|s| {
@@ -260,7 +263,7 @@ fn run_on_window(
 impl Reference {
     /// Computes the reference of a case run to `t_end` (None: the scene's end time). A
     /// failure of the reference itself is the solver's error (exit 3).
-    pub fn compute(p: &Prepared, t_end: Option<f64>) -> Result<Reference, Error> {
+    pub(crate) fn compute(p: &Prepared, t_end: Option<f64>) -> Result<Reference, Error> {
         let (t0, te) = p.t_span(t_end)?;
         let window = ErrorWindow::of(p, t0, te);
         if p.info.is_none() {
@@ -317,7 +320,7 @@ impl Reference {
     }
 
     /// What the headline error ([`ErrorNorms::headline`]) measures, in words (axis labels).
-    pub fn measure(&self) -> String {
+    pub(crate) fn measure(&self) -> String {
         let Some(r) = &self.run else {
             return "largest relative error of a component at t_end (IVP Test Set solution)".into();
         };
@@ -333,7 +336,7 @@ impl Reference {
 
     /// The error norms of a run made with the same t_end and `extra_times = window.grid()`
     /// (None for test problems: their error is `reference_error`).
-    pub fn norms(&self, r: &RunResult) -> Result<Option<ErrorNorms>, Error> {
+    pub(crate) fn norms(&self, r: &RunResult) -> Result<Option<ErrorNorms>, Error> {
         match &self.run {
             Some(reference) => ErrorNorms::between(
                 &r.extra,
@@ -384,7 +387,7 @@ pub struct Compared {
 
 impl Compared {
     /// The method's setting in words: `rtol 1e-8` or `h 2e-4`.
-    pub fn setting(&self) -> String {
+    pub(crate) fn setting(&self) -> String {
         match (self.rtol, self.step) {
             (_, Some(h)) => format!("h {}", fmt_num(h)),
             (Some(r), None) => format!("rtol {}", fmt_num(r)),
@@ -393,7 +396,7 @@ impl Compared {
     }
 
     /// `method` or `method/controller`.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self.controller {
             Some(c) => format!("{}/{}", self.method, c),
             None => self.method.to_string(),
@@ -402,7 +405,7 @@ impl Compared {
 }
 
 /// Runs one setting against the reference; a solver failure is recorded, not returned.
-pub fn compare_one(
+pub(crate) fn compare_one(
     p: &Prepared,
     reference: &Reference,
     method: Method,
@@ -486,7 +489,7 @@ fn timed(f: impl Fn() -> Result<RunResult, Error>) -> Result<RunResult, Error> {
 /// The largest RK4 step of the 1–2–5 series not above T/400 (1 ms at 150 rpm) whose run to
 /// `t_end` succeeds with ‖Φ‖ < 1e-8 on a 401-point trajectory: how the paper would choose a
 /// fixed step ("the largest step that runs stably"). Tries down to T·1e-7.
-pub fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
+pub(crate) fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
     let period = p.period().ok_or_else(|| {
         OptionError::new("steps")
             .text("RK4 needs ")
@@ -600,7 +603,7 @@ impl Comparison {
     }
 
     /// Writes compare.md and compare.json into `dir`; returns their paths.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         io::create_dir(dir)?;
         let md = dir.join("compare.md");
         let js = dir.join("compare.json");

@@ -23,7 +23,7 @@ use crate::store::io;
 
 /// A number for a table: plain for 0.01 ≤ |x| < 1e5 (at most 4 decimals), else scientific
 /// with at most 4 significant digits (`1e-6`, `3.25e-7`).
-pub fn fmt_num(x: f64) -> String {
+pub(crate) fn fmt_num(x: f64) -> String {
     let a = x.abs();
     let trim = |s: String| s.trim_end_matches('0').trim_end_matches('.').to_string();
     if x == 0.0 {
@@ -40,14 +40,14 @@ pub fn fmt_num(x: f64) -> String {
 }
 
 /// Default accuracy targets.
-pub const DEFAULT_TARGETS: [f64; 5] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10];
+pub(crate) const DEFAULT_TARGETS: [f64; 5] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10];
 
 /// Default tolerances of a work–precision set.
-pub const DEFAULT_TOLERANCES: [f64; 3] = [1e-4, 1e-6, 1e-8];
+pub(crate) const DEFAULT_TOLERANCES: [f64; 3] = [1e-4, 1e-6, 1e-8];
 
 /// The method the controllers are compared on when it is listed: the highest-order pair,
 /// whose steps are longest and so most sensitive to the controller.
-pub const CONTROLLER_METHOD: Method = Method::Dop853;
+pub(crate) const CONTROLLER_METHOD: Method = Method::Dop853;
 
 /// A checked work–precision request.
 ///
@@ -73,7 +73,7 @@ impl WorkPrecisionPlan {
     /// Checks the lists of a request (None = not given) against each other and applies the
     /// defaults: every method, [`DEFAULT_TOLERANCES`], every controller. Errors name the
     /// lists as the options `methods`, `tolerances`, `steps`, `controllers`.
-    pub fn new(
+    pub(crate) fn new(
         methods: Option<&[Method]>,
         tolerances: Option<&[f64]>,
         steps: Option<&[f64]>,
@@ -135,7 +135,7 @@ impl WorkPrecisionPlan {
 
     /// The method of ours the controllers are compared on: [`CONTROLLER_METHOD`] if listed,
     /// else the first adaptive method of ours in the list.
-    pub fn controller_method(&self) -> Option<Method> {
+    pub(crate) fn controller_method(&self) -> Option<Method> {
         if self.methods.contains(&CONTROLLER_METHOD) {
             Some(CONTROLLER_METHOD)
         } else {
@@ -155,7 +155,7 @@ impl WorkPrecisionPlan {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct WpRun {
+pub(crate) struct WpRun {
     /// Method.
     pub method: Method,
     /// Controller (None for fixed-step and diffsol's methods).
@@ -176,7 +176,7 @@ pub struct WpRun {
 
 impl WpRun {
     /// The curve the run belongs to: `method` or `method/controller`.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self.controller {
             Some(c) => format!("{}/{}", self.method, c),
             None => self.method.to_string(),
@@ -184,7 +184,7 @@ impl WpRun {
     }
 
     /// Its setting: `rtol 1e-6` or `h 1e-4`.
-    pub fn setting(&self) -> String {
+    pub(crate) fn setting(&self) -> String {
         match (self.rtol, self.step) {
             (_, Some(h)) => format!("h {}", fmt_num(h)),
             (Some(r), None) => format!("rtol {}", fmt_num(r)),
@@ -201,7 +201,7 @@ impl WpRun {
 ///
 /// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Cost {
+pub(crate) enum Cost {
     /// Right-hand-side evaluations.
     RhsEvals,
     /// Wall time.
@@ -217,7 +217,7 @@ fn cost_of(r: &WpRun, cost: Cost) -> f64 {
 
 /// Index of the cheapest run whose error is at most `target` (ties: smaller error, then
 /// earlier run); None if no run reached it.
-pub fn cheapest(runs: &[WpRun], target: f64, cost: Cost) -> Option<usize> {
+pub(crate) fn cheapest(runs: &[WpRun], target: f64, cost: Cost) -> Option<usize> {
     runs.iter()
         .enumerate()
         .filter(|(_, r)| r.error.is_some_and(|e| e <= target))
@@ -238,7 +238,7 @@ pub fn cheapest(runs: &[WpRun], target: f64, cost: Cost) -> Option<usize> {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Cheapest {
+pub(crate) struct Cheapest {
     /// Accuracy target.
     pub target: f64,
     /// Cheapest by RHS evaluations.
@@ -257,20 +257,20 @@ pub struct Cheapest {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WpTable {
     /// Case name.
-    pub case: String,
+    pub(crate) case: String,
     /// The runs, in the order made.
-    pub runs: Vec<WpRun>,
+    pub(crate) runs: Vec<WpRun>,
     /// The cheapest runs per target.
-    pub cheapest: Vec<Cheapest>,
+    pub(crate) cheapest: Vec<Cheapest>,
     /// What the error measures, in words (the figures' axis label; empty: "error").
     #[serde(default)]
-    pub error_measure: String,
+    pub(crate) error_measure: String,
 }
 
 impl WpTable {
     /// Checks the runs (errors finite and ≥ 0, wall times finite and ≥ 0) and targets (> 0)
     /// and finds the cheapest runs.
-    pub fn new(case: &str, runs: Vec<WpRun>, targets: &[f64]) -> Result<WpTable, Error> {
+    pub(crate) fn new(case: &str, runs: Vec<WpRun>, targets: &[f64]) -> Result<WpTable, Error> {
         for r in &runs {
             if r.error.is_some_and(|e| !(e.is_finite() && e >= 0.0)) {
                 return Err(Error::Internal(format!(
@@ -397,7 +397,7 @@ impl WpTable {
 
     /// Writes work_precision.md, work_precision.json and the two log–log figures into `dir`
     /// (created if needed); returns the paths.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         io::create_dir(dir)?;
         let mut out = Vec::new();
         let y_label = if self.error_measure.is_empty() {

@@ -1,4 +1,7 @@
 //! Diagnostics of one case: stiffness, Poincaré section and Lyapunov exponent.
 
-pub mod poincare;
-pub mod stiffness;
+pub(crate) mod poincare;
+pub(crate) mod stiffness;
+
+#[cfg(test)]
+mod tests;

@@ -41,22 +41,24 @@ use lash_solver::analysis::lyapunov::{
 };
 use lash_solver::SolverOptions;
 
-use crate::diagnostics::stiffness::analysis_error;
+use crate::diagnostics::stiffness::sample::analysis_error;
 use crate::error::{Error, OptionError};
 use crate::options::SolverChoice;
 use crate::progress::Progress;
 use crate::report::plot::{self, Axes, Panel, Series, SeriesStyle};
 use crate::report::summary::RunHeader;
 use crate::report::trajectory::fmt_num;
-use crate::run::simulate::{Model, Prepared, Sampler, DEFAULT_LENGTH_SCALE};
+use crate::run::prepare::scene_error;
+use crate::run::prepare::{Model, Prepared, DEFAULT_LENGTH_SCALE};
+use crate::run::sample::Sampler;
 use crate::store::io;
 
 /// Default number of revolutions.
-pub const DEFAULT_REVOLUTIONS: usize = 20;
+pub(crate) const DEFAULT_REVOLUTIONS: usize = 20;
 /// Default initial and renormalised separation d0, in clearances (weighted norm).
-pub const DEFAULT_PERTURBATION: f64 = 1e-4;
+pub(crate) const DEFAULT_PERTURBATION: f64 = 1e-4;
 /// Default renormalisations per crank revolution.
-pub const DEFAULT_RENORM_PER_REV: usize = 10;
+pub(crate) const DEFAULT_RENORM_PER_REV: usize = 10;
 /// Relative tolerance of `lash poincare`'s adaptive runs when `--rtol` is not given.
 ///
 /// Benettin's method needs the integration error of each trajectory far below d0 (the two
@@ -64,9 +66,9 @@ pub const DEFAULT_RENORM_PER_REV: usize = 10;
 /// cancel). On the dry press at 150 rpm the estimate at the case default rtol 1e-8 depends on
 /// d0, and from rtol 1e-10 down it does not; 1e-11 adds a margin at a moderate cost
 /// (measurements: BENCHMARKS.md, "Chaos diagnostics").
-pub const DEFAULT_RTOL: f64 = 1e-11;
+pub(crate) const DEFAULT_RTOL: f64 = 1e-11;
 /// Standard errors by which the estimate must clear zero for a verdict.
-pub const SIGMAS: f64 = 3.0;
+pub(crate) const SIGMAS: f64 = 3.0;
 
 /// What `lash poincare` does besides the solver options.
 ///
@@ -76,7 +78,7 @@ pub const SIGMAS: f64 = 3.0;
 ///
 /// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Clone, Debug, PartialEq)]
-pub struct PoincareSettings {
+pub(crate) struct PoincareSettings {
     /// Revolutions N (section points j = 0..N; Lyapunov averaging over N T).
     pub revolutions: usize,
     /// d0 in clearances (weighted norm).
@@ -97,7 +99,7 @@ impl Default for PoincareSettings {
 
 impl PoincareSettings {
     /// Checks the ranges (usage errors).
-    pub fn validate(&self) -> Result<(), Error> {
+    pub(crate) fn validate(&self) -> Result<(), Error> {
         if self.revolutions == 0 {
             return Err(OptionError::leading("revolutions", " must be >= 1").into());
         }
@@ -124,7 +126,7 @@ impl PoincareSettings {
 /// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Chaos {
+pub(crate) enum Chaos {
     /// λ clearly > 0: nearby trajectories separate exponentially.
     Chaotic,
     /// λ clearly < 0: nearby trajectories converge (a stable periodic response).
@@ -141,7 +143,7 @@ pub enum Chaos {
 ///
 /// Benettin et al. (1980); Sprott (2003), §5.6.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct LyapunovSummary {
+pub(crate) struct LyapunovSummary {
     /// λ over the late half, 1/s.
     pub exponent: f64,
     /// σ_λ, 1/s (None with fewer than 2 late revolutions).
@@ -165,7 +167,7 @@ pub struct LyapunovSummary {
 /// Summarises Benettin's log growths `est` over whole revolutions of period `period`, with
 /// `per_rev` renormalisations each (module doc). `est.log_growth.len()` must be a positive
 /// multiple of `per_rev`.
-pub fn summarize(
+pub(crate) fn summarize(
     est: &LyapunovEstimate,
     period: f64,
     per_rev: usize,
@@ -264,7 +266,7 @@ pub fn summarize(
 
 /// The solver options of `lash poincare`: the case's defaults with the choice laid over them,
 /// as `lash run`, except that an adaptive method without an rtol runs at [`DEFAULT_RTOL`].
-pub fn options(p: &Prepared, choice: &SolverChoice) -> Result<SolverOptions, Error> {
+pub(crate) fn options(p: &Prepared, choice: &SolverChoice) -> Result<SolverOptions, Error> {
     let mut f = choice.clone();
     let method = f.method.unwrap_or(p.default_options().method);
     if !method.is_fixed_step() && f.rtol.is_none() {
@@ -285,7 +287,7 @@ fn period_of(p: &Prepared) -> Result<f64, Error> {
 }
 
 /// Norm weights of the Lyapunov separation: 1/L on positions, 1/(L ω) on velocities.
-pub fn weights(p: &Prepared) -> Vec<f64> {
+pub(crate) fn weights(p: &Prepared) -> Vec<f64> {
     let (l, w, n) = match &p.info {
         Some(i) => (
             i.clearance_min.unwrap_or(DEFAULT_LENGTH_SCALE),
@@ -307,7 +309,7 @@ pub fn weights(p: &Prepared) -> Vec<f64> {
 ///
 /// Source: Benettin et al. (1980).
 #[derive(Clone, Debug)]
-pub struct LyapunovRun {
+pub(crate) struct LyapunovRun {
     /// The raw estimate (per renormalisation).
     pub estimate: LyapunovEstimate,
     /// The summary.
@@ -322,7 +324,7 @@ pub struct LyapunovRun {
 
 /// The largest Lyapunov exponent of a mechanism case with a crank (module doc), with solver
 /// options `opts` for both trajectories.
-pub fn lyapunov(
+pub(crate) fn lyapunov(
     p: &Prepared,
     opts: &SolverOptions,
     s: &PoincareSettings,
@@ -332,7 +334,7 @@ pub fn lyapunov(
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
-    let build = || Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()));
+    let build = || Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e));
     let (a, b) = (build()?, build()?);
     let y0 = a.initial_state();
     let w = weights(p);
@@ -375,7 +377,7 @@ pub fn lyapunov(
 ///
 /// Source: Guckenheimer & Holmes (1983), §1.4.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct SectionPoint {
+pub(crate) struct SectionPoint {
     /// Revolution j.
     pub revolution: usize,
     /// t_j, s.
@@ -398,7 +400,7 @@ pub struct SectionPoint {
 ///
 /// Source: Guckenheimer & Holmes (1983), §1.4.
 #[derive(Clone, Debug)]
-pub struct Section {
+pub(crate) struct Section {
     /// The points.
     pub points: Vec<SectionPoint>,
     /// Wall time of the run, s.
@@ -420,12 +422,16 @@ fn check(p: &Prepared, s: &PoincareSettings) -> Result<f64, Error> {
 }
 
 /// The stroboscopic section of the clearance-joint role's e/c (one run with `opts`).
-pub fn section(p: &Prepared, opts: &SolverOptions, s: &PoincareSettings) -> Result<Section, Error> {
+pub(crate) fn section(
+    p: &Prepared,
+    opts: &SolverOptions,
+    s: &PoincareSettings,
+) -> Result<Section, Error> {
     let period = check(p, s)?;
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
-    let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
+    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
     let sampler = Sampler::new(&mech, scene);
     let y0 = mech.initial_state();
     let clock = Instant::now();
@@ -476,7 +482,7 @@ pub fn section(p: &Prepared, opts: &SolverOptions, s: &PoincareSettings) -> Resu
 ///
 /// Source: this module.
 #[derive(Clone, Debug, serde::Serialize)]
-pub struct PoincareReport {
+pub(crate) struct PoincareReport {
     /// Case and settings (the keys of summary.json).
     #[serde(flatten)]
     pub run: RunHeader,
@@ -521,15 +527,15 @@ pub struct PoincareReport {
 #[derive(Clone, Debug)]
 pub struct PoincareResult {
     /// The section.
-    pub section: Section,
+    pub(crate) section: Section,
     /// The exponent.
-    pub lyapunov: LyapunovRun,
+    pub(crate) lyapunov: LyapunovRun,
     /// poincare.json.
-    pub report: PoincareReport,
+    pub(crate) report: PoincareReport,
 }
 
 /// Both analyses of a case; `progress` gets each as an item.
-pub fn analyse(
+pub(crate) fn analyse(
     p: &Prepared,
     opts: &SolverOptions,
     s: &PoincareSettings,
@@ -591,7 +597,7 @@ fn opt(v: Option<f64>) -> String {
 }
 
 /// poincare.csv: `revolution,t,crank_angle,ex_over_c,ey_over_c,eps`.
-pub fn section_csv(points: &[SectionPoint]) -> String {
+pub(crate) fn section_csv(points: &[SectionPoint]) -> String {
     let mut s = String::from("revolution,t,crank_angle,ex_over_c,ey_over_c,eps\n");
     for q in points {
         let _ = writeln!(
@@ -609,7 +615,7 @@ pub fn section_csv(points: &[SectionPoint]) -> String {
 }
 
 /// lyapunov.csv: `k,t,revolution,log_growth,running` (revolution = (t − t_0)/T).
-pub fn lyapunov_csv(est: &LyapunovEstimate, period: f64) -> String {
+pub(crate) fn lyapunov_csv(est: &LyapunovEstimate, period: f64) -> String {
     let mut s = String::from("k,t,revolution,log_growth,running\n");
     for (k, ((&t, &g), &r)) in est
         .t
@@ -656,7 +662,7 @@ impl PoincareResult {
     }
 
     /// poincare.md.
-    pub fn to_markdown(&self) -> String {
+    pub(crate) fn to_markdown(&self) -> String {
         let r = &self.report;
         let l = &r.lyapunov;
         let mut s = format!(
@@ -722,7 +728,7 @@ impl PoincareResult {
 
     /// Writes the files (module doc) into `dir`, each atomically, poincare.json last;
     /// everything is formatted before the first file is written.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, Error> {
         let sec_csv = section_csv(&self.section.points);
         let ly_csv = lyapunov_csv(&self.lyapunov.estimate, self.lyapunov.period);
         let md = self.to_markdown();

@@ -26,10 +26,10 @@ use crate::report::trajectory::{PARTIAL_TRAJECTORY_FILE, TRAJECTORY_FILE};
 use crate::store::io::Written;
 
 /// Prefix of the default file names of `lash plot`.
-pub const PLOT_PREFIX: &str = "plot_";
+pub(crate) const PLOT_PREFIX: &str = "plot_";
 
 /// Whether `name` is a file `lash plot` writes into a run directory by default.
-pub fn is_plot_file(name: &str) -> bool {
+pub(crate) fn is_plot_file(name: &str) -> bool {
     name.starts_with(PLOT_PREFIX) && (name.ends_with(".svg") || name.ends_with(".png"))
 }
 
@@ -41,7 +41,7 @@ pub fn is_plot_file(name: &str) -> bool {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct PlotOptions {
+pub(crate) struct PlotRequest {
     /// The run directory.
     pub run_dir: PathBuf,
     /// The columns drawn (y).
@@ -54,7 +54,7 @@ pub struct PlotOptions {
 
 /// What was plotted.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Plotted {
+pub(crate) struct Plotted {
     /// The columns, in the order drawn.
     pub columns: Vec<String>,
     /// The abscissa.
@@ -104,7 +104,7 @@ fn column<'a>(table: &'a Table, name: &str) -> Result<&'a [f64], Error> {
 }
 
 /// Draws the columns (module doc).
-pub fn plot_columns(o: &PlotOptions) -> Result<Written<Plotted>, Error> {
+pub(crate) fn plot_columns(o: &PlotRequest) -> Result<Written<Plotted>, Error> {
     if o.columns.is_empty() {
         return Err(Error::Usage("give at least one column to plot".into()));
     }
@@ -307,7 +307,7 @@ mod tests {
     fn one_unit_one_plot_several_units_panels() {
         let d = tempfile::tempdir().unwrap();
         let dir = run_dir(d.path());
-        let w = plot_columns(&PlotOptions {
+        let w = plot_columns(&PlotRequest {
             run_dir: dir.clone(),
             columns: vec!["rod.theta".into(), "crank_angle".into()],
             ..Default::default()
@@ -321,7 +321,7 @@ mod tests {
             "units on the axes"
         );
         assert!(is_plot_file("plot_rod.theta+crank_angle.png"));
-        let w = plot_columns(&PlotOptions {
+        let w = plot_columns(&PlotRequest {
             run_dir: dir.clone(),
             columns: vec!["rod.theta".into(), "rod.omega".into(), "x.force".into()],
             x: Some("crank_angle".into()),
@@ -345,7 +345,7 @@ mod tests {
     fn bad_requests_say_what_is_wrong() {
         let d = tempfile::tempdir().unwrap();
         let dir = run_dir(d.path());
-        let o = |c: &str| PlotOptions {
+        let o = |c: &str| PlotRequest {
             run_dir: dir.clone(),
             columns: vec![c.into()],
             ..Default::default()

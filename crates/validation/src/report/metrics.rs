@@ -43,23 +43,18 @@ use std::collections::BTreeMap;
 use crate::error::Error;
 
 /// Number of grid points over the last revolution.
-pub const GRID_POINTS: usize = 2001;
+pub(crate) const GRID_POINTS: usize = 2001;
 
 /// Sub-intervals of an accepted step sampled for the extrema (module doc).
-pub const STEP_SAMPLES: usize = 4;
+pub(crate) const STEP_SAMPLES: usize = 4;
 
 /// Evaluations of one golden-section refinement (module doc): the bracket shrinks to
 /// 0.618^30 < 1e-6 of its start.
-pub const REFINE_ITERATIONS: usize = 32;
-
-/// The crank period T = 60 / rpm, s.
-pub fn period_from_rpm(rpm: f64) -> f64 {
-    60.0 / rpm
-}
+pub(crate) const REFINE_ITERATIONS: usize = 32;
 
 /// The 2001-point grid over [t_end − period, t_end], both ends included, the last point
 /// exactly `t_end`.
-pub fn grid(t_end: f64, period: f64) -> Vec<f64> {
+pub(crate) fn grid(t_end: f64, period: f64) -> Vec<f64> {
     let n = GRID_POINTS - 1;
     let t0 = t_end - period;
     (0..GRID_POINTS)
@@ -82,7 +77,7 @@ pub fn grid(t_end: f64, period: f64) -> Vec<f64> {
 ///
 /// Source: docs/outputs.md (`trajectory.csv` columns and `metrics`); docs/model.md §2–§4.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Sample {
+pub(crate) struct Sample {
     /// Time, s.
     pub t: f64,
     /// Crank angle θ, rad (crank driver).
@@ -118,7 +113,8 @@ pub struct Sample {
 
 impl Sample {
     /// A sample at time `t` with no role (every optional field None, Φ = 0).
-    pub fn at(t: f64) -> Sample {
+    #[cfg(test)]
+    pub(crate) fn at(t: f64) -> Sample {
         Sample {
             t,
             ..Default::default()
@@ -134,7 +130,7 @@ impl Sample {
 ///
 /// Source: docs/model.md §2, docs/outputs.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct JointInfo {
+pub(crate) struct JointInfo {
     /// Position among the scene's clearance joints (the index of `Outputs::clearance`).
     pub index: usize,
     /// Radial clearance c, m.
@@ -180,7 +176,7 @@ pub struct EventRecord {
     /// None when not known (every joint counts as the role's).
     pub joint: Option<usize>,
     /// The event function that crossed (its index in the mechanism's list,
-    /// `lash_model::Mechanism::event_name`; [`crate::run::simulate::MechanismInfo::event_names`]).
+    /// `lash_model::Mechanism::event_name`; `crate::run::simulate::MechanismInfo::event_names`).
     pub index: usize,
 }
 
@@ -193,7 +189,7 @@ pub struct EventRecord {
 ///
 /// Source: docs/outputs.md (`energy`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct EnergyTotals {
+pub(crate) struct EnergyTotals {
     /// Work done by the crank driver, J.
     pub driver_work: f64,
     /// Change of kinetic energy, J.
@@ -244,7 +240,7 @@ pub struct Energy {
 
 impl Energy {
     /// Closes the balance of the totals.
-    pub fn from_totals(e: &EnergyTotals) -> Energy {
+    pub(crate) fn from_totals(e: &EnergyTotals) -> Energy {
         Energy {
             driver_work: e.driver_work,
             kinetic_change: e.kinetic_change,
@@ -335,7 +331,7 @@ pub struct Metrics {
 ///
 /// Source: docs/outputs.md (`metrics`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct JointExtremes {
+pub(crate) struct JointExtremes {
     /// Joint name.
     pub name: String,
     /// Radial clearance c, m.
@@ -361,7 +357,7 @@ pub struct JointExtremes {
 ///
 /// Source: module doc.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct DenseExtremes {
+pub(crate) struct DenseExtremes {
     /// (min, max) of the slider acceleration, m/s² (slider role).
     pub slider_acc: Option<(f64, f64)>,
     /// Max ‖Φ‖.
@@ -382,7 +378,7 @@ pub struct DenseExtremes {
 ///
 /// Source: module doc; golden-section search: Kiefer, Proc. AMS 4 (1953) 502–506.
 #[derive(Clone, Debug)]
-pub struct Peaks {
+pub(crate) struct Peaks {
     max: Vec<f64>,
     last: Option<(f64, Vec<f64>)>,
     /// Evaluations of f so far.
@@ -395,7 +391,7 @@ type Eval<'a> = dyn FnMut(f64) -> Result<Vec<f64>, Error> + 'a;
 
 impl Peaks {
     /// n quantities, no sample yet (every maximum −∞).
-    pub fn new(n: usize) -> Peaks {
+    pub(crate) fn new(n: usize) -> Peaks {
         Peaks {
             max: vec![f64::NEG_INFINITY; n],
             last: None,
@@ -405,12 +401,12 @@ impl Peaks {
     }
 
     /// The running maxima (−∞ before any sample).
-    pub fn max(&self) -> &[f64] {
+    pub(crate) fn max(&self) -> &[f64] {
         &self.max
     }
 
     /// Adds one sample of every quantity.
-    pub fn add(&mut self, v: &[f64]) {
+    pub(crate) fn add(&mut self, v: &[f64]) {
         for (m, x) in self.max.iter_mut().zip(v) {
             *m = m.max(*x);
         }
@@ -424,7 +420,7 @@ impl Peaks {
     }
 
     /// The accepted step [a, b] (a < b) of the dense output `f` (module doc).
-    pub fn step(&mut self, a: f64, b: f64, f: &mut Eval<'_>) -> Result<(), Error> {
+    pub(crate) fn step(&mut self, a: f64, b: f64, f: &mut Eval<'_>) -> Result<(), Error> {
         if !(b > a) {
             return Ok(());
         }
@@ -528,7 +524,7 @@ impl Peaks {
 ///
 /// Source: docs/outputs.md (`metrics`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Window {
+pub(crate) struct Window {
     /// End time, s.
     pub t_end: f64,
     /// Crank period T, s.
@@ -577,7 +573,7 @@ fn min(v: &[f64]) -> f64 {
 ///
 /// Errors ([`Error::Internal`], a bug in the caller): not 2001 samples, a sample off the grid,
 /// a non-finite value, a column given at some samples only.
-pub fn compute(
+pub(crate) fn compute(
     samples: &[Sample],
     window: Window,
     joint: Option<JointInfo>,
@@ -786,7 +782,6 @@ mod tests {
         for w in g.windows(2) {
             assert!((w[1] - w[0] - 0.4 / 2000.0).abs() < 1e-15);
         }
-        assert_eq!(period_from_rpm(150.0), 0.4);
     }
 
     #[test]

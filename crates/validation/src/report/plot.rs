@@ -44,9 +44,9 @@ static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 const FAMILY: &str = "sans-serif";
 
 /// Size of line and log–log figures, px.
-pub const FIGURE_SIZE: (u32, u32) = (1000, 650);
+pub(crate) const FIGURE_SIZE: (u32, u32) = (1000, 650);
 /// Size of orbit figures, px.
-pub const ORBIT_SIZE: (u32, u32) = (760, 760);
+pub(crate) const ORBIT_SIZE: (u32, u32) = (760, 760);
 
 /// Tableau 10 colours, given to series in order.
 const COLORS: [RGBColor; 10] = [
@@ -83,7 +83,7 @@ fn ensure_font() -> Result<(), Error> {
 ///
 /// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SeriesStyle {
+pub(crate) enum SeriesStyle {
     /// A solid line.
     Line,
     /// A dashed line (a reference, such as the ideal mechanism).
@@ -113,10 +113,10 @@ impl SeriesStyle {
 
 /// Number of marker shapes: filled circle, square, triangle, diamond; open circle, square;
 /// cross; downward triangle.
-pub const MARKERS: usize = 8;
+pub(crate) const MARKERS: usize = 8;
 
 /// An identifier (a case name, a file stem) as text for a figure: underscores become spaces.
-pub fn plain(name: &str) -> String {
+pub(crate) fn plain(name: &str) -> String {
     name.replace('_', " ")
 }
 
@@ -128,7 +128,7 @@ pub fn plain(name: &str) -> String {
 ///
 /// Source: this module.
 #[derive(Clone, Copy, Debug)]
-pub struct Series<'a> {
+pub(crate) struct Series<'a> {
     /// Legend entry.
     pub name: &'a str,
     /// Abscissae.
@@ -147,7 +147,7 @@ pub struct Series<'a> {
 ///
 /// Source: this module.
 #[derive(Clone, Copy, Debug)]
-pub struct Axes<'a> {
+pub(crate) struct Axes<'a> {
     /// Figure title.
     pub title: &'a str,
     /// x axis label (with unit).
@@ -164,7 +164,7 @@ pub struct Axes<'a> {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Written {
+pub(crate) struct Written {
     /// The SVG file.
     pub svg: PathBuf,
     /// The PNG file.
@@ -174,7 +174,7 @@ pub struct Written {
 }
 
 /// A rectangle of pixels `[x0, y0, x1, y1]`, `x1` and `y1` excluded.
-pub type PixelRect = [i32; 4];
+pub(crate) type PixelRect = [i32; 4];
 
 /// Where a figure put its parts, in the PNG's pixels: every pixel of a data series lies in one
 /// of the `plots`; the `legends` hold samples of the series' lines and markers.
@@ -185,7 +185,7 @@ pub type PixelRect = [i32; 4];
 ///
 /// Source: this module.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Layout {
+pub(crate) struct Layout {
     /// The plot areas.
     pub plots: Vec<PixelRect>,
     /// The legends.
@@ -244,7 +244,7 @@ fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Result<Written, 
 }
 
 /// Encodes an RGB image as an 8-bit palette PNG (module doc).
-pub fn palette_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
+pub(crate) fn palette_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
     use std::collections::HashMap;
     let mut counts: HashMap<[u8; 3], u32> = HashMap::new();
     for px in rgb.chunks_exact(3) {
@@ -339,7 +339,7 @@ fn bounds_xy(
 }
 
 /// A linear axis range around [lo, hi] with 5 % padding (a unit-free pad for a flat one).
-pub fn padded(lo: f64, hi: f64) -> (f64, f64) {
+pub(crate) fn padded(lo: f64, hi: f64) -> (f64, f64) {
     let pad = if hi > lo {
         0.05 * (hi - lo)
     } else if lo != 0.0 {
@@ -352,14 +352,14 @@ pub fn padded(lo: f64, hi: f64) -> (f64, f64) {
 
 /// A log axis range around [lo, hi] (both > 0), padded by 5 % of the decades (a factor 2 for
 /// a flat one).
-pub fn padded_log(lo: f64, hi: f64) -> (f64, f64) {
+pub(crate) fn padded_log(lo: f64, hi: f64) -> (f64, f64) {
     let f = if hi > lo { (hi / lo).powf(0.05) } else { 2.0 };
     (lo / f, hi * f)
 }
 
 /// The axis ranges of a square-unit plot of half-width `r` in a plotting area of
 /// `width_px` × `height_px`: the shorter side spans [−r, r], the longer one proportionally more.
-pub fn equal_aspect(r: f64, width_px: u32, height_px: u32) -> (f64, f64) {
+pub(crate) fn equal_aspect(r: f64, width_px: u32, height_px: u32) -> (f64, f64) {
     let (w, h) = (width_px.max(1) as f64, height_px.max(1) as f64);
     if w >= h {
         (r * w / h, r)
@@ -1269,7 +1269,11 @@ impl Figure for XyFigure<'_> {
 
 /// Several named series against one x axis (for example crank angle in degrees), linear axes.
 /// Writes `stem.svg` and `stem.png`.
-pub fn line_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Result<Written, Error> {
+pub(crate) fn line_plot(
+    stem: &Path,
+    axes: &Axes<'_>,
+    series: &[Series<'_>],
+) -> Result<Written, Error> {
     let fig = XyFigure {
         axes: *axes,
         series,
@@ -1281,7 +1285,11 @@ pub fn line_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Result<
 
 /// Several named series on log–log axes (work–precision: error against cost). Every x and y
 /// must be > 0. Writes `stem.svg` and `stem.png`.
-pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Result<Written, Error> {
+pub(crate) fn loglog_plot(
+    stem: &Path,
+    axes: &Axes<'_>,
+    series: &[Series<'_>],
+) -> Result<Written, Error> {
     let fig = XyFigure {
         axes: *axes,
         series,
@@ -1299,7 +1307,7 @@ pub fn loglog_plot(stem: &Path, axes: &Axes<'_>, series: &[Series<'_>]) -> Resul
 ///
 /// Source: this module.
 #[derive(Clone, Copy, Debug)]
-pub struct Panel<'a> {
+pub(crate) struct Panel<'a> {
     /// The panel's title and axis labels.
     pub axes: Axes<'a>,
     /// Its series.
@@ -1309,9 +1317,9 @@ pub struct Panel<'a> {
 }
 
 /// Width of a panel figure, px.
-pub const PANEL_WIDTH: u32 = 1000;
+pub(crate) const PANEL_WIDTH: u32 = 1000;
 /// Height of one panel, px.
-pub const PANEL_HEIGHT: u32 = 400;
+pub(crate) const PANEL_HEIGHT: u32 = 400;
 
 struct PanelsFigure<'a> {
     title: &'a str,
@@ -1379,7 +1387,11 @@ impl Figure for PanelsFigure<'_> {
 /// log10): quantities of different units against one abscissa (stiffness: |λ| and the RK4
 /// step limit against crank angle). Writes `stem.svg` and `stem.png`, [`PANEL_WIDTH`] wide and
 /// [`PANEL_HEIGHT`] per panel.
-pub fn panels_plot(stem: &Path, title: &str, panels: &[Panel<'_>]) -> Result<Written, Error> {
+pub(crate) fn panels_plot(
+    stem: &Path,
+    title: &str,
+    panels: &[Panel<'_>],
+) -> Result<Written, Error> {
     if panels.is_empty() {
         return Err(Error::Internal("plot: no panels".into()));
     }
@@ -1510,7 +1522,12 @@ impl Figure for OrbitFigure<'_> {
 /// The journal centre's orbit (e_x/c, e_y/c) inside the unit clearance circle, equal aspect.
 /// The view shows at least |e|/c ≤ 1.08, more if the journal penetrates further.
 /// Writes `stem.svg` and `stem.png`.
-pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Written, Error> {
+pub(crate) fn orbit_plot(
+    stem: &Path,
+    title: &str,
+    ex: &[f64],
+    ey: &[f64],
+) -> Result<Written, Error> {
     orbits_plot(
         stem,
         title,
@@ -1526,7 +1543,11 @@ pub fn orbit_plot(stem: &Path, title: &str, ex: &[f64], ey: &[f64]) -> Result<Wr
 /// Several orbits (series x = e_x/c, y = e_y/c, named in the legend) in one clearance circle,
 /// as [`orbit_plot`]. A series of style [`SeriesStyle::Points`] is drawn as markers (a
 /// Poincaré section), every other style as a thin line.
-pub fn orbits_plot(stem: &Path, title: &str, orbits: &[Series<'_>]) -> Result<Written, Error> {
+pub(crate) fn orbits_plot(
+    stem: &Path,
+    title: &str,
+    orbits: &[Series<'_>],
+) -> Result<Written, Error> {
     bounds(orbits, false)?;
     let r = orbits
         .iter()

@@ -24,7 +24,7 @@ use crate::run::case::Case;
 use crate::store::io;
 
 /// File name of the summary in an output directory.
-pub const SUMMARY_FILE: &str = "summary.json";
+pub(crate) const SUMMARY_FILE: &str = "summary.json";
 
 /// Which case ran with which settings: the header the diagnostic reports (`stiffness.json`,
 /// `poincare.json`) share with summary.json, flattened into their JSON objects.
@@ -36,7 +36,7 @@ pub const SUMMARY_FILE: &str = "summary.json";
 ///
 /// Source: docs/outputs.md (`summary.json`, the same keys and meanings).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct RunHeader {
+pub(crate) struct RunHeader {
     /// lash version.
     pub version: String,
     /// Case name.
@@ -56,7 +56,7 @@ pub struct RunHeader {
 
 impl RunHeader {
     /// The header of a run of `case` with `opts`.
-    pub fn new(case: &Case, opts: &SolverOptions) -> RunHeader {
+    pub(crate) fn new(case: &Case, opts: &SolverOptions) -> RunHeader {
         let fixed = opts.method.is_fixed_step();
         RunHeader {
             version: env!("CARGO_PKG_VERSION").to_string(),
@@ -70,7 +70,7 @@ impl RunHeader {
     }
 
     /// `rtol R` (adaptive) or `step H s` (fixed-step).
-    pub fn accuracy(&self) -> String {
+    pub(crate) fn accuracy(&self) -> String {
         match (self.rtol, self.step) {
             (Some(t), _) => format!("rtol {t:e}"),
             (None, Some(h)) => format!("step {h:e} s"),
@@ -120,15 +120,15 @@ pub struct Summary {
     /// Error against the reference solution (built-in test problems).
     pub reference_error: Option<f64>,
     /// How a run until periodic ended (`--until-periodic`; absent otherwise): revolutions,
-    /// whether the section settled, its change per revolution (crate::run::steady).
+    /// whether the section settled, its change per revolution (`run::steady`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub until_periodic: Option<crate::run::steady::Settled>,
+    pub until_periodic: Option<Settled>,
 }
 
 impl Summary {
     /// A summary of a run of `case` with `opts`, applying the null rules; metrics,
     /// final_state and reference_error start null.
-    pub fn new(
+    pub(crate) fn new(
         case: &Case,
         opts: &SolverOptions,
         t_end: f64,
@@ -158,7 +158,7 @@ impl Summary {
     }
 
     /// Checks that every number is finite (JSON has no NaN: serde_json would write null).
-    pub fn check_finite(&self) -> Result<(), Error> {
+    pub(crate) fn check_finite(&self) -> Result<(), Error> {
         let mut nums: Vec<(&str, f64)> = vec![
             ("t_end", self.t_end),
             ("wall_time_s", self.wall_time_s),
@@ -202,11 +202,62 @@ impl Summary {
     }
 
     /// Writes `dir/summary.json` atomically (after [`Summary::check_finite`]); returns its path.
-    pub fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
         self.check_finite()?;
         let p = dir.join(SUMMARY_FILE);
         io::write_json_atomic(&p, self)?;
         Ok(p)
+    }
+}
+
+/// How a run until periodic ended.
+///
+/// ```text
+/// revolutions = K;  settled ⇔ d_K < tol;  section_changes = [d_1, …, d_K]
+/// ```
+///
+/// Source: docs/outputs.md (`until_periodic` of summary.json); the run until periodic is
+/// `run::steady`'s.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Settled {
+    /// The request.
+    pub tol: f64,
+    /// The cap of the request.
+    pub max_revolutions: usize,
+    /// Revolutions run, K.
+    pub revolutions: usize,
+    /// Whether the section moved by less than tol·c in revolution K.
+    pub settled: bool,
+    /// d_k = |s_k − s_{k−1}| / c for k = 1..=K.
+    pub section_changes: Vec<f64>,
+}
+
+impl Settled {
+    /// d_K, the change in the last revolution.
+    pub(crate) fn last_change(&self) -> f64 {
+        self.section_changes.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
+    pub(crate) fn describe(&self) -> String {
+        if self.settled {
+            format!(
+                "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
+                 the last, below {:e} c)",
+                self.revolutions,
+                self.last_change(),
+                self.tol
+            )
+        } else {
+            format!(
+                "until periodic: not settled within {} revolutions (the section moved {:.2e} c \
+                 in the last, tolerance {:e} c); metrics are those of revolution {}",
+                self.max_revolutions,
+                self.last_change(),
+                self.tol,
+                self.revolutions
+            )
+        }
     }
 }
 

@@ -13,7 +13,6 @@
 //! sink.start(header) → sink.row(values) × rows → sink.finish()    (TrajectorySink)
 //!   CsvFile        streams the CSV to a file as the run goes (memory: one buffer)
 //!   Columns        keeps every column in memory (a library caller's arrays)
-//!   NoTrajectory   discards the rows (sweeps)
 //! ```
 //!
 //! Every sink receives the same rows, so the CSV of a [`Columns`] collector
@@ -30,13 +29,13 @@ use crate::error::Error;
 use crate::store::io;
 
 /// File name of the trajectory in an output directory.
-pub const TRAJECTORY_FILE: &str = "trajectory.csv";
+pub(crate) const TRAJECTORY_FILE: &str = "trajectory.csv";
 
 /// File name of the trajectory up to a solver failure (docs/outputs.md, "`failure.json`").
-pub const PARTIAL_TRAJECTORY_FILE: &str = "partial_trajectory.csv";
+pub(crate) const PARTIAL_TRAJECTORY_FILE: &str = "partial_trajectory.csv";
 
 /// The fixed columns, in order (docs/outputs.md, "`trajectory.csv`").
-pub const COLUMNS: [&str; 13] = [
+pub(crate) const COLUMNS: [&str; 13] = [
     "t",
     "crank_angle",
     "slider_x",
@@ -53,11 +52,11 @@ pub const COLUMNS: [&str; 13] = [
 ];
 
 /// Write buffer of a streamed trajectory, bytes: the memory a [`CsvFile`] holds.
-pub const WRITE_BUFFER: usize = 1 << 16;
+pub(crate) const WRITE_BUFFER: usize = 1 << 16;
 
 /// Formats a number so that it reads back to the same f64: plain decimal for
 /// 1e-4 ≤ |x| < 1e15 (and 0), else scientific.
-pub fn fmt_num(x: f64) -> String {
+pub(crate) fn fmt_num(x: f64) -> String {
     let mut s = String::new();
     push_num(&mut s, x);
     s
@@ -89,7 +88,7 @@ impl Header {
     /// The fixed columns (`fixed_present[k]`: whether the run fills [`COLUMNS`]`[k]`) followed
     /// by `extra` columns, all filled. Errors ([`Error::Internal`]): an extra name that is
     /// empty, holds a comma, quote or line break, or repeats a name.
-    pub fn new(fixed_present: [bool; 13], extra: Vec<String>) -> Result<Header, Error> {
+    pub(crate) fn new(fixed_present: [bool; 13], extra: Vec<String>) -> Result<Header, Error> {
         let mut names: Vec<String> = COLUMNS.iter().map(|s| s.to_string()).collect();
         let mut seen: std::collections::HashSet<String> = names.iter().cloned().collect();
         for e in &extra {
@@ -116,28 +115,23 @@ impl Header {
     }
 
     /// Number of columns.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.names.len()
     }
 
-    /// Whether there are no columns (never: `t` is always there).
-    pub fn is_empty(&self) -> bool {
-        self.names.is_empty()
-    }
-
     /// Index of the column `name`.
-    pub fn index(&self, name: &str) -> Option<usize> {
+    pub(crate) fn index(&self, name: &str) -> Option<usize> {
         self.names.iter().position(|n| n == name)
     }
 
     /// The header line (no line break).
-    pub fn line(&self) -> String {
+    pub(crate) fn line(&self) -> String {
         self.names.join(",")
     }
 
     /// Checks one row: one value per column, every filled one finite ([`Error::Internal`]: a
     /// non-finite output is a bug of the model, docs/outputs.md).
-    pub fn check(&self, values: &[f64]) -> Result<(), Error> {
+    pub(crate) fn check(&self, values: &[f64]) -> Result<(), Error> {
         if values.len() != self.names.len() {
             return Err(Error::Internal(format!(
                 "trajectory: a row of {} values for {} columns",
@@ -157,7 +151,7 @@ impl Header {
     }
 
     /// Appends the CSV line of `values` (with its line break) to `out`.
-    pub fn push_line(&self, out: &mut String, values: &[f64]) {
+    pub(crate) fn push_line(&self, out: &mut String, values: &[f64]) {
         for (k, v) in values.iter().enumerate() {
             if k > 0 {
                 out.push(',');
@@ -180,28 +174,13 @@ impl Header {
 /// An error from a sink ends the run with that error (an I/O error is exit 2).
 ///
 /// Source: docs/outputs.md (`trajectory.csv`); module doc.
-pub trait TrajectorySink {
+pub(crate) trait TrajectorySink {
     /// The columns of the rows to come.
     fn start(&mut self, header: &Header) -> Result<(), Error>;
     /// One row.
     fn row(&mut self, values: &[f64]) -> Result<(), Error>;
     /// No more rows (also after a solver failure: the rows up to it).
     fn finish(&mut self) -> Result<(), Error> {
-        Ok(())
-    }
-}
-
-/// Discards every row: a run that needs no trajectory (a sweep point).
-///
-/// Source: module doc.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoTrajectory;
-
-impl TrajectorySink for NoTrajectory {
-    fn start(&mut self, _: &Header) -> Result<(), Error> {
-        Ok(())
-    }
-    fn row(&mut self, _: &[f64]) -> Result<(), Error> {
         Ok(())
     }
 }
@@ -215,7 +194,7 @@ impl TrajectorySink for NoTrajectory {
 ///
 /// Source: module doc.
 #[derive(Debug)]
-pub struct CsvFile {
+pub(crate) struct CsvFile {
     path: PathBuf,
     out: Option<BufWriter<File>>,
     header: Option<Header>,
@@ -225,7 +204,7 @@ pub struct CsvFile {
 
 impl CsvFile {
     /// Creates (or truncates) `path`; nothing is written before `start`.
-    pub fn create(path: &Path) -> Result<CsvFile, Error> {
+    pub(crate) fn create(path: &Path) -> Result<CsvFile, Error> {
         let f = File::create(path).map_err(|e| Error::io(path, e))?;
         Ok(CsvFile {
             path: path.to_path_buf(),
@@ -237,13 +216,8 @@ impl CsvFile {
     }
 
     /// Rows written so far.
-    pub fn rows(&self) -> usize {
+    pub(crate) fn rows(&self) -> usize {
         self.rows
-    }
-
-    /// The file.
-    pub fn path(&self) -> &Path {
-        &self.path
     }
 
     fn write_line(&mut self) -> Result<(), Error> {
@@ -303,7 +277,7 @@ pub struct Columns {
 
 impl Columns {
     /// An empty collector.
-    pub fn new() -> Columns {
+    pub(crate) fn new() -> Columns {
         Columns::default()
     }
 
@@ -330,12 +304,12 @@ impl Columns {
     }
 
     /// Row `i`, one value per column (NaN where absent).
-    pub fn row_values(&self, i: usize) -> Vec<f64> {
+    pub(crate) fn row_values(&self, i: usize) -> Vec<f64> {
         self.data.iter().map(|c| c[i]).collect()
     }
 
     /// The CSV text of the rows (the header only when empty; "" before the run started).
-    pub fn to_csv(&self) -> String {
+    pub(crate) fn to_csv(&self) -> String {
         let Some(h) = &self.header else {
             return String::new();
         };
@@ -348,7 +322,7 @@ impl Columns {
     }
 
     /// Writes the CSV to `path` atomically.
-    pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
+    pub(crate) fn write_csv(&self, path: &Path) -> Result<(), Error> {
         io::write_atomic(path, self.to_csv().as_bytes())
     }
 }

@@ -5,9 +5,8 @@
 //!                         scene_sha256 = null)
 //!      | PATH             a JSON scene file (summary.case = file stem,
 //!                         scene_sha256 = hex sha256 of the file's bytes)
-//! Case::catalogue(NAME)   (API only) a press scene built in code by
-//!                         lash_model::cases::press_catalogue (summary.case = NAME, the stem of
-//!                         its file in cases/press/; scene_sha256 = null)
+//! Case::press(CASE)       (API only) a press case built in code (run::press::PressCase:
+//!                         summary.case = its file stem in cases/press/; scene_sha256 = null)
 //! ```
 //!
 //! Source: docs/outputs.md (`summary.json` fields `case`, `scene_sha256`). Loading checks that
@@ -18,23 +17,24 @@ use std::path::{Path, PathBuf};
 use sha2::{Digest, Sha256};
 
 use crate::error::Error;
+use crate::run::press::PressCase;
 
 /// Prefix of built-in test problems.
-pub const BUILTIN_PREFIX: &str = "testset:";
+pub(crate) const BUILTIN_PREFIX: &str = "testset:";
 
 /// Names (after the prefix) of the built-in test problems: the stiff problems of the IVP Test
 /// Set in `lash_solver::testset` (rober, vdpolm, hires, orego).
-pub const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
+pub(crate) const BUILTIN_NAMES: &[&str] = &lash_solver::testset::NAMES;
 
 /// Where a case comes from.
 ///
 /// ```text
-/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME) | Catalogue(NAME)
+/// File { path, bytes, sha256 = sha256(bytes), json } | BuiltIn(NAME) | Press(CASE)
 /// ```
 ///
 /// Source: docs/outputs.md (`case`, `scene_sha256`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum CaseSource {
+pub(crate) enum CaseSource {
     /// A scene file.
     File {
         /// Its path, as given (resolved against the base directory if relative).
@@ -48,9 +48,9 @@ pub enum CaseSource {
     },
     /// A built-in test problem, by its name after `testset:`.
     BuiltIn(String),
-    /// A press scene of `lash_model::cases::press_catalogue`, by its name (the file stem of
-    /// the same scene in `cases/press/`).
-    Catalogue(String),
+    /// A press case of the paper, its scene built in code (the scene of its file in
+    /// `cases/press/`).
+    Press(PressCase),
 }
 
 /// A loaded case reference.
@@ -65,7 +65,7 @@ pub struct Case {
     /// The name recorded in summary.json (`case`).
     pub name: String,
     /// The file or the built-in.
-    pub source: CaseSource,
+    pub(crate) source: CaseSource,
 }
 
 impl Case {
@@ -132,7 +132,7 @@ impl Case {
     }
 
     /// A built-in test problem by its name (without the prefix).
-    pub fn builtin(name: &str) -> Result<Case, Error> {
+    pub(crate) fn builtin(name: &str) -> Result<Case, Error> {
         if !BUILTIN_NAMES.contains(&name) {
             let known = if BUILTIN_NAMES.is_empty() {
                 "none in this build".to_string()
@@ -149,34 +149,25 @@ impl Case {
         })
     }
 
-    /// A press scene of the catalogue (`lash_model::cases::press_catalogue`) by its name,
-    /// e.g. `dry_150rpm_c0.1`; an unknown name is an input error.
-    pub fn catalogue(name: &str) -> Result<Case, Error> {
-        if !lash_model::cases::press_catalogue()
-            .iter()
-            .any(|(n, _)| n == name)
-        {
-            return Err(Error::Input(format!(
-                "unknown catalogue case '{name}' (the press scenes of cases/press/)"
-            )));
+    /// A press case of the paper (its scene built in code), named by its file stem.
+    pub(crate) fn press(case: PressCase) -> Case {
+        Case {
+            name: case.to_string(),
+            source: CaseSource::Press(case),
         }
-        Ok(Case {
-            name: name.to_string(),
-            source: CaseSource::Catalogue(name.to_string()),
-        })
     }
 
     /// The scene's sha256 (hex), None for built-ins and catalogue scenes.
-    pub fn sha256(&self) -> Option<&str> {
+    pub(crate) fn sha256(&self) -> Option<&str> {
         match &self.source {
             CaseSource::File { sha256, .. } => Some(sha256),
-            CaseSource::BuiltIn(_) | CaseSource::Catalogue(_) => None,
+            CaseSource::BuiltIn(_) | CaseSource::Press(_) => None,
         }
     }
 }
 
 /// Lower-case hex sha256 of `bytes` (FIPS 180-4).
-pub fn sha256_hex(bytes: &[u8]) -> String {
+pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
     let digest = Sha256::digest(bytes);
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
@@ -239,17 +230,14 @@ mod tests {
     }
 
     #[test]
-    fn catalogue_cases_are_named_like_their_files_and_have_no_hash() {
-        let c = Case::catalogue("dry_150rpm_c0.1").unwrap();
+    fn press_cases_are_named_like_their_files_and_have_no_hash() {
+        let c = Case::press(PressCase::dry(150, 100));
         assert_eq!(c.name, "dry_150rpm_c0.1");
         assert_eq!(c.sha256(), None);
-        // The catalogue writes cases/press/NAME.json: the same stem.
+        // The generator writes cases/press/NAME.json: the same stem.
         let file = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/press")
             .join(format!("{}.json", c.name));
         assert!(file.is_file(), "{}", file.display());
-        let e = Case::catalogue("dry_150rpm_c9").unwrap_err();
-        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
-        assert!(e.to_string().contains("'dry_150rpm_c9'"), "{e}");
     }
 }

@@ -34,14 +34,14 @@ use crate::report::trajectory::{self, Columns, PARTIAL_TRAJECTORY_FILE, TRAJECTO
 use crate::store::io;
 
 /// File stems of the figures (each written as .svg and .png).
-pub const FIGURES: [&str; 5] = ["slider_x", "slider_v", "slider_a", "orbit", "joint_forces"];
+pub(crate) const FIGURES: [&str; 5] = ["slider_x", "slider_v", "slider_a", "orbit", "joint_forces"];
 
 /// File name of a failed run's account.
-pub const FAILURE_FILE: &str = "failure.json";
+pub(crate) const FAILURE_FILE: &str = "failure.json";
 
 /// Whether `name` (`is_dir`: a directory) is a file a run directory holds: what
 /// [`io::OutDir`] may replace.
-pub fn run_file(name: &str, is_dir: bool) -> bool {
+pub(crate) fn run_file(name: &str, is_dir: bool) -> bool {
     if is_dir {
         return false;
     }
@@ -69,7 +69,7 @@ pub fn run_file(name: &str, is_dir: bool) -> bool {
 ///
 /// Source: docs/outputs.md (`summary.json`, `trajectory.csv`).
 #[derive(Clone, Copy, Debug)]
-pub struct RunOutput<'a> {
+pub(crate) struct RunOutput<'a> {
     /// The summary (metrics filled in for mechanism cases).
     pub summary: &'a Summary,
     /// Rows of trajectory.csv kept in memory; None when the run streamed them into the
@@ -91,7 +91,7 @@ pub struct RunOutput<'a> {
 ///
 /// Source: docs/outputs.md ("`failure.json`").
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct FailureError {
+pub(crate) struct FailureError {
     /// The variant of `lash_solver::SolveError`, in snake case.
     pub kind: String,
     /// Its one-line message.
@@ -108,7 +108,7 @@ pub struct FailureError {
 
 impl FailureError {
     /// The fields of `e`.
-    pub fn of(e: &SolveError) -> FailureError {
+    pub(crate) fn of(e: &SolveError) -> FailureError {
         let mut f = FailureError {
             kind: String::new(),
             message: e.to_string(),
@@ -166,7 +166,7 @@ impl FailureError {
 ///
 /// Source: docs/outputs.md ("`failure.json`").
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Failure {
+pub(crate) struct Failure {
     /// Which case ran with which settings.
     #[serde(flatten)]
     pub header: RunHeader,
@@ -188,7 +188,7 @@ pub struct Failure {
 
 impl Failure {
     /// The account of `e` for a run with `header`, state components named by `names`.
-    pub fn new(
+    pub(crate) fn new(
         header: RunHeader,
         t_end: f64,
         e: &SolveError,
@@ -218,7 +218,7 @@ impl Failure {
     }
 
     /// Writes `dir/failure.json`; returns its path.
-    pub fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<PathBuf, Error> {
         let p = dir.join(FAILURE_FILE);
         io::write_json_atomic(&p, self)?;
         Ok(p)
@@ -235,7 +235,7 @@ fn col(s: &[Sample], f: impl Fn(&Sample) -> Option<f64>) -> Option<Vec<f64>> {
 
 /// Writes the run's files into `dir` (created if needed); returns their paths in the order
 /// written.
-pub fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error> {
+pub(crate) fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>, Error> {
     out.summary.check_finite()?;
     io::create_dir(dir)?;
     let mut written = Vec::new();

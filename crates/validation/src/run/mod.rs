@@ -1,7 +1,19 @@
 //! Running one case: case references, the runner every command calls, runs until periodic,
 //! and the files of one run.
 
-pub mod case;
-pub mod files;
-pub mod simulate;
-pub mod steady;
+pub(crate) mod case;
+pub(crate) mod drive;
+pub(crate) mod files;
+pub(crate) mod mechanism;
+pub(crate) mod plan;
+pub(crate) mod prepare;
+pub(crate) mod press;
+pub(crate) mod quadrature;
+pub(crate) mod result;
+pub(crate) mod sample;
+pub(crate) mod simulate;
+pub(crate) mod steady;
+pub(crate) mod testset;
+
+#[cfg(test)]
+mod tests;

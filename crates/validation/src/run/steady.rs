@@ -22,8 +22,11 @@
 use lash_model::Mechanism;
 use lash_solver::{Problem, SolverOptions, StepOutcome};
 
-use crate::error::Error;
-use crate::run::simulate::{Model, Prepared, Sampler};
+use crate::error::{Error, OptionError};
+use crate::report::summary::Settled;
+use crate::run::prepare::scene_error;
+use crate::run::prepare::{Model, Prepared};
+use crate::run::sample::Sampler;
 
 /// Fewest revolutions of a run until periodic: the metrics need a last revolution and the
 /// periodicity check a revolution before it.
@@ -50,111 +53,86 @@ pub struct UntilPeriodic {
 
 impl UntilPeriodic {
     /// `tol` with the default cap.
-    pub fn new(tol: f64) -> UntilPeriodic {
+    #[cfg(test)]
+    pub(crate) fn new(tol: f64) -> UntilPeriodic {
         UntilPeriodic {
             tol,
             max_revolutions: DEFAULT_MAX_REVOLUTIONS,
         }
     }
 
-    /// Usage errors: tol not finite and > 0, a cap below [`MIN_REVOLUTIONS`].
-    pub fn validate(&self) -> Result<(), Error> {
+    /// Option errors (`until_periodic`, `max_revolutions`): tol not finite and > 0, a cap below
+    /// [`MIN_REVOLUTIONS`].
+    pub(crate) fn validate(&self) -> Result<(), Error> {
         if !(self.tol.is_finite() && self.tol > 0.0) {
-            return Err(Error::Usage(format!(
-                "--until-periodic must be a finite number > 0 (units of the clearance), got {}",
-                self.tol
-            )));
+            return Err(OptionError::leading(
+                "until_periodic",
+                format!(
+                    " must be a finite number > 0 (units of the clearance), got {}",
+                    self.tol
+                ),
+            )
+            .into());
         }
         if self.max_revolutions < MIN_REVOLUTIONS {
-            return Err(Error::Usage(format!(
-                "--max-revolutions must be at least {MIN_REVOLUTIONS}, got {}",
-                self.max_revolutions
-            )));
+            return Err(OptionError::leading(
+                "max_revolutions",
+                format!(
+                    " must be at least {MIN_REVOLUTIONS}, got {}",
+                    self.max_revolutions
+                ),
+            )
+            .into());
         }
         Ok(())
     }
 }
 
-/// How a run until periodic ended.
-///
-/// ```text
-/// revolutions = K;  settled ⇔ d_K < tol;  section_changes = [d_1, …, d_K]
-/// ```
-///
-/// Source: this module.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Settled {
-    /// The request.
-    pub tol: f64,
-    /// The cap of the request.
-    pub max_revolutions: usize,
-    /// Revolutions run, K.
-    pub revolutions: usize,
-    /// Whether the section moved by less than tol·c in revolution K.
-    pub settled: bool,
-    /// d_k = |s_k − s_{k−1}| / c for k = 1..=K.
-    pub section_changes: Vec<f64>,
-}
-
-impl Settled {
-    /// d_K, the change in the last revolution.
-    pub fn last_change(&self) -> f64 {
-        self.section_changes.last().copied().unwrap_or(f64::NAN)
-    }
-
-    /// One line: "settled after K revolutions (…)" or "not settled within N revolutions (…)".
-    pub fn describe(&self) -> String {
-        if self.settled {
-            format!(
-                "until periodic: settled after {} revolutions (the section moved {:.2e} c in \
-                 the last, below {:e} c)",
-                self.revolutions,
-                self.last_change(),
-                self.tol
-            )
-        } else {
-            format!(
-                "until periodic: not settled within {} revolutions (the section moved {:.2e} c \
-                 in the last, tolerance {:e} c); metrics are those of revolution {}",
-                self.max_revolutions,
-                self.last_change(),
-                self.tol,
-                self.revolutions
-            )
-        }
-    }
-}
-
 /// The settling pass (module doc): integrates `p` with `opts` revolution by revolution from
 /// its start until the section settles or the cap. Errors: a case without a crank driver or a
-/// clearance joint ([`Error::Usage`]), a bad request, solver failures.
-pub fn settle(p: &Prepared, opts: &SolverOptions, until: &UntilPeriodic) -> Result<Settled, Error> {
+/// clearance joint ([`Error::Option`] on `until_periodic`), a bad request, solver failures.
+pub(crate) fn settle(
+    p: &Prepared,
+    opts: &SolverOptions,
+    until: &UntilPeriodic,
+) -> Result<Settled, Error> {
     until.validate()?;
     let (info, scene) = match (&p.info, &p.model) {
         (Some(i), Model::Mechanism(s)) => (i, s),
         _ => {
-            return Err(Error::Usage(format!(
-                "--until-periodic needs a scene with a crank driver and a clearance joint; {} \
-                 is a test problem",
-                p.case.name
-            )))
+            return Err(OptionError::leading(
+                "until_periodic",
+                format!(
+                    " needs a scene with a crank driver and a clearance joint; {} is a test \
+                     problem",
+                    p.case.name
+                ),
+            )
+            .into())
         }
     };
     let period = info.period.ok_or_else(|| {
-        Error::Usage(format!(
-            "--until-periodic needs a crank driver (the section is taken once per revolution), \
-             and {} has none",
-            p.case.name
+        Error::from(OptionError::leading(
+            "until_periodic",
+            format!(
+                " needs a crank driver (the section is taken once per revolution), and {} has \
+                 none",
+                p.case.name
+            ),
         ))
     })?;
     if info.joint.is_none() {
-        return Err(Error::Usage(format!(
-            "--until-periodic needs a clearance joint (its section decides the steady state), \
-             and {} has none",
-            p.case.name
-        )));
+        return Err(OptionError::leading(
+            "until_periodic",
+            format!(
+                " needs a clearance joint (its section decides the steady state), and {} has \
+                 none",
+                p.case.name
+            ),
+        )
+        .into());
     }
-    let mech = Mechanism::from_scene(scene).map_err(|e| Error::Input(e.to_string()))?;
+    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
     let sampler = Sampler::new(&mech, scene);
     let section = |t: f64, y: &[f64]| -> Result<[f64; 2], Error> {
         let s = sampler.sample(t, y);

@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use serde_json::Value;
 
 use crate::error::Error;
 use crate::run::case::sha256_hex;
@@ -30,11 +31,11 @@ use crate::store::claim;
 use crate::store::io;
 
 /// Name of the cache folder inside a command's output directory.
-pub const CACHE_DIR: &str = "cache";
+pub(crate) const CACHE_DIR: &str = "cache";
 
 /// The build a cache entry was made by: `VERSION+` the first 16 hex digits of sha256 of the
 /// running executable (`VERSION+unknown` where it cannot be read).
-pub fn build_id() -> &'static str {
+pub(crate) fn build_id() -> &'static str {
     static ID: OnceLock<String> = OnceLock::new();
     ID.get_or_init(|| {
         let exe = std::env::current_exe().and_then(std::fs::read);
@@ -47,7 +48,7 @@ pub fn build_id() -> &'static str {
 ///
 /// Source: this module.
 #[derive(Clone, Debug)]
-pub struct RunCache {
+pub(crate) struct RunCache {
     dir: PathBuf,
 }
 
@@ -60,7 +61,7 @@ struct Entry<K, T> {
 impl RunCache {
     /// The cache in `dir` (created on the first store; temporary files that processes gone
     /// from this host left there are removed).
-    pub fn new(dir: &Path) -> RunCache {
+    pub(crate) fn new(dir: &Path) -> RunCache {
         claim::remove_dead_temporaries(dir);
         RunCache {
             dir: dir.to_path_buf(),
@@ -68,19 +69,23 @@ impl RunCache {
     }
 
     /// The cache folder.
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.dir
     }
 
     /// The key of a run of `kind` with these inputs (module doc).
-    pub fn key<I: Serialize + ?Sized>(&self, kind: &str, inputs: &I) -> Result<String, Error> {
+    pub(crate) fn key<I: Serialize + ?Sized>(
+        &self,
+        kind: &str,
+        inputs: &I,
+    ) -> Result<String, Error> {
         let v = serde_json::json!({
             "build": build_id(),
             "kind": kind,
             "inputs": serde_json::to_value(inputs)
                 .map_err(|e| Error::Internal(format!("cache key of {kind}: {e}")))?,
         });
-        Ok(sha256_hex(crate::sweep::canonical(&v).as_bytes()))
+        Ok(sha256_hex(canonical(&v).as_bytes()))
     }
 
     fn path(&self, key: &str) -> PathBuf {
@@ -88,24 +93,45 @@ impl RunCache {
     }
 
     /// Whether an entry for `key` is there (not whether it is readable).
-    pub fn contains(&self, key: &str) -> bool {
+    pub(crate) fn contains(&self, key: &str) -> bool {
         self.path(key).is_file()
     }
 
     /// The value stored under `key`, if its file parses and holds this key.
-    pub fn load<T: DeserializeOwned>(&self, key: &str) -> Option<T> {
+    pub(crate) fn load<T: DeserializeOwned>(&self, key: &str) -> Option<T> {
         let bytes = std::fs::read(self.path(key)).ok()?;
         let e: Entry<String, T> = serde_json::from_slice(&bytes).ok()?;
         (e.key == key).then_some(e.value)
     }
 
     /// Stores `value` under `key` (atomically; the folder is created if needed).
-    pub fn store<T: Serialize>(&self, key: &str, value: &T) -> Result<(), Error> {
+    pub(crate) fn store<T: Serialize>(&self, key: &str, value: &T) -> Result<(), Error> {
         io::create_dir(&self.dir)?;
         let path = self.path(key);
         let bytes = serde_json::to_vec(&Entry { key, value })
             .map_err(|e| Error::Internal(format!("cache {}: {e}", path.display())))?;
         io::write_atomic(&path, &bytes)
+    }
+}
+
+/// Serialises a JSON value with object keys sorted at every level: the form that is hashed
+/// for cache keys and sweep point ids.
+pub(crate) fn canonical(v: &Value) -> String {
+    match v {
+        Value::Object(m) => {
+            let mut keys: Vec<&String> = m.keys().collect();
+            keys.sort();
+            let parts: Vec<String> = keys
+                .into_iter()
+                .map(|k| format!("{}:{}", Value::String(k.clone()), canonical(&m[k])))
+                .collect();
+            format!("{{{}}}", parts.join(","))
+        }
+        Value::Array(a) => {
+            let parts: Vec<String> = a.iter().map(canonical).collect();
+            format!("[{}]", parts.join(","))
+        }
+        other => other.to_string(),
     }
 }
 

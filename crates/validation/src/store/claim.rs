@@ -37,13 +37,13 @@ use crate::error::Error;
 use crate::store::io;
 
 /// Name of the claim file inside a point's directory.
-pub const CLAIM_FILE: &str = "claim.json";
+pub(crate) const CLAIM_FILE: &str = "claim.json";
 /// How often a holder refreshes the modification time of its claims.
-pub const HEARTBEAT: Duration = Duration::from_secs(30);
+pub(crate) const HEARTBEAT: Duration = Duration::from_secs(30);
 /// Age of a claim's modification time beyond which it is stale whatever its host (ten
 /// missed heartbeats: slack for a loaded node and for attribute caching of network file
 /// systems, which can delay a seen modification time by a minute).
-pub const STALE_AFTER: Duration = Duration::from_secs(300);
+pub(crate) const STALE_AFTER: Duration = Duration::from_secs(300);
 
 /// The content of a claim file.
 ///
@@ -54,7 +54,7 @@ pub const STALE_AFTER: Duration = Duration::from_secs(300);
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ClaimRecord {
+pub(crate) struct ClaimRecord {
     /// Process id of the holder.
     pub pid: u32,
     /// Host name of the holder.
@@ -69,7 +69,7 @@ pub struct ClaimRecord {
 
 impl ClaimRecord {
     /// A new claim of this process.
-    pub fn mine() -> ClaimRecord {
+    pub(crate) fn mine() -> ClaimRecord {
         static COUNTER: AtomicU64 = AtomicU64::new(0);
         let since = SystemTime::now()
             .duration_since(UNIX_EPOCH)
@@ -86,13 +86,13 @@ impl ClaimRecord {
     }
 
     /// "host:pid", for messages.
-    pub fn holder(&self) -> String {
+    pub(crate) fn holder(&self) -> String {
         format!("{}:{}", self.host, self.pid)
     }
 }
 
 /// The host name (Linux: /proc/sys/kernel/hostname; else $HOSTNAME; else "unknown").
-pub fn host_name() -> &'static str {
+pub(crate) fn host_name() -> &'static str {
     static HOST: OnceLock<String> = OnceLock::new();
     HOST.get_or_init(|| {
         fs::read_to_string("/proc/sys/kernel/hostname")
@@ -106,7 +106,7 @@ pub fn host_name() -> &'static str {
 
 /// Start time of process `pid` in clock ticks after boot (Linux: field 22 of
 /// /proc/PID/stat); None where it cannot be read.
-pub fn process_start(pid: u32) -> Option<u64> {
+pub(crate) fn process_start(pid: u32) -> Option<u64> {
     let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
     // The command name (field 2) is in parentheses and may hold spaces: count after the last ')'.
     let rest = &stat[stat.rfind(')')? + 1..];
@@ -115,7 +115,7 @@ pub fn process_start(pid: u32) -> Option<u64> {
 
 /// Whether a process on this host is alive: Some(true/false) where /proc tells (Linux), None
 /// where it cannot be known. A pid whose start time differs from `start` is another process.
-pub fn alive_here(pid: u32, start: Option<u64>) -> Option<bool> {
+pub(crate) fn alive_here(pid: u32, start: Option<u64>) -> Option<bool> {
     if !Path::new("/proc/self/stat").exists() {
         return None;
     }
@@ -127,7 +127,7 @@ pub fn alive_here(pid: u32, start: Option<u64>) -> Option<bool> {
 
 /// Whether a claim is stale (module doc): its holder is gone from this host, or it is older
 /// than [`STALE_AFTER`].
-pub fn is_stale(c: &ClaimRecord, age: Duration) -> bool {
+pub(crate) fn is_stale(c: &ClaimRecord, age: Duration) -> bool {
     if c.host == host_name() && alive_here(c.pid, c.process_start) == Some(false) {
         return true;
     }
@@ -138,7 +138,7 @@ pub fn is_stale(c: &ClaimRecord, age: Duration) -> bool {
 ///
 /// Source: this module.
 #[derive(Debug)]
-pub enum Claimed {
+pub(crate) enum Claimed {
     /// The point is ours until the guard is dropped.
     Mine(ClaimGuard),
     /// Another live process holds it.
@@ -149,14 +149,14 @@ pub enum Claimed {
 ///
 /// Source: this module.
 #[derive(Debug)]
-pub struct ClaimGuard {
+pub(crate) struct ClaimGuard {
     path: PathBuf,
     nonce: String,
 }
 
 impl ClaimGuard {
     /// The claim file.
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 }
@@ -170,7 +170,7 @@ impl Drop for ClaimGuard {
 }
 
 /// The claim at `path` and its age, if it exists and parses.
-pub fn read_claim(path: &Path) -> Option<(ClaimRecord, Duration)> {
+pub(crate) fn read_claim(path: &Path) -> Option<(ClaimRecord, Duration)> {
     let bytes = fs::read(path).ok()?;
     let c: ClaimRecord = serde_json::from_slice(&bytes).ok()?;
     Some((c, age_of(path)))
@@ -220,7 +220,7 @@ fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, Error> {
 
 /// Claims the point whose directory is `dir` (which must exist): creates `dir/claim.json`
 /// exclusively, taking over a stale claim (module doc).
-pub fn try_claim(dir: &Path) -> Result<Claimed, Error> {
+pub(crate) fn try_claim(dir: &Path) -> Result<Claimed, Error> {
     let path = dir.join(CLAIM_FILE);
     let me = ClaimRecord::mine();
     let bytes = serde_json::to_vec_pretty(&me)
@@ -276,7 +276,7 @@ pub fn try_claim(dir: &Path) -> Result<Claimed, Error> {
 }
 
 /// Refreshes the modification time of a claim file (the heartbeat).
-pub fn touch(path: &Path) {
+pub(crate) fn touch(path: &Path) {
     if let Ok(f) = fs::OpenOptions::new().append(true).open(path) {
         let _ = f.set_modified(SystemTime::now());
     }
@@ -285,7 +285,7 @@ pub fn touch(path: &Path) {
 /// Removes the temporary files ([`io::temp_path`]: `.NAME.tmp-PID-N…`) in `dir` left by
 /// processes that are gone from this host; returns how many. Files of live processes, and of
 /// processes whose liveness cannot be known, stay.
-pub fn remove_dead_temporaries(dir: &Path) -> usize {
+pub(crate) fn remove_dead_temporaries(dir: &Path) -> usize {
     let Ok(rd) = fs::read_dir(dir) else {
         return 0;
     };
@@ -304,7 +304,7 @@ pub fn remove_dead_temporaries(dir: &Path) -> usize {
 
 /// Removes every temporary file ([`io::temp_path`]) in `dir`, whoever wrote it: for a
 /// directory this process holds the claim of, whose earlier holders are gone.
-pub fn remove_all_temporaries(dir: &Path) -> usize {
+pub(crate) fn remove_all_temporaries(dir: &Path) -> usize {
     let Ok(rd) = fs::read_dir(dir) else {
         return 0;
     };
@@ -319,7 +319,7 @@ pub fn remove_all_temporaries(dir: &Path) -> usize {
 }
 
 /// The pid in a temporary file name `.NAME.tmp-PID-N[.EXT]`.
-pub fn temp_pid(name: &str) -> Option<u32> {
+pub(crate) fn temp_pid(name: &str) -> Option<u32> {
     if !name.starts_with('.') {
         return None;
     }

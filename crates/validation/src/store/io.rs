@@ -55,7 +55,7 @@ static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// Creates the directory `dir` and its parents if needed, and removes the stale temporary
 /// files of dead processes in it (module doc).
-pub fn create_dir(dir: &Path) -> Result<(), Error> {
+pub(crate) fn create_dir(dir: &Path) -> Result<(), Error> {
     fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     if !dir.is_dir() {
         return Err(Error::Input(format!(
@@ -69,7 +69,7 @@ pub fn create_dir(dir: &Path) -> Result<(), Error> {
 
 /// The PID in a temporary name `.X.tmp-PID-N[.EXT]` or `.X.old-PID-N`, and whether it is an
 /// `.old` directory; None for any other name.
-pub fn temp_owner(name: &str) -> Option<(u32, bool)> {
+pub(crate) fn temp_owner(name: &str) -> Option<(u32, bool)> {
     if !name.starts_with('.') {
         return None;
     }
@@ -104,7 +104,7 @@ fn old_target(name: &str) -> Option<&str> {
 }
 
 /// Removes the stale temporaries of dead processes in `dir` (module doc); best effort.
-pub fn clean_stale(dir: &Path) {
+pub(crate) fn clean_stale(dir: &Path) {
     let Ok(entries) = fs::read_dir(dir) else {
         return;
     };
@@ -147,7 +147,7 @@ pub fn clean_stale(dir: &Path) {
 ///
 /// Source: docs/outputs.md ("General rules").
 #[derive(Debug)]
-pub struct OutDir {
+pub(crate) struct OutDir {
     target: PathBuf,
     work: PathBuf,
     committed: bool,
@@ -158,7 +158,10 @@ impl OutDir {
     /// entry of an existing `target` is one a run writes (`owns(name, is_dir)`, or a
     /// temporary name), and creates the fresh working directory. Errors: `target` names no
     /// directory (`.`, `/`), is a file, or holds other files (exit 2: nothing is deleted).
-    pub fn create(target: &Path, owns: &dyn Fn(&str, bool) -> bool) -> Result<OutDir, Error> {
+    pub(crate) fn create(
+        target: &Path,
+        owns: &dyn Fn(&str, bool) -> bool,
+    ) -> Result<OutDir, Error> {
         let Some(name) = target.file_name().map(|n| n.to_string_lossy().into_owned()) else {
             return Err(Error::Input(format!(
                 "output directory {} must name a directory, not . or / (a run replaces its \
@@ -218,17 +221,12 @@ impl OutDir {
     }
 
     /// Where the files go until [`OutDir::commit`].
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.work
     }
 
-    /// The directory the run replaces.
-    pub fn target(&self) -> &Path {
-        &self.target
-    }
-
     /// `path` (inside the working directory) as it will be after the commit.
-    pub fn final_path(&self, path: &Path) -> PathBuf {
+    pub(crate) fn final_path(&self, path: &Path) -> PathBuf {
         match path.strip_prefix(&self.work) {
             Ok(rel) => self.target.join(rel),
             Err(_) => path.to_path_buf(),
@@ -236,7 +234,7 @@ impl OutDir {
     }
 
     /// Swaps the complete working directory in for the target (module doc).
-    pub fn commit(mut self) -> Result<PathBuf, Error> {
+    pub(crate) fn commit(mut self) -> Result<PathBuf, Error> {
         if let Ok(d) = File::open(&self.work) {
             let _ = d.sync_all();
         }
@@ -280,7 +278,7 @@ impl Drop for OutDir {
 }
 
 /// A temporary path beside `path`: same directory, hidden name, same extension.
-pub fn temp_path(path: &Path) -> PathBuf {
+pub(crate) fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -296,7 +294,7 @@ pub fn temp_path(path: &Path) -> PathBuf {
 
 /// Writes a file atomically by letting `write` produce it at a temporary path beside `path`,
 /// then syncing it and renaming it onto `path`. The parent directory must exist.
-pub fn write_atomic_with<F>(path: &Path, write: F) -> Result<(), Error>
+pub(crate) fn write_atomic_with<F>(path: &Path, write: F) -> Result<(), Error>
 where
     F: FnOnce(&Path) -> Result<(), Error>,
 {
@@ -316,7 +314,7 @@ where
 }
 
 /// Writes `bytes` to `path` atomically (temporary name, fsync, rename).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     write_atomic_with(path, |tmp| {
         let mut f = File::create(tmp).map_err(|e| Error::io(tmp, e))?;
         f.write_all(bytes).map_err(|e| Error::io(tmp, e))
@@ -324,7 +322,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
 }
 
 /// Writes `value` as pretty JSON (with a final newline) to `path` atomically.
-pub fn write_json_atomic<T: serde::Serialize + ?Sized>(
+pub(crate) fn write_json_atomic<T: serde::Serialize + ?Sized>(
     path: &Path,
     value: &T,
 ) -> Result<(), Error> {

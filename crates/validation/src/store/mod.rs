@@ -1,5 +1,5 @@
 //! What is kept on disk: atomic writes, the cache of finished runs, claim files.
 
-pub mod cache;
-pub mod claim;
-pub mod io;
+pub(crate) mod cache;
+pub(crate) mod claim;
+pub(crate) mod io;

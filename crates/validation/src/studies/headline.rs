@@ -33,60 +33,59 @@ use lash_solver::Method;
 use crate::compare::reference::{self as compare, Compared, ErrorNorms, ErrorWindow, Reference};
 use crate::compare::workprecision::fmt_num;
 use crate::error::Error;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::Progress;
 use crate::report::metrics::{Metrics, Sample};
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
-use crate::run::simulate::{Prepared, RunResult};
+use crate::run::prepare::Prepared;
+use crate::run::press::PressCase;
+use crate::run::result::RunResult;
 use crate::store::io::{self, OutDir, Written};
 
 /// One case of the default run.
 ///
 /// ```text
-/// (file stem in cases/press, label, the paper's RK4 step, the best adaptive method)
+/// (press case: file stem in cases/press and the paper's RK4 step, label, the best adaptive
+/// method)
 /// ```
 ///
-/// Source: module doc (steps: crates/model/tests/press_cases.rs).
+/// Source: module doc (RK4 steps: `PressCase::rk4_step`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HeadlineCase {
-    /// File stem in `cases/press/`.
-    pub stem: &'static str,
+pub(crate) struct HeadlineCase {
+    /// The press case (its file in `cases/press/`, its RK4 step: the largest stable one).
+    pub case: PressCase,
     /// Short label.
     pub label: &'static str,
-    /// The paper's RK4 step: the largest stable one, s.
-    pub rk4_step: f64,
     /// The best adaptive method for this case (lash work-precision).
     pub method: Method,
 }
 
 /// The three cases.
-pub const CASES: [HeadlineCase; 3] = [
+pub(crate) const CASES: [HeadlineCase; 3] = [
     HeadlineCase {
-        stem: "ideal_150rpm",
+        case: PressCase::ideal(150),
         label: "ideal",
-        rk4_step: 1e-3,
         method: Method::Dop853,
     },
     HeadlineCase {
-        stem: "dry_150rpm_c0.1",
+        case: PressCase::dry(150, 100),
         label: "dry",
-        rk4_step: 2e-4,
         method: Method::Tsit54,
     },
     HeadlineCase {
-        stem: "lubricated_150rpm_c0.1",
+        case: PressCase::lubricated(150, 100),
         label: "lubricated",
-        rk4_step: 2e-6,
         method: Method::Bdf,
     },
 ];
 
 /// Tolerances tried, loosest first, to match RK4's accuracy.
-pub const MATCH_TOLERANCES: [f64; 9] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11];
+pub(crate) const MATCH_TOLERANCES: [f64; 9] =
+    [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11];
 
 /// The workspace root: the working directory if it holds `cases/press`, else the source tree
 /// this binary was built from (two levels above the validation crate), else the working
 /// directory.
-pub fn workspace_root() -> PathBuf {
+pub(crate) fn workspace_root() -> PathBuf {
     let cwd = PathBuf::from(".");
     if cwd.join("cases/press").is_dir() {
         return cwd;
@@ -145,10 +144,17 @@ pub struct Headline {
 }
 
 fn run_case(root: &Path, c: &HeadlineCase) -> Result<(CaseReport, RunResult, Prepared), Error> {
-    let path = root.join("cases/press").join(format!("{}.json", c.stem));
+    let path = root.join("cases/press").join(format!("{}.json", c.case));
     let p = Prepared::load_spec(&path.to_string_lossy(), None)?;
     let reference = Reference::compute(&p, None)?;
-    let (rk4, _) = compare::compare_one(&p, &reference, Method::Rk4, None, Some(c.rk4_step), None)?;
+    let (rk4, _) = compare::compare_one(
+        &p,
+        &reference,
+        Method::Rk4,
+        None,
+        Some(c.case.rk4_step()),
+        None,
+    )?;
     let target = rk4.error.unwrap_or(f64::INFINITY);
     let mut best: Option<Compared> = None;
     let mut matched = false;
@@ -376,17 +382,11 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
     Ok(out)
 }
 
-/// Runs the default comparison and writes `out` (default `validation/reports/default` under
-/// the workspace root); reports nothing. See [`run_with_progress`].
-pub fn run(out: Option<PathBuf>) -> Result<Headline, Error> {
-    run_with_progress(out, &NoProgress).map(|w| w.result)
-}
-
 /// Runs the default comparison, noting each case as it starts (`running STEM …`), and writes
 /// `out` (default `validation/reports/default` under the workspace root): README.md (the
 /// table, [`Headline::to_markdown`]), default.json, the figures and per case the reference
 /// run's files. Returns the table, the directory and the files written.
-pub fn run_with_progress(
+pub(crate) fn run_with_progress(
     out: Option<PathBuf>,
     progress: &dyn Progress,
 ) -> Result<Written<Headline>, Error> {
@@ -396,7 +396,7 @@ pub fn run_with_progress(
     let mut cases = Vec::new();
     let mut runs = Vec::new();
     for c in &CASES {
-        progress.note(&format!("running {} …", c.stem).into());
+        progress.note(&format!("running {} …", c.case).into());
         let (report, run, _) = run_case(&root, c)?;
         cases.push(report);
         runs.push((*c, run));
@@ -406,7 +406,7 @@ pub fn run_with_progress(
     let dir = out_dir.path().to_path_buf();
     let mut written = figures(&dir, &runs)?;
     for (c, r) in &runs {
-        written.extend(r.write(&dir.join(c.stem))?);
+        written.extend(r.write(&dir.join(c.case.to_string()))?);
     }
     let mut h = Headline {
         cases,
@@ -431,21 +431,10 @@ pub fn run_with_progress(
 /// replace): README.md, default.json, the figures, one directory per case.
 fn default_run_file(name: &str, is_dir: bool) -> bool {
     if is_dir {
-        return CASES.iter().any(|c| c.stem == name);
+        return CASES.iter().any(|c| c.case.to_string() == name);
     }
     ["README.md", "default.json"].contains(&name)
         || ["slider_acceleration", "orbits"]
             .iter()
             .any(|f| name == format!("{f}.svg") || name == format!("{f}.png"))
-}
-
-/// The comparison table of [`Headline::to_markdown`] (its first table: header, rule and one
-/// row per run), the one README.md shows.
-pub fn comparison_table(markdown: &str) -> Vec<String> {
-    markdown
-        .lines()
-        .skip_while(|l| !l.starts_with("| case | method |"))
-        .take_while(|l| l.starts_with('|'))
-        .map(str::to_string)
-        .collect()
 }

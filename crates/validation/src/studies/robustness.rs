@@ -32,17 +32,19 @@ use lash_model::Scene;
 
 use crate::error::Error;
 use crate::progress::Progress;
+use crate::run::press::{Kind, RunKey};
 use crate::store::cache::{RunCache, CACHE_DIR};
 use crate::store::io;
 use crate::studies::paper::claims::{self, Cases, Claim, Number, Thresholds, Verdict};
-use crate::studies::paper::{
-    case_names, kind_of, run_jobs, spread, Ensemble, Job, JobOut, Kind, Plan, Setting,
-};
+use crate::studies::paper::plan::{study_cases, Plan, Setting, LUB_CLEARANCES};
+use crate::studies::paper::runner::Job;
+use crate::studies::paper::runner::{run_jobs, spread, JobOut};
+use crate::studies::paper::stats::Ensemble;
 
 /// File name of the robustness table (markdown).
-pub const MD_FILE: &str = "robustness.md";
+pub(crate) const MD_FILE: &str = "robustness.md";
 /// File name of the machine-readable robustness results.
-pub const JSON_FILE: &str = "robustness.json";
+pub(crate) const JSON_FILE: &str = "robustness.json";
 
 /// Run length of a variant.
 ///
@@ -54,7 +56,7 @@ pub const JSON_FILE: &str = "robustness.json";
 /// Source: this module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum RunLength {
+pub(crate) enum RunLength {
     /// As the study.
     Study,
     /// Two revolutions for every claim.
@@ -73,7 +75,7 @@ pub enum RunLength {
 /// Source: docs/model.md §3.1 (c_max), §4 (eps_cap, film models).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Choice {
+pub(crate) enum Choice {
     /// The baseline.
     Baseline,
     /// The film's eccentricity cap (None: no cap).
@@ -90,7 +92,7 @@ pub enum Choice {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Variant {
+pub(crate) struct Variant {
     /// Name (the key of robustness.json's verdicts).
     pub name: String,
     /// The factor varied ("baseline", "eps_cap", "film", "c_max", "run_length").
@@ -109,7 +111,7 @@ impl Variant {
     }
 
     /// The run length of this variant.
-    pub fn length(&self) -> RunLength {
+    pub(crate) fn length(&self) -> RunLength {
         match self.choice {
             Choice::Length(l) => l,
             _ => RunLength::Study,
@@ -117,7 +119,7 @@ impl Variant {
     }
 
     /// The case scene under this variant's choice.
-    pub fn apply(&self, scene: &Scene) -> Scene {
+    pub(crate) fn apply(&self, scene: &Scene) -> Scene {
         let mut s = scene.clone();
         for j in s.joints.iter_mut() {
             if let JointSpec::Clearance(c) = j {
@@ -146,7 +148,7 @@ impl Variant {
 }
 
 /// The variants of `lash study paper --robustness`, baseline first (module doc).
-pub fn variants() -> Vec<Variant> {
+pub(crate) fn variants() -> Vec<Variant> {
     vec![
         Variant::new("baseline", "baseline", Choice::Baseline),
         Variant::new("eps_cap=0.999", "eps_cap", Choice::EpsCap(Some(0.999))),
@@ -181,7 +183,7 @@ pub fn variants() -> Vec<Variant> {
 ///
 /// Source: [`claims::Claim`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Cell {
+pub(crate) struct Cell {
     /// The verdict.
     pub verdict: Verdict,
     /// Its relative margin ([`Claim::margin`]).
@@ -198,7 +200,7 @@ pub struct Cell {
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ClaimRobustness {
+pub(crate) struct ClaimRobustness {
     /// Claim id (P1, …, M4).
     pub id: String,
     /// The claim.
@@ -224,29 +226,29 @@ pub struct ClaimRobustness {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RobustnessResult {
     /// lash version.
-    pub version: String,
+    pub(crate) version: String,
     /// The study's plan (only its study settings, realisations and steady state are used).
-    pub plan: Plan,
+    pub(crate) plan: Plan,
     /// The thresholds of the claims.
-    pub thresholds: Thresholds,
+    pub(crate) thresholds: Thresholds,
     /// The variants, baseline first.
-    pub variants: Vec<Variant>,
+    pub(crate) variants: Vec<Variant>,
     /// Verdicts: claim id → variant name → "holds" | "does_not_hold".
-    pub claims: BTreeMap<String, BTreeMap<String, String>>,
+    pub(crate) claims: BTreeMap<String, BTreeMap<String, String>>,
     /// Each claim across the variants, in the order of the study.
-    pub details: Vec<ClaimRobustness>,
+    pub(crate) details: Vec<ClaimRobustness>,
     /// Distinct runs (after removing identical ones).
-    pub runs: usize,
+    pub(crate) runs: usize,
     /// Wall time, s.
-    pub timing_s: f64,
+    pub(crate) timing_s: f64,
 }
 
 /// The runs of every variant, as the claims read them (one [`Cases`] per variant).
-pub type VariantCases = Vec<Cases>;
+pub(crate) type VariantCases = Vec<Cases>;
 
 /// Runs every variant (module doc) and returns each variant's ensembles. Runs go through the
 /// study's job runner with `cache` and `progress`.
-pub fn run_variants(
+pub(crate) fn run_variants(
     plan: &Plan,
     variants: &[Variant],
     cache: &RunCache,
@@ -255,19 +257,14 @@ pub fn run_variants(
     if plan.realisations == 0 {
         return Err(Error::Usage("study: at least one realisation".into()));
     }
-    let catalogue: BTreeMap<String, Scene> =
-        lash_model::cases::press_catalogue().into_iter().collect();
-    let names = case_names();
+    let names = study_cases();
     let mut jobs = Vec::new();
     // (variant, case, steady) of each job.
     let mut tags = Vec::new();
     for (vi, v) in variants.iter().enumerate() {
-        for (i, name) in names.iter().enumerate() {
-            let base = catalogue.get(*name).ok_or_else(|| {
-                Error::Internal(format!("study: case {name} is not in the catalogue"))
-            })?;
-            let scene = v.apply(base);
-            let kind = kind_of(name);
+        for (i, &name) in names.iter().enumerate() {
+            let scene = v.apply(&name.scene());
+            let kind = name.kind();
             let members = if kind == Kind::Ideal {
                 1
             } else {
@@ -275,7 +272,9 @@ pub fn run_variants(
             };
             let steady = Some(plan.steady);
             let lengths: Vec<Option<_>> = match v.length() {
-                RunLength::Study if claims::LUB_CLEARANCES.contains(name) => vec![None, steady],
+                RunLength::Study if LUB_CLEARANCES.contains(&name) => {
+                    vec![None, steady]
+                }
                 RunLength::SteadyState if kind != Kind::Ideal => vec![steady],
                 _ => vec![None],
             };
@@ -283,7 +282,7 @@ pub fn run_variants(
                 for member in 0..members {
                     jobs.push(Job {
                         case: i,
-                        name,
+                        press: name,
                         scene: scene.clone(),
                         setting: Setting::Study,
                         member,
@@ -298,7 +297,7 @@ pub fn run_variants(
     let mut all = Vec::new();
     for (vi, v) in variants.iter().enumerate() {
         let mut cases = Cases::new();
-        for (i, name) in names.iter().enumerate() {
+        for (i, &name) in names.iter().enumerate() {
             let ensemble = |steady: bool| {
                 let mut m: Vec<(usize, &JobOut)> = jobs
                     .iter()
@@ -316,12 +315,12 @@ pub fn run_variants(
             let (two, steady) = (ensemble(false), ensemble(true));
             match (v.length(), two, steady) {
                 (RunLength::SteadyState, _, Some(s)) => {
-                    cases.insert(name.to_string(), s);
+                    cases.insert(RunKey::runs(name), s);
                 }
                 (_, Some(t), s) => {
-                    cases.insert(name.to_string(), t);
+                    cases.insert(RunKey::runs(name), t);
                     if let Some(s) = s {
-                        cases.insert(claims::at_steady_state(name), s);
+                        cases.insert(RunKey::steady_state(name), s);
                     }
                 }
                 _ => {
@@ -338,7 +337,7 @@ pub fn run_variants(
 }
 
 /// The verdicts of every claim under every variant with thresholds `th` (baseline first).
-pub fn judge(
+pub(crate) fn judge(
     variants: &[Variant],
     cases: &[Cases],
     th: &Thresholds,
@@ -392,7 +391,7 @@ fn verdict_word(v: Verdict) -> &'static str {
 /// Runs the robustness study and writes `out/robustness.md`, then `out/robustness.json`;
 /// finished runs go to `out/cache` (shared with `lash study paper --out` the same folder, whose
 /// study-setting runs it reuses).
-pub fn run_and_write(
+pub(crate) fn run_and_write(
     plan: &Plan,
     variants: &[Variant],
     th: &Thresholds,
@@ -432,41 +431,31 @@ pub fn run_and_write(
     Ok(r)
 }
 
-/// `lash study paper --robustness`: every variant of [`variants`] with the study's plan and
-/// thresholds.
-pub fn paper(out: &Path, progress: &dyn Progress) -> Result<RobustnessResult, Error> {
-    run_and_write(
-        &Plan::paper(),
-        &variants(),
-        &Thresholds::paper(),
-        out,
-        progress,
-    )
-}
-
-/// One line: robust and fragile claims, where the table is.
-pub fn describe(r: &RobustnessResult, out: &Path) -> String {
-    let fragile: Vec<&str> = r
-        .details
-        .iter()
-        .filter(|d| !d.robust)
-        .map(|d| d.id.as_str())
-        .collect();
-    format!(
-        "study paper --robustness: {} variants, {} distinct runs, {:.1} s; {} of {} claims robust, fragile: {}; table {}",
-        r.variants.len(),
-        r.runs,
-        r.timing_s,
-        r.details.len() - fragile.len(),
-        r.details.len(),
-        if fragile.is_empty() { "none".to_string() } else { fragile.join(", ") },
-        out.join(MD_FILE).display()
-    )
+impl RobustnessResult {
+    /// One line: robust and fragile claims, where the table is.
+    pub fn describe(&self, out: &Path) -> String {
+        let fragile: Vec<&str> = self
+            .details
+            .iter()
+            .filter(|d| !d.robust)
+            .map(|d| d.id.as_str())
+            .collect();
+        format!(
+            "study paper (robustness): {} variants, {} distinct runs, {:.1} s; {} of {} claims robust, fragile: {}; table {}",
+            self.variants.len(),
+            self.runs,
+            self.timing_s,
+            self.details.len() - fragile.len(),
+            self.details.len(),
+            if fragile.is_empty() { "none".to_string() } else { fragile.join(", ") },
+            out.join(MD_FILE).display()
+        )
+    }
 }
 
 /// robustness.md: thresholds, the claims × variants table (verdict and margin), and for each
 /// fragile claim the variants that flip it with their numbers.
-pub fn markdown(r: &RobustnessResult) -> String {
+pub(crate) fn markdown(r: &RobustnessResult) -> String {
     let th = &r.thresholds;
     let mut s = String::new();
     s.push_str("# The paper's claims under model uncertainty\n\n");
@@ -495,7 +484,7 @@ pub fn markdown(r: &RobustnessResult) -> String {
         th.not_chaotic,
         th.periodic,
         th.marked_growth,
-        claims::SECTOR_FLUCTUATION
+        crate::studies::paper::stats::SECTOR_FLUCTUATION
     ));
     s.push_str(
         "Each cell: ✓ holds / ✗ does not hold, and the verdict's relative margin (the \

@@ -25,65 +25,32 @@
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 
-use super::{CaseStats, Ensemble};
 use crate::error::Error;
-
-/// Dry cases of the speed study (0.1 mm), in increasing speed.
-pub const DRY_SPEEDS: [&str; 4] = [
-    "dry_120rpm_c0.1",
-    "dry_150rpm_c0.1",
-    "dry_180rpm_c0.1",
-    "dry_200rpm_c0.1",
-];
-/// Lubricated cases of the speed study (0.1 mm), in increasing speed.
-pub const LUB_SPEEDS: [&str; 4] = [
-    "lubricated_120rpm_c0.1",
-    "lubricated_150rpm_c0.1",
-    "lubricated_180rpm_c0.1",
-    "lubricated_200rpm_c0.1",
-];
-/// Dry cases of the clearance study (150 rpm), in increasing clearance.
-pub const DRY_CLEARANCES: [&str; 4] = [
-    "dry_150rpm_c0.1",
-    "dry_150rpm_c0.2",
-    "dry_150rpm_c0.3",
-    "dry_150rpm_c0.5",
-];
-/// Lubricated cases of the clearance study (150 rpm), in increasing clearance.
-pub const LUB_CLEARANCES: [&str; 4] = [
-    "lubricated_150rpm_c0.1",
-    "lubricated_150rpm_c0.2",
-    "lubricated_150rpm_c0.3",
-    "lubricated_150rpm_c0.5",
-];
-/// The ideal mechanism at the four speeds.
-pub const IDEALS: [&str; 4] = [
-    "ideal_120rpm",
-    "ideal_150rpm",
-    "ideal_180rpm",
-    "ideal_200rpm",
-];
-/// Radial clearances of the clearance study, mm (the order of [`DRY_CLEARANCES`]).
-pub const CLEARANCES_MM: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
+use crate::run::press::{PressCase, RunKey};
+use crate::studies::paper::plan::CLEARANCES_MM;
+use crate::studies::paper::plan::DRY_CLEARANCES;
+use crate::studies::paper::plan::DRY_SPEEDS;
+use crate::studies::paper::plan::IDEALS;
+use crate::studies::paper::plan::LUB_CLEARANCES;
+use crate::studies::paper::plan::LUB_SPEEDS;
+use crate::studies::paper::stats::{CaseStats, Ensemble};
 
 /// "Little effect" on the displacement: below this fraction of the stroke 2r.
-pub const LITTLE: f64 = 0.01;
+pub(crate) const LITTLE: f64 = 0.01;
 /// "Scarcely different" acceleration: max deviation below this fraction of the ideal peak.
-pub const SCARCELY: f64 = 0.01;
+pub(crate) const SCARCELY: f64 = 0.01;
 /// "Obvious" acceleration deviation: max deviation at least this fraction of the ideal peak.
-pub const OBVIOUS: f64 = 0.05;
-/// A 45° sector "fluctuates" when its max deviation exceeds this fraction of the ideal peak.
-pub const SECTOR_FLUCTUATION: f64 = 0.1;
+pub(crate) const OBVIOUS: f64 = 0.05;
 /// "Near the boundary" of the clearance circle: ε_max at least this.
-pub const NEAR_BOUNDARY: f64 = 0.9;
+pub(crate) const NEAR_BOUNDARY: f64 = 0.9;
 /// "Not chaotic": the realisations' pointwise acceleration spread below this fraction of the
 /// ideal peak.
-pub const NOT_CHAOTIC: f64 = 1e-3;
+pub(crate) const NOT_CHAOTIC: f64 = 1e-3;
 /// "Periodic": max |e_k − e_{k−1}| / c between the last two revolutions below this.
-pub const PERIODIC: f64 = 0.05;
+pub(crate) const PERIODIC: f64 = 0.05;
 /// "Grows markedly" (P16): the RMS deviation at 0.5 mm at least this multiple of that at
 /// 0.3 mm.
-pub const MARKED_GROWTH: f64 = 1.25;
+pub(crate) const MARKED_GROWTH: f64 = 1.25;
 
 /// The thresholds the claims are judged with (the module doc says what each means).
 ///
@@ -93,12 +60,12 @@ pub const MARKED_GROWTH: f64 = 1.25;
 /// marked growth × 1.25
 /// ```
 ///
-/// The 10 % of a "fluctuating" sector ([`SECTOR_FLUCTUATION`]) is applied when the runs'
-/// statistics are made, not here.
+/// The 10 % of a "fluctuating" sector (`stats::SECTOR_FLUCTUATION`) is applied when the
+/// runs' statistics are made, not here.
 ///
 /// Source: this module (the constants above).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Thresholds {
+pub(crate) struct Thresholds {
     /// [`LITTLE`].
     pub little: f64,
     /// [`SCARCELY`].
@@ -117,7 +84,7 @@ pub struct Thresholds {
 
 impl Thresholds {
     /// The study's thresholds (the constants of this module).
-    pub fn paper() -> Thresholds {
+    pub(crate) fn paper() -> Thresholds {
         Thresholds {
             little: LITTLE,
             scarcely: SCARCELY,
@@ -130,14 +97,6 @@ impl Thresholds {
     }
 }
 
-/// Suffix of a case name under which [`Cases`] holds the case's runs until periodic.
-pub const STEADY_SUFFIX: &str = "@steady_state";
-
-/// The name of a case's runs until periodic in [`Cases`].
-pub fn at_steady_state(case: &str) -> String {
-    format!("{case}{STEADY_SUFFIX}")
-}
-
 /// A statistic of one realisation of one case that a claim reads.
 ///
 /// ```text
@@ -147,7 +106,7 @@ pub fn at_steady_state(case: &str) -> String {
 ///
 /// Source: docs/outputs.md (`metrics`); this module's [`super::Deviations`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Quantity {
+pub(crate) enum Quantity {
     /// `slider_acc_rms_dev_ideal`, m/s².
     RmsDev,
     /// `eps_max`.
@@ -189,7 +148,7 @@ pub enum Quantity {
 
 impl Quantity {
     /// Name in the report and study.json.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Quantity::RmsDev => "slider_acc_rms_dev_ideal",
             Quantity::EpsMax => "eps_max",
@@ -213,7 +172,7 @@ impl Quantity {
     }
 
     /// The value for one realisation (None when the case lacks it, e.g. ε of the ideal one).
-    pub fn of(self, s: &CaseStats) -> Option<f64> {
+    pub(crate) fn of(self, s: &CaseStats) -> Option<f64> {
         let (m, d) = (&s.metrics, &s.dev);
         match self {
             Quantity::RmsDev => m.slider_acc_rms_dev_ideal,
@@ -257,7 +216,7 @@ pub enum Verdict {
 
 impl Verdict {
     /// HOLDS for true.
-    pub fn of(b: bool) -> Verdict {
+    pub(crate) fn of(b: bool) -> Verdict {
         if b {
             Verdict::Holds
         } else {
@@ -265,7 +224,7 @@ impl Verdict {
         }
     }
     /// "HOLDS" or "DOES NOT HOLD".
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Verdict::Holds => "HOLDS",
             Verdict::DoesNotHold => "DOES NOT HOLD",
@@ -346,14 +305,14 @@ pub struct Claim {
     pub realisations: usize,
 }
 
-/// The runs by case name.
+/// The runs of each case (its plan's runs, and its runs until periodic where it has them).
 ///
 /// ```text
-/// case name → Ensemble { members[k] = statistics of realisation k, acc_spread }
+/// (case, variant) → Ensemble { members[k] = statistics of realisation k, acc_spread }
 /// ```
 ///
-/// Source: [`super::Ensemble`].
-pub type Cases = BTreeMap<String, Ensemble>;
+/// Source: `stats::Ensemble`; `run::press::RunKey`.
+pub(crate) type Cases = BTreeMap<RunKey, Ensemble>;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Pick {
@@ -414,19 +373,20 @@ impl View<'_> {
     }
 
     /// The case's runs until periodic when there are any, else its own runs.
-    fn periodic_case(&self, case: &str) -> String {
-        let s = at_steady_state(case);
+    fn periodic_case(&self, case: PressCase) -> RunKey {
+        let s = RunKey::steady_state(case);
         if self.cases.contains_key(&s) {
             s
         } else {
-            case.to_string()
+            RunKey::runs(case)
         }
     }
 
-    fn get(&self, case: &str, q: Quantity) -> Result<f64, Error> {
+    fn get(&self, case: impl Into<RunKey>, q: Quantity) -> Result<f64, Error> {
+        let case: RunKey = case.into();
         let e = self
             .cases
-            .get(case)
+            .get(&case)
             .ok_or_else(|| Error::Internal(format!("study: no runs of case {case}")))?;
         if e.members.is_empty() {
             return Err(Error::Internal(format!("study: case {case} has no runs")));
@@ -471,8 +431,8 @@ impl View<'_> {
         Ok(value)
     }
 
-    fn all(&self, cases: &[&str], q: Quantity) -> Result<Vec<f64>, Error> {
-        cases.iter().map(|c| self.get(c, q)).collect()
+    fn all(&self, cases: &[PressCase], q: Quantity) -> Result<Vec<f64>, Error> {
+        cases.iter().map(|&c| self.get(c, q)).collect()
     }
 
     /// Records a derived number (ratio, threshold) in the mean view.
@@ -486,11 +446,6 @@ impl View<'_> {
             });
         }
     }
-}
-
-/// True when every element exceeds the one before it.
-pub fn strictly_increasing(v: &[f64]) -> bool {
-    v.windows(2).all(|w| w[1] > w[0])
 }
 
 fn span(v: &[f64]) -> f64 {
@@ -873,9 +828,9 @@ const DEFS: &[Def] = &[
         criterion: "max |e(t) − e(t − T)| / c over the last revolution < 0.05 at every clearance (lubricated, 150 rpm), judged at steady state: each realisation runs until its once-per-revolution section moves by less than 0.01 c (at most 40 revolutions).",
         note: "The journal starts centred (docs/model.md §6) and sinks into the film over many revolutions; after two revolutions the gap is a transient that has not settled, which is why the claim is judged at steady state.",
         eval: |v| {
-            let cases: Vec<String> = LUB_CLEARANCES.iter().map(|c| v.periodic_case(c)).collect();
+            let cases: Vec<RunKey> = LUB_CLEARANCES.iter().map(|&c| v.periodic_case(c)).collect();
             let mut ok = true;
-            for c in &cases {
+            for &c in &cases {
                 ok &= v.less(v.get(c, Quantity::OrbitClosure)?, v.th.periodic);
             }
             Ok(ok)
@@ -939,19 +894,20 @@ const DEFS: &[Def] = &[
 ];
 
 /// Number of claims [`evaluate`] returns.
-pub fn count() -> usize {
+#[cfg(test)]
+pub(crate) fn count() -> usize {
     DEFS.len()
 }
 
 /// Decides every claim from the runs: the verdict on the ensemble means, and the number of
 /// realisations on which the criterion holds. Errors ([`Error::Internal`]): a case missing, a
 /// statistic missing or non-finite.
-pub fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
+pub(crate) fn evaluate(cases: &Cases) -> Result<Vec<Claim>, Error> {
     evaluate_with(cases, &Thresholds::paper())
 }
 
 /// [`evaluate`] with other thresholds.
-pub fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error> {
+pub(crate) fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error> {
     let n = cases.values().map(|e| e.members.len()).max().unwrap_or(0);
     if n == 0 {
         return Err(Error::Internal(
@@ -1007,7 +963,8 @@ pub fn evaluate_with(cases: &Cases, th: &Thresholds) -> Result<Vec<Claim>, Error
 mod tests {
     use super::*;
     use crate::report::metrics::Metrics;
-    use crate::studies::paper::{CaseStats, Deviations, Ensemble};
+    use crate::run::press::Kind;
+    use crate::studies::paper::stats::{CaseStats, Deviations, Ensemble};
 
     /// Statistics of one realisation with the given values (everything else neutral).
     #[derive(Clone, Copy)]
@@ -1099,10 +1056,10 @@ mod tests {
     /// A table on which every claim holds, two identical realisations per clearance case.
     fn paper_like() -> Cases {
         let mut c = Cases::new();
-        let mut put = |name: &str, s: S, spread: f64| {
-            let n = if name.starts_with("ideal") { 1 } else { 2 };
+        let mut put = |case: PressCase, s: S, spread: f64| {
+            let n = if case.kind() == Kind::Ideal { 1 } else { 2 };
             c.insert(
-                name.to_string(),
+                RunKey::runs(case),
                 Ensemble {
                     members: vec![stats(s); n],
                     acc_spread: spread,
@@ -1112,7 +1069,7 @@ mod tests {
         for (i, name) in DRY_SPEEDS.iter().enumerate() {
             let k = i as f64;
             put(
-                name,
+                *name,
                 S {
                     rms: 1.0 + k,
                     eps: Some(2.0 + 0.1 * k),
@@ -1136,7 +1093,7 @@ mod tests {
                 (5e-4, 0.05, 5.0, 0.3, 1.5e-4),
             ][j];
             put(
-                name,
+                *name,
                 S {
                     rms,
                     x_dev: x,
@@ -1151,7 +1108,7 @@ mod tests {
         }
         for (i, name) in LUB_SPEEDS.iter().enumerate() {
             put(
-                name,
+                *name,
                 S {
                     peak: 2.5 + i as f64,
                     ..LUB
@@ -1162,7 +1119,7 @@ mod tests {
         for (j, name) in LUB_CLEARANCES.iter().enumerate().skip(1) {
             let (a_dev, eps) = [(0.0, 0.0), (0.01, 0.6), (0.02, 0.85), (0.3, 0.95)][j];
             put(
-                name,
+                *name,
                 S {
                     a_dev,
                     eps: Some(eps),
@@ -1196,8 +1153,13 @@ mod tests {
     }
 
     /// Applies `f` to every realisation of `case`.
-    fn set(cases: &mut Cases, case: &str, f: impl Fn(&mut CaseStats)) {
-        for m in cases.get_mut(case).unwrap().members.iter_mut() {
+    fn set(cases: &mut Cases, case: PressCase, f: impl Fn(&mut CaseStats)) {
+        for m in cases
+            .get_mut(&RunKey::runs(case))
+            .unwrap()
+            .members
+            .iter_mut()
+        {
             f(m);
         }
     }
@@ -1222,120 +1184,140 @@ mod tests {
     /// One change per claim that breaks exactly the property the claim asserts.
     const BREAKERS: &[Mutation] = &[
         ("P1", |c| {
-            set(c, "dry_200rpm_c0.1", |s| s.dev.x_dev_max = 3.1e-4)
+            set(c, PressCase::dry(200, 100), |s| s.dev.x_dev_max = 3.1e-4)
         }), // > 1 % of 0.03 m
         ("P2", |c| {
-            set(c, "dry_180rpm_c0.1", |s| s.dev.x_dev_bdc = 1.35e-4)
+            set(c, PressCase::dry(180, 100), |s| s.dev.x_dev_bdc = 1.35e-4)
         }), // > 200 rpm's 1.3e-4
         ("P3", |c| {
-            set(c, "dry_120rpm_c0.1", |s| s.dev.v_dev_rel = 0.95)
+            set(c, PressCase::dry(120, 100), |s| s.dev.v_dev_rel = 0.95)
         }),
         ("P4", |c| {
-            set(c, "dry_150rpm_c0.1", |s| s.dev.fluctuation_sectors = 7)
+            set(c, PressCase::dry(150, 100), |s| {
+                s.dev.fluctuation_sectors = 7
+            })
         }),
         ("P5", |c| {
-            set(c, "dry_200rpm_c0.1", |s| {
+            set(c, PressCase::dry(200, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.0)
             })
         }),
         ("P6", |c| {
-            set(c, "dry_120rpm_c0.1", |s| s.dev.a_dev_dead_centres = 5.0)
+            set(c, PressCase::dry(120, 100), |s| {
+                s.dev.a_dev_dead_centres = 5.0
+            })
         }),
         ("P7", |c| {
-            set(c, "dry_200rpm_c0.1", |s| s.dev.contact_fraction = Some(0.7))
+            set(c, PressCase::dry(200, 100), |s| {
+                s.dev.contact_fraction = Some(0.7)
+            })
         }),
         ("P8", |c| {
-            set(c, "dry_180rpm_c0.1", |s| {
+            set(c, PressCase::dry(180, 100), |s| {
                 s.metrics.penetration_max = Some(1.1e-4)
             })
         }),
         ("P9", |c| {
-            set(c, "lubricated_180rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(180, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.5)
             })
         }),
         ("P10", |c| {
-            set(c, "lubricated_120rpm_c0.1", |s| s.dev.x_dev_bdc = 1e-4)
+            set(c, PressCase::lubricated(120, 100), |s| {
+                s.dev.x_dev_bdc = 1e-4
+            })
         }),
         ("P11", |c| {
-            set(c, "lubricated_200rpm_c0.1", |s| s.dev.v_dev_max = 0.05)
+            set(c, PressCase::lubricated(200, 100), |s| {
+                s.dev.v_dev_max = 0.05
+            })
         }),
         ("P12", |c| {
-            set(c, "lubricated_200rpm_c0.1", |s| s.dev.a_dev_max = 0.06)
+            set(c, PressCase::lubricated(200, 100), |s| {
+                s.dev.a_dev_max = 0.06
+            })
         }), // 1 % of 5.5 = 0.055
         ("P13", |c| {
-            set(c, "lubricated_120rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(120, 100), |s| {
                 s.metrics.eps_max = Some(1.0)
             })
         }),
         ("P14", |c| {
-            set(c, "dry_150rpm_c0.3", |s| s.dev.x_dev_max = 1.5e-4)
+            set(c, PressCase::dry(150, 300), |s| s.dev.x_dev_max = 1.5e-4)
         }),
         ("P15", |c| {
-            set(c, "dry_150rpm_c0.5", |s| s.dev.v_dev_max = 0.035)
+            set(c, PressCase::dry(150, 500), |s| s.dev.v_dev_max = 0.035)
         }),
         ("P16", |c| {
             // 3.7 / 3.0 < 1.25 although the curve still steepens: (3.7−3)/0.2 > (3−2)/0.2.
-            set(c, "dry_150rpm_c0.5", |s| {
+            set(c, PressCase::dry(150, 500), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(3.7)
             })
         }),
         ("P17", |c| {
-            set(c, "dry_150rpm_c0.3", |s| {
+            set(c, PressCase::dry(150, 300), |s| {
                 s.dev.contact_fraction = Some(0.56)
             })
         }),
         ("P18", |c| {
-            set(c, "dry_150rpm_c0.5", |s| {
+            set(c, PressCase::dry(150, 500), |s| {
                 s.metrics.penetration_max = Some(1.3e-4)
             })
         }),
         ("P19", |c| {
-            set(c, "lubricated_150rpm_c0.3", |s| s.dev.x_dev_max = 4e-4)
+            set(c, PressCase::lubricated(150, 300), |s| {
+                s.dev.x_dev_max = 4e-4
+            })
         }),
         ("P20", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| {
+            set(c, PressCase::lubricated(150, 500), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(6.0)
             })
         }),
         ("P21", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| s.dev.a_dev_max = 0.19)
+            set(c, PressCase::lubricated(150, 500), |s| {
+                s.dev.a_dev_max = 0.19
+            })
         }), // < 5 % of 3.86
         ("P22", |c| {
-            set(c, "lubricated_150rpm_c0.2", |s| {
+            set(c, PressCase::lubricated(150, 200), |s| {
                 s.metrics.eps_max = Some(0.9)
             })
         }),
         ("P23", |c| {
-            set(c, "lubricated_150rpm_c0.5", |s| {
+            set(c, PressCase::lubricated(150, 500), |s| {
                 s.metrics.eps_max = Some(1.01)
             })
         }),
         ("P24", |c| {
-            c.get_mut("lubricated_150rpm_c0.3").unwrap().acc_spread = 4e-3
+            c.get_mut(&RunKey::runs(PressCase::lubricated(150, 300)))
+                .unwrap()
+                .acc_spread = 4e-3
         }),
         ("P25", |c| {
-            set(c, "lubricated_150rpm_c0.2", |s| {
+            set(c, PressCase::lubricated(150, 200), |s| {
                 s.dev.orbit_closure = Some(0.05)
             })
         }),
         ("M1", |c| {
-            set(c, "ideal_180rpm", |s| {
+            set(c, PressCase::ideal(180), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(1e-5)
             })
         }),
         ("M2", |c| {
-            set(c, "dry_150rpm_c0.1", |s| {
+            set(c, PressCase::dry(150, 100), |s| {
                 s.metrics.contact_force_max = Some(2.9e4)
             })
         }),
         ("M3", |c| {
-            set(c, "lubricated_150rpm_c0.1", |s| {
+            set(c, PressCase::lubricated(150, 100), |s| {
                 s.metrics.slider_acc_rms_dev_ideal = Some(2e-3)
             })
         }),
         ("M4", |c| {
-            c.get_mut("dry_150rpm_c0.1").unwrap().acc_spread = 1e-2
+            c.get_mut(&RunKey::runs(PressCase::dry(150, 100)))
+                .unwrap()
+                .acc_spread = 1e-2
         }),
     ];
 
@@ -1364,7 +1346,9 @@ mod tests {
         // P5 at 200 rpm: realisation 0 has RMS 5 (> 180 rpm's 3), realisation 1 has 2.5 (< 3).
         // Mean 3.75 > 3: HOLDS on the means, 1 of 2 realisations.
         let mut cases = paper_like();
-        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        let e = cases
+            .get_mut(&RunKey::runs(PressCase::dry(200, 100)))
+            .unwrap();
         e.members[0].metrics.slider_acc_rms_dev_ideal = Some(5.0);
         e.members[1].metrics.slider_acc_rms_dev_ideal = Some(2.5);
         assert_eq!(verdict(&cases, "P5"), (Verdict::Holds, 1, 2));
@@ -1380,7 +1364,9 @@ mod tests {
             .unwrap();
         assert_eq!((n.value, n.min, n.max), (3.75, Some(2.5), Some(5.0)));
         // Mean 2.9 < 3: DOES NOT HOLD although realisation 0 still satisfies it.
-        let e = cases.get_mut("dry_200rpm_c0.1").unwrap();
+        let e = cases
+            .get_mut(&RunKey::runs(PressCase::dry(200, 100)))
+            .unwrap();
         e.members[1].metrics.slider_acc_rms_dev_ideal = Some(0.8);
         assert_eq!(verdict(&cases, "P5"), (Verdict::DoesNotHold, 1, 2));
     }
@@ -1388,7 +1374,7 @@ mod tests {
     #[test]
     fn missing_data_is_an_error_not_a_verdict() {
         let mut cases = paper_like();
-        cases.remove("lubricated_150rpm_c0.5");
+        cases.remove(&RunKey::runs(PressCase::lubricated(150, 500)));
         let e = evaluate(&cases).unwrap_err();
         assert!(
             e.to_string()
@@ -1396,7 +1382,7 @@ mod tests {
             "{e}"
         );
         let mut cases = paper_like();
-        set(&mut cases, "dry_120rpm_c0.1", |s| {
+        set(&mut cases, PressCase::dry(120, 100), |s| {
             s.metrics.penetration_max = None
         });
         assert!(evaluate(&cases)
@@ -1404,18 +1390,10 @@ mod tests {
             .to_string()
             .contains("dry_120rpm_c0.1 has no penetration_max"));
         let mut cases = paper_like();
-        set(&mut cases, "dry_120rpm_c0.1", |s| {
+        set(&mut cases, PressCase::dry(120, 100), |s| {
             s.dev.x_dev_max = f64::NAN
         });
         assert!(evaluate(&cases).is_err());
         assert!(evaluate(&Cases::new()).is_err());
-    }
-
-    #[test]
-    fn strictly_increasing_is_strict() {
-        assert!(strictly_increasing(&[1.0, 2.0, 3.0]));
-        assert!(!strictly_increasing(&[1.0, 2.0, 2.0]));
-        assert!(!strictly_increasing(&[1.0, 3.0, 2.0]));
-        assert!(strictly_increasing(&[1.0]));
     }
 }

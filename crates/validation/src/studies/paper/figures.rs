@@ -19,16 +19,18 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use super::claims::{DRY_CLEARANCES, DRY_SPEEDS, LUB_CLEARANCES, LUB_SPEEDS};
-use super::{Curves, FigureRecord};
 use crate::error::Error;
 use crate::report::plot::{self, Axes, Series, SeriesStyle};
+use crate::run::press::PressCase;
+use crate::studies::paper::plan::{DRY_CLEARANCES, DRY_SPEEDS, LUB_CLEARANCES, LUB_SPEEDS};
+use crate::studies::paper::result::FigureRecord;
+use crate::studies::paper::stats::Curves;
 
 struct Set {
     first_figure: u32,
     condition: &'static str,
     varies: &'static str,
-    cases: [&'static str; 4],
+    cases: [PressCase; 4],
     labels: [&'static str; 4],
     /// All four cases run at one speed (the ideal curves coincide).
     one_speed: bool,
@@ -103,13 +105,13 @@ enum Job {
     },
 }
 
-fn get<'a>(curves: &'a BTreeMap<String, Curves>, case: &str) -> Result<&'a Curves, Error> {
+fn get(curves: &BTreeMap<PressCase, Curves>, case: PressCase) -> Result<&Curves, Error> {
     curves
-        .get(case)
+        .get(&case)
         .ok_or_else(|| Error::Internal(format!("study figures: no curves of {case}")))
 }
 
-fn record(id: String, title: String, cases: &[&str]) -> FigureRecord {
+fn record(id: String, title: String, cases: &[PressCase]) -> FigureRecord {
     FigureRecord {
         id,
         title,
@@ -117,14 +119,14 @@ fn record(id: String, title: String, cases: &[&str]) -> FigureRecord {
     }
 }
 
-fn jobs(curves: &BTreeMap<String, Curves>) -> Result<Vec<Job>, Error> {
+fn jobs(curves: &BTreeMap<PressCase, Curves>) -> Result<Vec<Job>, Error> {
     let mut jobs = Vec::new();
     for set in &SETS {
         let n = set.first_figure;
         let cs: Vec<&Curves> = set
             .cases
             .iter()
-            .map(|c| get(curves, c))
+            .map(|&c| get(curves, c))
             .collect::<Result<_, _>>()?;
         let line = |name: String, c: &Curves, y: Vec<f64>, style| Line {
             name,
@@ -297,13 +299,17 @@ fn render(dir: &Path, job: &Job) -> Result<FigureRecord, Error> {
 }
 
 /// Number of figures [`write`] draws (each an SVG and a PNG).
-pub fn count() -> usize {
+#[cfg(test)]
+pub(crate) fn count() -> usize {
     SETS.len() * (3 + 4 + 4)
 }
 
 /// Draws every figure into `dir` (which must exist), in parallel; returns their records in
 /// figure order.
-pub fn write(dir: &Path, curves: &BTreeMap<String, Curves>) -> Result<Vec<FigureRecord>, Error> {
+pub(super) fn write(
+    dir: &Path,
+    curves: &BTreeMap<PressCase, Curves>,
+) -> Result<Vec<FigureRecord>, Error> {
     let jobs = jobs(curves)?;
     let mut recs: Vec<FigureRecord> = jobs
         .par_iter()

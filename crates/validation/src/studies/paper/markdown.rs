@@ -12,12 +12,15 @@
 
 use std::fmt::Write as _;
 
-use super::claims::{self, Claim, Origin};
-use super::{CaseResult, CaseStats, Ensemble, Kind, Setting, StudyResult};
 use crate::report::metrics::Metrics;
+use crate::run::press::Kind;
+use crate::studies::paper::claims::{self, Claim, Origin};
+use crate::studies::paper::plan::Setting;
+use crate::studies::paper::result::{CaseResult, StudyResult};
+use crate::studies::paper::stats::{CaseStats, Ensemble};
 
 /// Text for a table cell: `|` escaped.
-pub fn cell(s: &str) -> String {
+pub(crate) fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
@@ -25,7 +28,7 @@ pub fn cell(s: &str) -> String {
 type Stat = fn(&CaseStats) -> Option<f64>;
 
 /// A number with four significant digits, plain or scientific.
-pub fn sig(v: f64) -> String {
+pub(crate) fn sig(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }
@@ -418,7 +421,7 @@ fn convergence(out: &mut String, r: &StudyResult) {
 }
 
 /// The whole report.
-pub fn report(r: &StudyResult) -> String {
+pub(crate) fn report(r: &StudyResult) -> String {
     let mut out = String::new();
     let p = &r.plan;
     let _ = writeln!(out, "# The paper's case study (§4) with lash\n");
@@ -479,11 +482,11 @@ pub fn report(r: &StudyResult) -> String {
         100.0 * claims::LITTLE,
         100.0 * claims::SCARCELY,
         100.0 * claims::OBVIOUS,
-        100.0 * claims::SECTOR_FLUCTUATION,
+        100.0 * crate::studies::paper::stats::SECTOR_FLUCTUATION,
         claims::NEAR_BOUNDARY,
         100.0 * claims::NOT_CHAOTIC,
         claims::PERIODIC,
-        super::DEAD_CENTRE_WINDOW_DEG
+        crate::studies::paper::plan::DEAD_CENTRE_WINDOW_DEG
     );
 
     let _ = writeln!(out, "## Verdicts\n");
@@ -552,8 +555,8 @@ pub fn report(r: &StudyResult) -> String {
          RMS(q_ideal − mean), `fluctuation_sectors` = 45° sectors with max |ẍ − ẍ_ideal| > {1} % \
          of the ideal peak, `contact_fraction` = share of the revolution with δ > 0, \
          `orbit_closure` = max |e(t) − e(t − T)|/c.\n",
-        super::DEAD_CENTRE_WINDOW_DEG,
-        100.0 * claims::SECTOR_FLUCTUATION
+        crate::studies::paper::plan::DEAD_CENTRE_WINDOW_DEG,
+        100.0 * crate::studies::paper::stats::SECTOR_FLUCTUATION
     );
     deviations_table(&mut out, r);
 

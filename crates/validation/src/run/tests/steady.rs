@@ -3,10 +3,11 @@
 
 use std::path::PathBuf;
 
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::run::simulate::Prepared;
-use lash_validation::run::steady::{settle, UntilPeriodic};
-use lash_validation::{ErrorKind, NoProgress};
+use crate::commands::run::{self as commands, RunOptions};
+use crate::error::ErrorKind;
+use crate::progress::NoProgress;
+use crate::run::prepare::Prepared;
+use crate::run::steady::{settle, UntilPeriodic};
 
 fn press(stem: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -6,10 +6,10 @@
 
 use std::sync::Mutex;
 
-use lash_validation::studies::paper::claims::{Thresholds, Verdict};
-use lash_validation::studies::paper::Plan;
-use lash_validation::studies::robustness::{self, ClaimRobustness, Variant};
-use lash_validation::Progress;
+use crate::progress::Progress;
+use crate::studies::paper::claims::{Thresholds, Verdict};
+use crate::studies::paper::plan::Plan;
+use crate::studies::robustness::{self, ClaimRobustness, Variant};
 
 fn quick_plan() -> Plan {
     let mut p = Plan::paper();
@@ -97,7 +97,7 @@ fn robustness_verdicts_come_from_the_runs_and_follow_the_thresholds() {
     let cases = robustness::run_variants(
         &plan,
         &variants,
-        &lash_validation::store::cache::RunCache::new(&out.join("cache")),
+        &crate::store::cache::RunCache::new(&out.join("cache")),
         &count,
     )
     .unwrap()

@@ -6,11 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
-use lash_validation::animation::{
-    self, AnimateOptions, Animation, AnimationOptions, Table, ANIMATION_FILE, SCENE_FILE,
-};
-use lash_validation::commands::{self, RunOptions};
-use lash_validation::NoProgress;
+use super::{AnimationOptions, Table, ANIMATION_FILE, SCENE_FILE};
+use crate::commands::run::{run, RunOptions};
+use crate::commands::viz::{animate, animate_in_memory, AnimateOptions};
+use crate::progress::NoProgress;
 use serde_json::Value;
 
 fn case(rel: &str) -> String {
@@ -23,7 +22,7 @@ fn case(rel: &str) -> String {
 
 /// Runs `scene` into `dir` and animates it; returns the page's data and the trajectory.
 fn run_and_animate(scene: &str, dir: &Path, o: AnimationOptions) -> (Value, Table, String) {
-    commands::run(
+    run(
         &RunOptions {
             case: case(scene),
             out: Some(dir.to_path_buf()),
@@ -32,9 +31,11 @@ fn run_and_animate(scene: &str, dir: &Path, o: AnimationOptions) -> (Value, Tabl
         &NoProgress,
     )
     .unwrap();
-    let w = commands::animate(&AnimateOptions {
+    let w = animate(&AnimateOptions {
         run_dir: dir.to_path_buf(),
-        animation: o,
+        trace: o.trace,
+        column: o.column,
+        max_frames: o.max_frames,
         out: None,
     })
     .unwrap();
@@ -265,11 +266,10 @@ fn the_fourbar_page_matches_its_trajectory() {
                 .unwrap_or_else(|| vec![f64::NAN; tab.rows()])
         })
         .collect();
-    let mem = Table::from_columns(names, cols).unwrap();
     let scene = std::fs::read_to_string(dir.join(SCENE_FILE)).unwrap();
     let title = data["title"].as_str().unwrap();
-    let a = Animation::from_scene_text(&scene, &mem, title, &AnimationOptions::default()).unwrap();
-    assert_eq!(a.html, html);
+    let mem = animate_in_memory(&scene, names, cols, title, &AnimateOptions::default()).unwrap();
+    assert_eq!(mem, html);
 }
 
 #[test]
@@ -351,7 +351,7 @@ fn a_scene_that_does_not_fit_the_trajectory_is_refused() {
         .replace("0.0499", "0.0498");
     std::fs::write(&p, s).unwrap();
     std::fs::remove_file(dir.join("summary.json")).unwrap();
-    let e = animation::animate_dir(&AnimateOptions {
+    let e = animate(&AnimateOptions {
         run_dir: dir.clone(),
         ..Default::default()
     })

@@ -3,12 +3,12 @@
 //! the Baumgarte modes (Lyapunov exponent −α + √(α² − β²)). (The commands themselves, through
 //! the built binary: `crates/cli/tests/diagnostics.rs`.)
 
+use crate::diagnostics::poincare::{self, Chaos, PoincareSettings};
+use crate::diagnostics::stiffness::sample::{measure_limit, sample_along};
+use crate::run::prepare::Prepared;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_solver::analysis::stiffness::{Rk4ProbeOptions, StiffnessOptions};
 use lash_solver::{Method, OdeSystem, SolverOptions};
-use lash_validation::diagnostics::poincare::{self, Chaos, PoincareSettings};
-use lash_validation::diagnostics::stiffness::{measure_limit, sample_along};
-use lash_validation::run::simulate::Prepared;
 
 /// y' = A y, A = blockdiag(−1000, [[−1, 100], [−100, −1]]) (normal), through the functions the
 /// command runs: every sample has λ = −1000 (dominant) and the limit 2.7853/1000 (the real
@@ -125,5 +125,5 @@ fn lyapunov_exponent_of_the_baumgarte_modes() {
     assert!((l.exponent_running + 2.0).abs() < 1.0);
     // The section needs a clearance joint, which the ideal press has not.
     let e = poincare::section(&p, &opts, &s).unwrap_err();
-    assert_eq!(e.kind(), lash_validation::ErrorKind::BadInput);
+    assert_eq!(e.kind(), crate::ErrorKind::BadInput);
 }

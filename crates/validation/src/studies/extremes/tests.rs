@@ -1,15 +1,16 @@
-//! The extremes matrix (`lash_validation::studies::extremes`): the scene files, the scene that drives
+//! The extremes matrix (`crate::studies::extremes`): the scene files, the scene that drives
 //! the film to ε ≈ 0.999, the quick subset of the matrix (default run) and the full matrix
-//! (ignored: `cargo test --release -p lash-validation --test extremes -- --ignored`, or
+//! (ignored: `cargo test --release -p lash-validation --lib full_matrix -- --ignored`, or
 //! `lash extremes`).
 
 use std::path::PathBuf;
 
+use crate::studies::extremes::catalogue::catalogue;
+use crate::studies::extremes::outcome::{FailureKind, Matrix, Outcome};
+use crate::studies::extremes::plan::{Plan, Setting};
+use crate::studies::extremes::{plan, runner};
 use lash_model::scene::JointSpec;
 use lash_model::{Mechanism, Scene};
-use lash_validation::studies::extremes::{
-    self, catalogue, FailureKind, Matrix, Outcome, Plan, Setting,
-};
 
 fn cases_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases/extremes")
@@ -88,7 +89,7 @@ fn film_scene_reaches_eccentricity_0_999() {
         .into_iter()
         .find(|s| s.stem == "lubricated_eccentricity_0.999")
         .unwrap();
-    let r = extremes::prepare(s).unwrap();
+    let r = runner::prepare(s).unwrap();
     let eps = r.report.eps_max.unwrap();
     assert!((0.999..0.9995).contains(&eps), "ε_max = {eps}");
     assert!(r.report.agreement < 1e-8, "E_ref = {}", r.report.agreement);
@@ -99,7 +100,7 @@ fn film_scene_reaches_eccentricity_0_999() {
 /// non-finite state inside the run, every reference converged.
 fn check(m: &Matrix) {
     assert_eq!(m.failures, 0, "\n{}", m.failure_lines().join("\n"));
-    let per_scene = 2 + extremes::ADAPTIVE.len() * m.plan.tolerances.len();
+    let per_scene = 2 + plan::ADAPTIVE.len() * m.plan.tolerances.len();
     assert_eq!(m.cells.len(), m.scenes.len() * per_scene);
     for c in &m.cells {
         if let Setting::Rk4Beyond { .. } = c.setting {
@@ -129,7 +130,7 @@ fn check(m: &Matrix) {
 
 #[test]
 fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::quick(), &lash_validation::NoProgress).unwrap();
+    let m = runner::run_cached(&Plan::quick(), None, &crate::NoProgress).unwrap();
     check(&m);
     // The known findings are not in the quick scenes: here every result meets its promise.
     assert!(m.known_lines().is_empty(), "{:?}", m.known_lines());
@@ -146,7 +147,7 @@ fn quick_matrix_ends_every_run_in_an_allowed_outcome() {
 #[ignore = "the full matrix: 15 scenes × 50 runs, several minutes in release; `lash extremes` \
             runs the same and writes its report (BENCHMARKS.md, Extremes)"]
 fn full_matrix_ends_every_run_in_an_allowed_outcome() {
-    let m = extremes::run(&Plan::full(), &lash_validation::NoProgress).unwrap();
+    let m = runner::run_cached(&Plan::full(), None, &crate::NoProgress).unwrap();
     eprintln!("{}", m.to_markdown());
     check(&m);
 }

@@ -4,14 +4,17 @@
 
 use std::path::PathBuf;
 
+use crate::error::{Error, ErrorKind};
+use crate::report::metrics::EventQuantity;
+use crate::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
+use crate::run::case::Case;
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::result::RunResult;
+use crate::run::simulate::{simulate, simulate_into};
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::Mechanism;
 use lash_solver::Method;
-use lash_validation::report::metrics::EventQuantity;
-use lash_validation::report::trajectory::{Columns, CsvFile, Header, TrajectorySink};
-use lash_validation::run::case::Case;
-use lash_validation::run::simulate::{simulate, simulate_into, Prepared, RunRequest, RunResult};
-use lash_validation::{Error, ErrorKind};
 
 fn case(stem: &str) -> Prepared {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -147,12 +150,7 @@ fn dry_press_contact_onsets_match_a_tight_reference() {
     let reference = run(&p, Method::Dop853, 1e-12, Some(t_rev));
     let ref_on = onsets(&reference, 0.0, t_rev);
     assert!(ref_on.len() >= 20, "{}", ref_on.len());
-    let r = run(
-        &p,
-        lash_validation::run::simulate::DEFAULT_METHOD,
-        1e-10,
-        Some(t_rev),
-    );
+    let r = run(&p, crate::run::prepare::DEFAULT_METHOD, 1e-10, Some(t_rev));
     let on = onsets(&r, 0.0, t_rev);
     assert_eq!(on.len(), ref_on.len(), "{on:?}\n{ref_on:?}");
     for (a, b) in on.iter().zip(&ref_on).take(ref_on.len() / 2) {
@@ -229,12 +227,13 @@ fn hires_reference_error_at_rtol_1e8() {
 }
 
 #[test]
-fn catalogue_case_prepares_the_scene_of_its_file() {
-    // Case::catalogue builds the scene in code; the file in cases/press/ was written from the
+fn press_case_prepares_the_scene_of_its_file() {
+    // Case::press builds the scene in code; the file in cases/press/ was written from the
     // same generator, so both prepare to the same scene and mechanism facts.
-    use lash_validation::run::case::Case;
+    use crate::run::case::Case;
+    use crate::run::press::PressCase;
     let name = "lubricated_150rpm_c0.2";
-    let from_code = Prepared::load(Case::catalogue(name).unwrap()).unwrap();
+    let from_code = Prepared::load(Case::press(PressCase::lubricated(150, 200))).unwrap();
     let from_file = case(name);
     assert_eq!(from_code.scene(), from_file.scene());
     assert_eq!(from_code.info, from_file.info);
@@ -290,12 +289,7 @@ impl TrajectorySink for MaxOf {
 #[test]
 fn the_pendulums_peak_contact_force_is_the_true_peak() {
     let p = prepared("pendulum", &readme_pendulum());
-    let r = run(
-        &p,
-        lash_validation::run::simulate::DEFAULT_METHOD,
-        1e-8,
-        None,
-    );
+    let r = run(&p, crate::run::prepare::DEFAULT_METHOD, 1e-8, None);
     let m = r.summary.metrics.as_ref().unwrap();
     let peak = m.contact_force_max.unwrap();
     let mut req = RunRequest::new(

@@ -1,0 +1,370 @@
+//! Lagrange multipliers with Baumgarte stabilisation: the paper's formulation (docs/model.md
+//! §1.3–§1.5), today's only one.
+//!
+//! ```text
+//! y = (q, q̇),  q = (x_i, y_i, φ_i) of every integrated body (scene order)
+//!
+//! [ M    Φ_qᵀ ] [ q̈ ]   [ g                 ]        M = diag(m_i, m_i, I_i)
+//! [ Φ_q  0    ] [ λ  ] = [ γ − 2αΦ̇ − β²Φ    ]        Φ̈ = Φ_q q̈ − γ
+//!
+//! solved by the range-space (Schur complement) reduction, exactly equivalent for M > 0 and
+//! Φ_q of full row rank (checked at the initial state):
+//!   S = Φ_q M⁻¹ Φ_qᵀ  (SPD),   S λ = Φ_q M⁻¹ g − (γ − 2αΦ̇ − β²Φ)   (Cholesky),
+//!   q̈ = M⁻¹ (g − Φ_qᵀ λ)
+//! ```
+//! S has a fixed structure (which rows share a body) built once, and is block diagonal up to
+//! the order of its rows: each block is factored on its own (linalg.rs). The Jacobian of this
+//! formulation is in jacobian.rs, its checks at the initial state in check.rs.
+//!
+//! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
+//! Baumgarte 1972), Peng et al. 2025 §3.
+
+mod check;
+mod jacobian;
+
+use std::cell::RefCell;
+
+use crate::linalg::{block_cholesky_inv, block_cholesky_solve};
+use crate::mechanism::bodies::{Bodies, BodyInfo};
+use crate::mechanism::constraints::{eval_row, Constraints};
+use crate::mechanism::scratch::Scratch;
+use crate::scene::format::Baumgarte;
+
+pub(crate) use jacobian::JacWork;
+
+/// One block product of the Schur complement S = Φ_q M⁻¹ Φ_qᵀ: term `ta` of row `a` and term
+/// `tb` of row `b` (a ≥ b) act on the same integrated body `i`, and add
+/// J_{a,ta} M_i⁻¹ J_{b,tb}ᵀ (3-vectors, M_i⁻¹ = diag(1/m, 1/m, 1/I)) to S_ab. Built once per
+/// scene: the rows of bodies that share no term give S_ab = 0 and cost nothing.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SchurTerm {
+    pub a: usize,
+    pub b: usize,
+    pub ta: usize,
+    pub tb: usize,
+    pub i: usize,
+}
+
+/// The buffers of one evaluation of the constraint side (m equations, n_q coordinates).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Work {
+    /// Φ_q, m × n_q row-major (full evaluations and the Jacobian).
+    pub jac: Vec<f64>,
+    pub phi: Vec<f64>,
+    pub phid: Vec<f64>,
+    /// r = γ − 2αΦ̇ − β²Φ.
+    pub rc: Vec<f64>,
+    /// S, then its factor (lower triangle, 1/L_jj on the diagonal).
+    pub smat: Vec<f64>,
+    pub lam: Vec<f64>,
+    /// Jacobian blocks of every row with respect to each of its terms' bodies.
+    pub term_jac: Vec<[[f64; 3]; 2]>,
+}
+
+impl Work {
+    fn new(m: usize, nq: usize) -> Work {
+        Work {
+            jac: vec![0.0; m * nq],
+            phi: vec![0.0; m],
+            phid: vec![0.0; m],
+            rc: vec![0.0; m],
+            smat: vec![0.0; m * m],
+            lam: vec![0.0; m],
+            term_jac: vec![[[0.0; 3]; 2]; m],
+        }
+    }
+}
+
+/// The formulation (module doc).
+#[derive(Debug)]
+pub(crate) struct LagrangeBaumgarte {
+    nq: usize,
+    /// M⁻¹ of the integrated coordinates.
+    minv: Vec<f64>,
+    alpha: f64,
+    beta: f64,
+    /// The nonzero block products of S (fixed structure, built once).
+    schur: Vec<SchurTerm>,
+    /// The rows of each diagonal block of S (rows that share no body, directly or through
+    /// other rows, are in different blocks), each in increasing order.
+    kkt_blocks: Vec<Vec<usize>>,
+    work: RefCell<Work>,
+    jac_work: RefCell<JacWork>,
+}
+
+impl LagrangeBaumgarte {
+    /// The structure of S for the constraint equations `cons` on `bodies`.
+    pub(crate) fn new(cons: &Constraints, bodies: &Bodies, baumgarte: Baumgarte) -> Self {
+        let (rows, row_int) = (&cons.rows, &cons.row_int);
+        let mut schur = Vec::new();
+        for a in 0..rows.len() {
+            for b in 0..=a {
+                for ta in 0..2 {
+                    for tb in 0..2 {
+                        if let (Some(i), Some(j)) = (row_int[a][ta], row_int[b][tb]) {
+                            if i == j {
+                                schur.push(SchurTerm { a, b, ta, tb, i });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Diagonal blocks of S: connected components of the rows under "share a body".
+        let mut comp: Vec<usize> = (0..rows.len()).collect();
+        fn root(c: &mut [usize], mut a: usize) -> usize {
+            while c[a] != a {
+                c[a] = c[c[a]];
+                a = c[a];
+            }
+            a
+        }
+        for p in &schur {
+            let (ra, rb) = (root(&mut comp, p.a), root(&mut comp, p.b));
+            comp[ra.max(rb)] = ra.min(rb);
+        }
+        let mut kkt_blocks: Vec<Vec<usize>> = Vec::new();
+        let mut block_of = vec![usize::MAX; rows.len()];
+        for r in 0..rows.len() {
+            let c = root(&mut comp, r);
+            if block_of[c] == usize::MAX {
+                block_of[c] = kkt_blocks.len();
+                kkt_blocks.push(Vec::new());
+            }
+            kkt_blocks[block_of[c]].push(r);
+        }
+        let nq = bodies.nq();
+        LagrangeBaumgarte {
+            nq,
+            minv: bodies.inverse_masses(),
+            alpha: baumgarte.alpha,
+            beta: baumgarte.beta,
+            schur,
+            kkt_blocks,
+            work: RefCell::new(Work::new(rows.len(), nq)),
+            jac_work: RefCell::default(),
+        }
+    }
+
+    /// q̈ into `sc.qdd` from the applied forces `sc.g` (after the kinematics): the constraint
+    /// rows, then the KKT system by its Schur complement. False if S is not positive definite.
+    pub(crate) fn accelerations(
+        &self,
+        t: f64,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &mut Scratch,
+        full: bool,
+    ) -> bool {
+        let mut w = self.work.borrow_mut();
+        self.constraint_rows(t, cons, info, sc, &mut w, full);
+        self.solve_kkt(cons, sc, &mut w)
+    }
+
+    /// Constraint values, Φ̇, the Baumgarte right-hand side and the Jacobian blocks of every
+    /// term (for the Schur complement and, in full mode, the reactions on any body); in full
+    /// mode also the dense Φ_q of the integrated columns (`sc.jac`).
+    pub(crate) fn constraint_rows(
+        &self,
+        t: f64,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &Scratch,
+        w: &mut Work,
+        full: bool,
+    ) {
+        let (a2, b2) = (2.0 * self.alpha, self.beta * self.beta);
+        for (r, row) in cons.rows.iter().enumerate() {
+            let ev = eval_row(row, info, t, sc);
+            w.term_jac[r] = ev.jrows;
+            w.phi[r] = ev.phi;
+            w.phid[r] = ev.phid;
+            w.rc[r] = ev.gamma - a2 * ev.phid - b2 * ev.phi;
+        }
+        if full {
+            self.dense_constraint_jacobian(cons, w);
+        }
+    }
+
+    /// Φ_q (m × n_q, row-major) into `w.jac` from the term blocks (after `constraint_rows`).
+    pub(crate) fn dense_constraint_jacobian(&self, cons: &Constraints, w: &mut Work) {
+        let nq = self.nq;
+        w.jac.iter_mut().for_each(|v| *v = 0.0);
+        for (r, (row, jr)) in cons.row_int.iter().zip(&w.term_jac).enumerate() {
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let base = r * nq + 3 * i;
+                    w.jac[base] += jr[ti][0];
+                    w.jac[base + 1] += jr[ti][1];
+                    w.jac[base + 2] += jr[ti][2];
+                }
+            }
+        }
+    }
+
+    /// Solves the KKT system by its Schur complement; false if S is not positive definite.
+    ///
+    /// ```text
+    /// S = Φ_q M⁻¹ Φ_qᵀ,  S λ = Φ_q M⁻¹ g − r,  q̈ = M⁻¹ (g − Φ_qᵀ λ)
+    /// ```
+    /// Φ_q is used through its term blocks (`term_jac`, three columns of one body each) and S
+    /// through its fixed structure (`schur`): no product with a zero block is formed.
+    pub(crate) fn solve_kkt(&self, cons: &Constraints, sc: &mut Scratch, w: &mut Work) -> bool {
+        let nq = self.nq;
+        let m = cons.rows.len();
+        let Work {
+            term_jac,
+            smat,
+            lam,
+            rc,
+            ..
+        } = w;
+        let Scratch { qdd, g, .. } = sc;
+        let minv = &self.minv[..nq];
+        let g = &g[..nq];
+        let qdd = &mut qdd[..nq];
+        if m == 0 {
+            for j in 0..nq {
+                qdd[j] = minv[j] * g[j];
+            }
+            return true;
+        }
+        // q̈ first holds M⁻¹ g, the right-hand side Φ_q M⁻¹ g − r of λ is read from it.
+        for j in 0..nq {
+            qdd[j] = minv[j] * g[j];
+        }
+        let term_jac = &term_jac[..m];
+        let smat = &mut smat[..m * m];
+        for (a, (row, jr)) in cons.row_int.iter().zip(term_jac).enumerate() {
+            let mut ba = -rc[a];
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let x = &qdd[3 * i..3 * i + 3];
+                    let j = &jr[ti];
+                    ba += j[0] * x[0] + j[1] * x[1] + j[2] * x[2];
+                }
+            }
+            lam[a] = ba;
+            smat[a * m..a * m + a + 1].fill(0.0);
+        }
+        for p in &self.schur {
+            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
+            let w = &minv[3 * p.i..3 * p.i + 3];
+            smat[p.a * m + p.b] +=
+                ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
+        }
+        // S is block diagonal (up to the order of the rows): each block is factored and solved
+        // on its own, so the square roots and divisions of different blocks do not wait for
+        // each other. The factor, stored in place, is the dense factor of S.
+        for blk in &self.kkt_blocks {
+            if block_cholesky_inv(smat, m, blk).is_err() {
+                return false;
+            }
+            block_cholesky_solve(smat, m, blk, lam);
+        }
+        // q̈ = M⁻¹ g − M⁻¹ Φ_qᵀ λ.
+        for (a, (row, jr)) in cons.row_int.iter().zip(term_jac).enumerate() {
+            let la = lam[a];
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    let j = &jr[ti];
+                    let w = &minv[3 * i..3 * i + 3];
+                    let x = &mut qdd[3 * i..3 * i + 3];
+                    x[0] -= w[0] * j[0] * la;
+                    x[1] -= w[1] * j[1] * la;
+                    x[2] -= w[2] * j[2] * la;
+                }
+            }
+        }
+        true
+    }
+
+    /// The constraint forces −Σ J_r,kᵀ λ_r of the last evaluation on every body, added to `cf`
+    /// in row order, and the torques −λ of the driver rows: (joint index, τ).
+    pub(crate) fn reactions(
+        &self,
+        cons: &Constraints,
+        cf: &mut [[f64; 3]],
+        torques: &mut Vec<(usize, f64)>,
+    ) {
+        let w = self.work.borrow();
+        for (r, row) in cons.rows.iter().enumerate() {
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                let j = w.term_jac[r][ti];
+                for c in 0..3 {
+                    cf[term.body][c] -= j[c] * w.lam[r];
+                }
+            }
+        }
+        for (r, row) in cons.rows.iter().enumerate() {
+            if row.driver {
+                torques.push((row.joint, -w.lam[r]));
+            }
+        }
+    }
+
+    /// ‖Φ(q, t)‖₂ of the last evaluation.
+    pub(crate) fn constraint_violation(&self) -> f64 {
+        let w = self.work.borrow();
+        w.phi.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The Schur-complement solve equals faer's LU solve of the full KKT matrix.
+    use crate::cases::{press_scene, PressJoint};
+    use crate::mechanism::formulation::Formulation;
+    use crate::Mechanism;
+    use faer::Mat;
+
+    #[test]
+    fn schur_complement_equals_the_full_kkt_solve() {
+        let m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        let Formulation::LagrangeBaumgarte(f) = m.formulation();
+        let nq = m.nq();
+        let nc = m.constraints().len();
+        // A perturbed state: off the constraint manifold, in contact, moving.
+        let mut y = m.initial_state();
+        let pert = [
+            3e-5, -1.2e-4, 2e-3, 1e-4, 2e-5, -1e-3, 0.02, -0.01, 0.3, -0.05, 0.01, 0.002,
+        ];
+        for (v, p) in y.iter_mut().zip(pert) {
+            *v += p;
+        }
+        let t = 0.123;
+        let sc = m.evaluated(t, &y).unwrap();
+        let mut w = f.work.borrow_mut();
+        f.dense_constraint_jacobian(m.constraints(), &mut w);
+        assert!(sc.revolute[0].f_n > 0.0, "the test state is in contact");
+        let n = nq + nc;
+        let mut kkt = Mat::<f64>::zeros(n, n);
+        let mut rhs = Mat::<f64>::zeros(n, 1);
+        for j in 0..nq {
+            kkt[(j, j)] = 1.0 / f.minv[j];
+            rhs[(j, 0)] = sc.g[j];
+        }
+        for a in 0..nc {
+            for j in 0..nq {
+                kkt[(nq + a, j)] = w.jac[a * nq + j];
+                kkt[(j, nq + a)] = w.jac[a * nq + j];
+            }
+            rhs[(nq + a, 0)] = w.rc[a];
+        }
+        use faer::linalg::solvers::Solve;
+        let sol = kkt.partial_piv_lu().solve(&rhs);
+        for j in 0..nq {
+            let d = (sol[(j, 0)] - sc.qdd[j]).abs();
+            assert!(
+                d <= 1e-9 * sol[(j, 0)].abs().max(1.0),
+                "q̈[{j}]: {} vs {}",
+                sol[(j, 0)],
+                sc.qdd[j]
+            );
+        }
+        for a in 0..nc {
+            let d = (sol[(nq + a, 0)] - w.lam[a]).abs();
+            assert!(d <= 1e-9 * sol[(nq + a, 0)].abs().max(1.0), "λ[{a}]");
+        }
+    }
+}

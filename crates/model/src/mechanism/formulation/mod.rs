@@ -1,0 +1,258 @@
+//! The constraint side of a mechanism: a formulation owns the layout of the state y and the
+//! acceleration solve. Everything else — bodies, clearance joints, force elements, events,
+//! outputs — works in absolute coordinates (x, y, φ of every body, docs/model.md §1.1), which a
+//! formulation maps its state to.
+//!
+//! # The contract
+//!
+//! ```text
+//! name()            the name a scene field or flag would give it ("lagrange_baumgarte")
+//! dim()             length of y
+//! kinematics(t, y, bodies, sc)
+//!                   the poses, velocities and (cos φ, sin φ) of the integrated bodies in sc
+//!                   from y, then the prescribed bodies (Bodies::kinematics does both from an
+//!                   absolute (q, q̇); a formulation whose y is not (q, q̇) first recovers it,
+//!                   e.g. q̇ = R(θ) θ̇ on a spanning tree)
+//! state_of(y_abs)   y of an absolute (q, q̇) of the integrated bodies (the assembled initial
+//!                   state is absolute: assembly.rs)
+//! accelerations(t, constraints, bodies, sc, full) → ok
+//!                   q̈ of the integrated coordinates into sc.qdd, from the applied forces
+//!                   sc.g (absolute, n_q) and the kinematics in sc; false when the solve fails
+//!                   (the right-hand side is then NaN, never a silent wrong value)
+//! derivative(y, qdd, dy)
+//!                   ẏ from y and q̈
+//! jacobian(constraints, sc, dg, jac)
+//!                   ∂ẏ/∂y after an evaluation, given dg = ∂g/∂(q, q̇) of the applied forces in
+//!                   absolute coordinates (n_q × 2n_q, column-major: what the clearance joints
+//!                   and force elements give); dg = None: the evaluation failed (NaN rows)
+//! reactions(constraints, cf, torques)
+//!                   the constraint forces on every body and the driver torques of the last
+//!                   evaluation (outputs; the Newton–Euler balance of prescribed bodies)
+//! constraint_violation()
+//!                   ‖Φ(q, t)‖₂ of the last evaluation
+//! needs_full_rank() the assembly checks that Φ_q has full row rank at the initial state
+//! check_point_mobility(..), check_equations(..)
+//!                   its checks at the assembled initial state (initial_check.rs calls them)
+//! ```
+//! The constraint equations themselves ([`crate::mechanism::constraints`]: Φ, Φ̇, γ and their
+//! Jacobian blocks) are shared by every formulation; how they are enforced is each one's own.
+//! A formulation keeps its buffers to itself (behind a `RefCell`), so `&self` evaluates.
+//!
+//! # Adding one (issue 26)
+//!
+//! A file beside `lagrange_baumgarte/` with a struct that implements the contract, and a
+//! variant of [`Formulation`] with its arm in each method below; the mechanism builds it in
+//! `Mechanism::from_scene` (mechanism/build.rs, phase 3). An augmented Lagrangian keeps
+//! y = (q, q̇) and replaces the Schur-complement solve by (M + Φ_qᵀαΦ_q) q̈ = … with λ*
+//! iterated; a minimal formulation has y = (θ, θ̇) and maps it in `kinematics` and
+//! `state_of`, its `jacobian` chaining dg through ∂(q, q̇)/∂(θ, θ̇). Neither touches the
+//! clearance joints, the force elements or the outputs.
+//!
+//! Only `lagrange_baumgarte` exists today.
+
+pub(crate) mod lagrange_baumgarte;
+
+use faer::MatMut;
+
+use crate::mechanism::bodies::{Bodies, BodyInfo};
+use crate::mechanism::constraints::Constraints;
+use crate::mechanism::scratch::Scratch;
+use crate::scene::error::SceneError;
+use crate::scene::format::Scene;
+
+pub(crate) use lagrange_baumgarte::LagrangeBaumgarte;
+
+/// The formulation of a mechanism (module doc).
+#[derive(Debug)]
+pub(crate) enum Formulation {
+    /// Lagrange multipliers with Baumgarte stabilisation (docs/model.md §1.3–§1.5).
+    LagrangeBaumgarte(LagrangeBaumgarte),
+}
+
+impl Formulation {
+    /// Its name.
+    pub(crate) fn name(&self) -> &'static str {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => "lagrange_baumgarte",
+        }
+    }
+
+    /// Length of the state y.
+    pub(crate) fn dim(&self, bodies: &Bodies) -> usize {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => 2 * bodies.nq(),
+        }
+    }
+
+    /// The kinematics of every body at (t, y) into `sc`.
+    #[inline]
+    pub(crate) fn kinematics(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => bodies.kinematics(t, y, sc),
+        }
+    }
+
+    /// y of the absolute (q, q̇) of the integrated bodies.
+    pub(crate) fn state_of(&self, y_abs: &[f64]) -> Vec<f64> {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => y_abs.to_vec(),
+        }
+    }
+
+    /// q̈ into `sc.qdd` from `sc.g` and the kinematics; false if the solve fails.
+    #[inline]
+    pub(crate) fn accelerations(
+        &self,
+        t: f64,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &mut Scratch,
+        full: bool,
+    ) -> bool {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.accelerations(t, cons, info, sc, full),
+        }
+    }
+
+    /// ẏ from y and q̈ (NaN accelerations when the solve failed: `ok` false).
+    #[inline]
+    pub(crate) fn derivative(&self, y: &[f64], qdd: &[f64], ok: bool, dy: &mut [f64]) {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => {
+                let nq = qdd.len();
+                dy[..nq].copy_from_slice(&y[nq..2 * nq]);
+                if ok {
+                    dy[nq..].copy_from_slice(qdd);
+                } else {
+                    dy[nq..].iter_mut().for_each(|v| *v = f64::NAN);
+                }
+            }
+        }
+    }
+
+    /// ∂ẏ/∂y after an evaluation, given ∂g/∂(q, q̇) (None: the evaluation failed).
+    pub(crate) fn jacobian(
+        &self,
+        cons: &Constraints,
+        sc: &Scratch,
+        dg: Option<&[f64]>,
+        jac: MatMut<'_, f64>,
+    ) {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.jacobian(cons, sc, dg, jac),
+        }
+    }
+
+    /// The constraint forces on every body (added to `cf`) and the driver torques (pushed to
+    /// `torques` as (joint, τ)) of the last evaluation.
+    pub(crate) fn reactions(
+        &self,
+        cons: &Constraints,
+        cf: &mut [[f64; 3]],
+        torques: &mut Vec<(usize, f64)>,
+    ) {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.reactions(cons, cf, torques),
+        }
+    }
+
+    /// ‖Φ(q, t)‖₂ of the last evaluation.
+    pub(crate) fn constraint_violation(&self) -> f64 {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.constraint_violation(),
+        }
+    }
+
+    /// Whether Φ_q must have full row rank (checked by the assembly).
+    pub(crate) fn needs_full_rank(&self) -> bool {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => true,
+        }
+    }
+
+    /// Its checks before any evaluation (initial_check.rs, check 1).
+    pub(crate) fn check_point_mobility(
+        &self,
+        scene: &Scene,
+        cons: &Constraints,
+        info: &[BodyInfo],
+    ) -> Result<(), SceneError> {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.check_point_mobility(scene, cons, info),
+        }
+    }
+
+    /// Its checks of the equations at (t, y) after the kinematics and applied forces in `sc`
+    /// (initial_check.rs, check 2).
+    pub(crate) fn check_equations(
+        &self,
+        t: f64,
+        scene: &Scene,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &Scratch,
+    ) -> Result<(), SceneError> {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => f.check_equations(t, scene, cons, info, sc),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The seam's state mapping: y → the absolute (q, q̇) of the integrated bodies (through
+    //! `kinematics`) and back (`state_of`) is the identity, bit for bit, and the initial state
+    //! a formulation gives satisfies the constraints it enforces.
+    use crate::cases::{press_scene, PressJoint};
+    use crate::{Mechanism, Scene};
+    use lash_solver::OdeSystem;
+
+    fn round_trip(m: &Mechanism, t: f64, y: &[f64]) {
+        let f = m.formulation();
+        assert_eq!(f.dim(m.bodies()), y.len());
+        let mut sc = m.scratch();
+        f.kinematics(t, y, m.bodies(), &mut sc);
+        let nq = m.nq();
+        let mut y_abs = vec![0.0; 2 * nq];
+        for (i, &k) in m.bodies().int_bodies.iter().enumerate() {
+            y_abs[3 * i..3 * i + 3].copy_from_slice(&sc.pose[k]);
+            y_abs[nq + 3 * i..nq + 3 * i + 3].copy_from_slice(&sc.vel[k]);
+            let (s, c) = sc.pose[k][2].sin_cos();
+            assert_eq!(sc.cs[k], [c, s]);
+        }
+        let back = f.state_of(&y_abs);
+        assert_eq!(
+            back.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            y.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn the_state_maps_to_absolute_coordinates_and_back() {
+        let press = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        let pendulum = Mechanism::from_scene(
+            &Scene::from_path(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../cases/examples/pendulum.json"
+            ))
+            .unwrap(),
+        )
+        .unwrap();
+        for m in [&press, &pendulum] {
+            assert_eq!(m.formulation().name(), "lagrange_baumgarte");
+            let y0 = m.initial_state();
+            round_trip(m, m.t_start(), &y0);
+            // Off the constraint manifold too: the mapping does not project.
+            let y: Vec<f64> = y0
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v + 1e-3 * (i as f64 + 1.0).sin())
+                .collect();
+            round_trip(m, m.t_start() + 0.01, &y);
+            // The assembled initial state meets the constraints to the assembly's tolerance.
+            let o = m.outputs(m.t_start(), &y0);
+            assert!(o.constraint_violation < 1e-11, "{}", o.constraint_violation);
+            assert_eq!(m.dim(), y0.len());
+        }
+    }
+}

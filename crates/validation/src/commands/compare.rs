@@ -1,0 +1,305 @@
+//! `lash compare` and `lash work-precision`: the methods against a converged reference.
+//!
+//! Source: docs/outputs.md ("`lash compare CASE`", "`lash work-precision CASE`").
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use lash_solver::{ControllerKind, Method};
+
+use crate::commands::default_out;
+use crate::compare::reference::{
+    self as compare, Compared, Comparison, Reference, COMPARE_TOLERANCES,
+};
+use crate::compare::workprecision::{WorkPrecisionPlan, WpRun, WpTable, DEFAULT_TARGETS};
+use crate::error::{Error, Message, OptionError};
+use crate::progress::Progress;
+use crate::run::case::Case;
+use crate::run::prepare::Prepared;
+use crate::store::io::Written;
+
+/// The RK4 steps of a comparison: the given ones, else the largest stable step h and h/2,
+/// h/4 (`halvings` + 1 steps) for scene cases with a crank, none for test problems.
+fn rk4_steps(
+    p: &Prepared,
+    given: &Option<Vec<f64>>,
+    t_end: Option<f64>,
+    halvings: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<f64>, Error> {
+    match given {
+        Some(v) => Ok(v.clone()),
+        None if p.period().is_some() => {
+            let clock = Instant::now();
+            let h = compare::stable_rk4_step(p, t_end)?;
+            progress.finished(
+                &format!(
+                    "{}: largest stable RK4 step {h:e} s (1-2-5 series from T/400, ‖Φ‖ < 1e-8)",
+                    p.case.name
+                ),
+                clock.elapsed().as_secs_f64(),
+            );
+            Ok((0..=halvings).map(|k| h / f64::from(1u32 << k)).collect())
+        }
+        None => Ok(Vec::new()),
+    }
+}
+
+/// What to compare: one case, every method.
+///
+/// ```text
+/// case [tolerances] [steps] [t_end] [out]
+/// ```
+///
+/// Source: docs/outputs.md ("`lash compare CASE`").
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CompareOptions {
+    /// The case: a scene file (JSON) or `testset:NAME`.
+    pub case: String,
+    /// Relative tolerances of the adaptive methods; None = `COMPARE_TOLERANCES`.
+    pub tolerances: Option<Vec<f64>>,
+    /// RK4 steps, s; None = the largest stable step h of the case and h/2, h/4 (scene cases
+    /// with a crank), none for test problems.
+    pub steps: Option<Vec<f64>>,
+    /// End time override, s (scene cases only).
+    pub t_end: Option<f64>,
+    /// Output directory; None = `out/compare/CASE`.
+    pub out: Option<PathBuf>,
+}
+
+/// Compares the methods on one case: RK4 at several steps, every embedded pair and every stiff
+/// method at each tolerance, against the case's reference; writes compare.md and
+/// compare.json. Notes the reference and a derived RK4 step.
+pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Comparison>, Error> {
+    let p = Prepared::load_spec(&o.case, None)?;
+    let out = o
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("compare", &p.case.name));
+    let tolerances = o
+        .tolerances
+        .clone()
+        .unwrap_or_else(|| COMPARE_TOLERANCES.to_vec());
+    let derive = o.steps.is_none() && p.period().is_some();
+    let n_steps = o
+        .steps
+        .as_ref()
+        .map_or(if derive { 3 } else { 0 }, Vec::len);
+    let adaptive = Method::ALL.iter().filter(|m| !m.is_fixed_step()).count();
+    progress.started(
+        "runs",
+        1 + usize::from(derive) + n_steps + adaptive * tolerances.len(),
+    );
+    let clock = Instant::now();
+    let reference = Reference::compute(&p, o.t_end)?;
+    progress.finished(
+        &format!("{}: reference {}", p.case.name, reference.how),
+        clock.elapsed().as_secs_f64(),
+    );
+    let steps = rk4_steps(&p, &o.steps, o.t_end, 2, progress)?;
+    let mut runs = Vec::new();
+    let mut push = |c: Compared, secs: f64| {
+        progress.finished(&run_line(&c), secs);
+        runs.push(c);
+    };
+    for &h in &steps {
+        let t = Instant::now();
+        let c = compare::compare_one(&p, &reference, Method::Rk4, None, Some(h), None)?.0;
+        push(c, t.elapsed().as_secs_f64());
+    }
+    for m in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+        for &r in &tolerances {
+            let t = Instant::now();
+            let c = compare::compare_one(&p, &reference, m, Some(r), None, None)?.0;
+            push(c, t.elapsed().as_secs_f64());
+        }
+    }
+    let c = Comparison {
+        case: p.case.name.clone(),
+        reference: reference.how.clone(),
+        reference_agreement: reference.agreement.clone(),
+        window: reference.window.clone(),
+        t_end: reference.t_end,
+        runs,
+    };
+    let files = c.write(&out)?;
+    Ok(Written {
+        result: c,
+        dir: out,
+        files,
+    })
+}
+
+/// What to measure: error against cost on one case.
+///
+/// ```text
+/// case [methods] [tolerances] [steps] [controllers] [t_end] [out]   (None = the default)
+/// ```
+///
+/// Source: docs/outputs.md ("`lash work-precision CASE`").
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WorkPrecisionOptions {
+    /// The case: a scene file (JSON) or `testset:NAME`.
+    pub case: String,
+    /// Methods; None = every method of this build.
+    pub methods: Option<Vec<Method>>,
+    /// Relative tolerances of the adaptive methods (atol as in the case); None = the
+    /// defaults (`crate::compare::workprecision::DEFAULT_TOLERANCES`).
+    pub tolerances: Option<Vec<f64>>,
+    /// Steps of the fixed-step methods, s; None = derived from the case.
+    pub steps: Option<Vec<f64>>,
+    /// Controllers compared on one adaptive method; None = all.
+    pub controllers: Option<Vec<ControllerKind>>,
+    /// End time override, s (scene cases only).
+    pub t_end: Option<f64>,
+    /// Output directory; None = `out/work-precision/CASE`.
+    pub out: Option<PathBuf>,
+}
+
+impl WorkPrecisionOptions {
+    /// Checks the lists against each other and applies the defaults
+    /// (`WorkPrecisionPlan::new`).
+    pub fn plan(&self) -> Result<WorkPrecisionPlan, Error> {
+        WorkPrecisionPlan::new(
+            self.methods.as_deref(),
+            self.tolerances.as_deref(),
+            self.steps.as_deref(),
+            self.controllers.as_deref(),
+        )
+    }
+}
+
+/// What [`work_precision`] measured: the table and how its reference was obtained.
+///
+/// Source: this module.
+#[derive(Debug)]
+pub struct WorkPrecisionResult {
+    /// The runs and the cheapest per target.
+    pub table: WpTable,
+    /// How the reference was obtained.
+    pub reference: String,
+}
+
+/// Error against cost on one case: every method × tolerance and RK4 × step, and the
+/// controllers compared on one method of ours (`WorkPrecisionPlan::controller_method`),
+/// against the case's reference; writes the markdown and JSON tables and the log–log figures.
+/// Notes the reference, a derived RK4 step (or that RK4 is left out) and each run as it ends.
+pub fn work_precision(
+    o: &WorkPrecisionOptions,
+    progress: &dyn Progress,
+) -> Result<Written<WorkPrecisionResult>, Error> {
+    let case = Case::load(&o.case, None)?;
+    let plan = o.plan()?;
+    let p = Prepared::load(case)?;
+    let out = o
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out("work-precision", &p.case.name));
+    let wants_rk4 = plan.methods.iter().any(|m| m.is_fixed_step());
+    if wants_rk4 && plan.steps.is_none() && p.period().is_none() {
+        if o.methods.is_some() {
+            return Err(OptionError::new("steps")
+                .text("rk4 needs ")
+                .name("steps")
+                .text(format!(
+                    " for {} (no crank period to derive them from)",
+                    p.case.name
+                ))
+                .into());
+        }
+        progress.note(
+            &Message::default()
+                .text(format!("{}: rk4 left out (give ", p.case.name))
+                .name("steps")
+                .text(" to include it)"),
+        );
+    }
+    let ctl_method = plan.controller_method();
+    let derive = wants_rk4 && plan.steps.is_none() && p.period().is_some();
+    let n_steps = match &plan.steps {
+        Some(v) => v.len(),
+        None if derive => 4,
+        None => 0,
+    };
+    let total_runs: usize = plan
+        .methods
+        .iter()
+        .map(|&m| {
+            if m.is_fixed_step() {
+                n_steps
+            } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
+                plan.controllers.len() * plan.tolerances.len()
+            } else {
+                plan.tolerances.len()
+            }
+        })
+        .sum();
+    progress.started("runs", 1 + usize::from(derive) + total_runs);
+    let clock = Instant::now();
+    let reference = Reference::compute(&p, o.t_end)?;
+    progress.finished(
+        &format!("{}: reference {}", p.case.name, reference.how),
+        clock.elapsed().as_secs_f64(),
+    );
+    let steps = if wants_rk4 {
+        rk4_steps(&p, &plan.steps, o.t_end, 3, progress)?
+    } else {
+        Vec::new()
+    };
+    let mut runs = Vec::new();
+    let mut clock = Instant::now();
+    let mut push = |c: Compared| {
+        progress.finished(&run_line(&c), clock.elapsed().as_secs_f64());
+        clock = Instant::now();
+        runs.push(WpRun {
+            method: c.method,
+            controller: c.controller,
+            rtol: c.rtol,
+            step: c.step,
+            error: c.error,
+            rhs_evals: c.rhs_evals,
+            wall_time_s: c.wall_time_s,
+            failure: c.failure,
+        });
+    };
+    for &m in &plan.methods {
+        if m.is_fixed_step() {
+            for &h in &steps {
+                push(compare::compare_one(&p, &reference, m, None, Some(h), None)?.0);
+            }
+        } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
+            for &c in &plan.controllers {
+                for &r in &plan.tolerances {
+                    push(compare::compare_one(&p, &reference, m, Some(r), None, Some(c))?.0);
+                }
+            }
+        } else {
+            for &r in &plan.tolerances {
+                push(compare::compare_one(&p, &reference, m, Some(r), None, None)?.0);
+            }
+        }
+    }
+    let mut table = WpTable::new(&p.case.name, runs, &DEFAULT_TARGETS)?;
+    table.error_measure = reference.measure();
+    let files = table.write(&out)?;
+    Ok(Written {
+        result: WorkPrecisionResult {
+            table,
+            reference: reference.how,
+        },
+        dir: out,
+        files,
+    })
+}
+
+/// One line on a comparison run: label, setting, error, work.
+fn run_line(c: &Compared) -> String {
+    format!(
+        "{} {}: error {}, {} RHS evaluations, {:.3} s",
+        c.label(),
+        c.setting(),
+        c.error.map_or("failed".into(), |e| format!("{e:.3e}")),
+        c.rhs_evals,
+        c.wall_time_s
+    )
+}

@@ -1,0 +1,217 @@
+//! `lash sweep` and `lash merge`: a grid of runs over a base case, and its merged table.
+//!
+//! Source: docs/outputs.md ("Sweeps").
+
+use std::path::{Path, PathBuf};
+
+use crate::commands::default_out;
+use crate::error::{Error, OptionError};
+use crate::options::SolverChoice;
+use crate::progress::Progress;
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::simulate::simulate;
+use crate::sweep::merge::MergedTable;
+use crate::sweep::runner::{PointResult, SweepOptions, SweepReport};
+use crate::sweep::spec::{Shard, SweepPoint};
+
+/// What to sweep.
+///
+/// ```text
+/// SWEEP.json [jobs] [shard] [out]
+/// ```
+///
+/// Source: docs/outputs.md ("Sweeps").
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SweepRunOptions {
+    /// The sweep file (JSON): a base case and lists of parameter values.
+    pub file: PathBuf,
+    /// Parallel jobs (≥ 1, capped at the available parallelism with a note); None = the
+    /// number of cores.
+    pub jobs: Option<usize>,
+    /// The points to run; None = all.
+    pub shard: Option<Shard>,
+    /// Output directory (one subdirectory per point); None = `out/sweep/STEM` of the file.
+    pub out: Option<PathBuf>,
+}
+
+/// What a sweep did.
+///
+/// Source: this module.
+#[derive(Debug)]
+pub struct SweepOutcome {
+    /// Counts of the shard's points.
+    pub report: SweepReport,
+    /// The shard run.
+    pub shard: Shard,
+    /// Points in the whole grid.
+    pub points: usize,
+    /// The output directory.
+    pub dir: PathBuf,
+}
+
+/// Runs a sweep of scene runs (`sweep_point`): loads and checks the sweep file and its base
+/// case, then [`sweep_with`].
+pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
+    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
+    spec.points()?;
+    let base = Prepared::load(spec.case.clone())?;
+    sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
+}
+
+/// Runs a sweep with a point runner: loads and checks the sweep file, runs the shard's
+/// unfinished points in parallel (progress: each point as it ends). A point that failed
+/// otherwise than in the solver makes the whole sweep an error, after the others ran
+/// (`SweepReport::into_result`).
+pub fn sweep_with<F>(
+    o: &SweepRunOptions,
+    runner: F,
+    progress: &dyn Progress,
+) -> Result<SweepOutcome, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
+    let points = spec.points()?;
+    let out = o.out.clone().unwrap_or_else(|| {
+        let stem = o
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sweep".into());
+        default_out("sweep", &stem)
+    });
+    let opts = SweepOptions {
+        jobs: o.jobs,
+        shard: o.shard.unwrap_or(Shard::ALL),
+    };
+    let report =
+        crate::sweep::runner::run_sweep(&points, &out, &opts, runner, progress)?.into_result()?;
+    Ok(SweepOutcome {
+        report,
+        shard: opts.shard,
+        points: points.len(),
+        dir: out,
+    })
+}
+
+/// The point runner of a sweep: the base case with the point's physical parameters laid over
+/// its scene ([`crate::sweep::spec::apply_params`]) and its solver choice over the case's defaults;
+/// writes DIR/summary.json and returns the summary, flattened, for the merged table. A
+/// solver failure is returned as such (the sweep records it as a finished point).
+pub(crate) fn sweep_point(
+    base: &Prepared,
+    point: &SweepPoint,
+    dir: &Path,
+) -> Result<PointResult, Error> {
+    let pp = &point.params;
+    let physical = pp.speed_rpm.is_some()
+        || pp.clearance.is_some()
+        || pp.viscosity.is_some()
+        || pp.stiffness.is_some();
+    let prepared = match base.scene() {
+        Some(scene) if physical => {
+            let mut s = scene.clone();
+            crate::sweep::spec::apply_params(&mut s, pp)?;
+            Prepared::with_scene(base.case.clone(), s)?
+        }
+        None if physical => {
+            return Err(Error::Input(format!(
+                "sweep: speed_rpm, clearance, viscosity and stiffness need a scene case, not {}",
+                base.case.name
+            )))
+        }
+        _ => base.clone(),
+    };
+    let choice = SolverChoice {
+        method: pp.method,
+        rtol: pp.rtol,
+        step: pp.step,
+        controller: pp.controller,
+        ..Default::default()
+    };
+    let mut req = RunRequest::new(prepared.options(&choice)?);
+    req.trajectory_points = Some(0);
+    let r = simulate(&prepared, &req)?;
+    r.summary.write(dir)?;
+    let v = serde_json::to_value(&r.summary)
+        .map_err(|e| Error::Internal(format!("summary of point {}: {e}", point.id)))?;
+    Ok(point_values(v))
+}
+
+/// A point's summary as merged-table values: `case` and `scene_sha256` dropped (the point's
+/// parameters hold them), the solver settings actually used renamed `used.method`,
+/// `used.controller`, `used.rtol`, `used.step` (the parameters say what was asked for), `atol`
+/// left in the point's summary.json only.
+pub(crate) fn point_values(mut summary: serde_json::Value) -> PointResult {
+    if let Some(o) = summary.as_object_mut() {
+        for k in ["case", "scene_sha256", "atol"] {
+            o.remove(k);
+        }
+        for k in ["method", "controller", "rtol", "step"] {
+            if let Some(v) = o.remove(k) {
+                o.insert(format!("used.{k}"), v);
+            }
+        }
+    }
+    PointResult::flatten(&summary)
+}
+
+/// What to merge.
+///
+/// ```text
+/// DIR... [out]
+/// ```
+///
+/// Source: docs/outputs.md ("Sweeps").
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MergeOptions {
+    /// Sweep output directories (or point directories) to join; at least one.
+    pub dirs: Vec<PathBuf>,
+    /// Where merged.csv and merged.md go; None = the first directory.
+    pub out: Option<PathBuf>,
+    /// Merge what finished even if some points of the grid are unfinished or corrupt (they
+    /// get rows with status `unfinished` / `corrupt`); else that is an error.
+    pub allow_partial: bool,
+}
+
+/// What [`merge`] wrote.
+///
+/// Source: this module.
+#[derive(Debug)]
+pub struct Merged {
+    /// The table.
+    pub table: MergedTable,
+    /// merged.csv.
+    pub csv: PathBuf,
+    /// merged.md.
+    pub md: PathBuf,
+}
+
+/// Joins the finished points of sweep directories into one table: merged.csv and merged.md.
+/// Points of the grids that are unfinished or whose result is corrupt make it an input error
+/// that names them (nothing written), unless `allow_partial`: then they are rows of their own
+/// (status `unfinished`, `corrupt`).
+pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
+    let Some(first) = o.dirs.first() else {
+        return Err(Error::Usage("merge: no directory to merge".into()));
+    };
+    let out = o.out.clone().unwrap_or_else(|| first.clone());
+    let table = crate::sweep::merge::merge(&o.dirs)?;
+    let complete = table.unfinished.is_empty() && table.corrupt.is_empty();
+    if !complete && !o.allow_partial {
+        return Err(OptionError::new("allow_partial")
+            .text(format!(
+                "merge: the sweep is incomplete ({} finished): {}; rerun the sweep to finish \
+                 them, or give ",
+                table.rows.len(),
+                table.missing_summary(5)
+            ))
+            .name("allow_partial")
+            .text(" to merge what finished")
+            .into());
+    }
+    let table = table.with_missing();
+    let (csv, md) = table.write(&out)?;
+    Ok(Merged { table, csv, md })
+}

@@ -1,0 +1,372 @@
+//! A run of a mechanism (a scene): the observer that writes the trajectory's rows, samples
+//! the metrics window and the extra times, searches the extrema on the dense output,
+//! integrates the power terms and records the events; then the metrics and the summary.
+//!
+//! Source: docs/outputs.md (`metrics`, the energy balance); docs/model.md §1.8.
+
+use lash_model::scene::JointSpec;
+use lash_model::{Mechanism, Outputs, Scene};
+use lash_solver::{EventHit, OdeSystem, Solution};
+
+use crate::error::Error;
+use crate::report::metrics::{
+    self, DenseExtremes, EnergyTotals, EventQuantity, EventRecord, JointExtremes, Peaks, Sample,
+    GRID_POINTS,
+};
+use crate::report::trajectory::{Columns, Header, TrajectorySink};
+use crate::run::drive::checked_power;
+use crate::run::drive::drive;
+use crate::run::drive::empty_solution;
+use crate::run::drive::Observer;
+use crate::run::drive::PowerFn;
+use crate::run::plan::check_times;
+use crate::run::plan::options_within;
+use crate::run::plan::plan_run;
+use crate::run::plan::Grid;
+use crate::run::plan::RunRequest;
+use crate::run::prepare::scene_error;
+use crate::run::prepare::Prepared;
+use crate::run::prepare::QUADRATURE_PANEL_PER_PERIOD;
+use crate::run::quadrature::Quadrature;
+use crate::run::result::RunResult;
+use crate::run::sample::fixed_values;
+use crate::run::sample::Sampler;
+
+/// Output lists of a mechanism run, merged in time order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum List {
+    Window,
+    Trajectory,
+    Extra,
+}
+
+/// The observer of a mechanism run (module doc): rows into the sink, samples of the window
+/// and at the extra times, the extrema over the dense output, the energy quadrature, events.
+struct MechanismRun<'a> {
+    mech: &'a Mechanism,
+    sampler: Sampler<'a>,
+    header: Header,
+    sink: &'a mut dyn TrajectorySink,
+    row: Vec<f64>,
+    // The three output lists, merged lazily.
+    wgrid: Vec<f64>,
+    tgrid: Grid,
+    extra_times: &'a [f64],
+    idx: [usize; 3],
+    t0: f64,
+    t_end: f64,
+    window: Vec<Sample>,
+    extra: Vec<Sample>,
+    extra_states: Solution,
+    rows: usize,
+    // Extrema over the window's dense output.
+    w0: f64,
+    peaks: Peaks,
+    cv_max: f64,
+    has_slider: bool,
+    n_clr: usize,
+    // Energy.
+    quad: Option<Quadrature>,
+    power: Option<PowerFn<'a>>,
+    // Events.
+    names: Vec<(&'static str, Option<usize>)>,
+    keep_events: bool,
+    events: Vec<EventRecord>,
+    ybuf: Vec<f64>,
+}
+
+impl MechanismRun<'_> {
+    fn next(&self) -> Option<(f64, List)> {
+        let w = self.wgrid.get(self.idx[0]).map(|&t| (t, List::Window));
+        let tr =
+            (self.idx[1] < self.tgrid.n).then(|| (self.tgrid.time(self.idx[1]), List::Trajectory));
+        let x = self.extra_times.get(self.idx[2]).map(|&t| (t, List::Extra));
+        [w, tr, x]
+            .into_iter()
+            .flatten()
+            .fold(None, |best: Option<(f64, List)>, c| match best {
+                Some(b) if b.0 <= c.0 => Some(b),
+                _ => Some(c),
+            })
+    }
+
+    /// The quantities whose extrema the metrics take (module doc): slider a and −a, then per
+    /// clearance joint ε, δ, F_N, |F_film|.
+    fn quantities(&mut self, o: &Outputs) -> Result<Vec<f64>, Error> {
+        let mut v = Vec::with_capacity(2 + 4 * self.n_clr);
+        if self.has_slider {
+            let a = o.slider_a.unwrap_or(f64::NAN);
+            v.extend([a, -a]);
+        }
+        for c in &o.clearance {
+            v.extend([c.eps, c.delta, c.contact_force, c.film_force.abs()]);
+        }
+        if v.iter().any(|x| !x.is_finite()) || !o.constraint_violation.is_finite() {
+            return Err(Error::Internal(format!(
+                "metrics: a non-finite output on the dense output: {v:?}, ‖Φ‖ = {}",
+                o.constraint_violation
+            )));
+        }
+        self.cv_max = self.cv_max.max(o.constraint_violation);
+        Ok(v)
+    }
+
+    fn dense_extremes(&self, scene: &Scene) -> DenseExtremes {
+        let m = self.peaks.max();
+        let found = |x: f64| x.is_finite().then_some(x);
+        let (slider_acc, off) = if self.has_slider {
+            (found(-m[1]).zip(found(m[0])), 2)
+        } else {
+            (None, 0)
+        };
+        let joints = scene
+            .joints
+            .iter()
+            .filter_map(|j| match j {
+                JointSpec::Clearance(c) => Some(c),
+                _ => None,
+            })
+            .enumerate()
+            .map(|(k, c)| {
+                let q = &m[off + 4 * k..off + 4 * k + 4];
+                JointExtremes {
+                    name: c.name.clone(),
+                    clearance: c.bearing.radius - c.journal.radius,
+                    lubricated: c.film.is_some(),
+                    eps_max: q[0],
+                    delta_max: q[1],
+                    contact_force_max: q[2],
+                    film_force_max: q[3],
+                }
+            })
+            .collect();
+        DenseExtremes {
+            slider_acc,
+            constraint_violation_max: self.cv_max,
+            joints,
+        }
+    }
+}
+
+impl Observer for MechanismRun<'_> {
+    fn next_time(&self) -> Option<f64> {
+        // The metrics grid may start a few ulps before t0 (t_end − T): clamp into the run.
+        self.next().map(|(t, _)| t.clamp(self.t0, self.t_end))
+    }
+
+    fn output(&mut self, _t: f64, y: &[f64]) -> Result<(), Error> {
+        let Some((t_req, list)) = self.next() else {
+            return Err(Error::Internal(
+                "an output past the last requested time".into(),
+            ));
+        };
+        let o = self.mech.outputs(t_req, y);
+        let s = self.sampler.of_outputs(t_req, &o);
+        match list {
+            List::Window => {
+                self.window.push(s);
+                self.idx[0] += 1;
+            }
+            List::Extra => {
+                self.extra_states.t.push(t_req);
+                self.extra_states.y.extend_from_slice(y);
+                self.extra.push(s);
+                self.idx[2] += 1;
+            }
+            List::Trajectory => {
+                self.row.clear();
+                self.row.extend(fixed_values(&s));
+                o.column_values(&mut self.row);
+                self.header.check(&self.row)?;
+                self.sink.row(&self.row)?;
+                self.rows += 1;
+                self.idx[1] += 1;
+            }
+        }
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        ta: f64,
+        tb: f64,
+        cut: bool,
+        _y: &[f64],
+        dense: &dyn Fn(f64, &mut [f64]),
+    ) -> Result<(), Error> {
+        if let (Some(q), Some(pw)) = (self.quad.as_mut(), self.power) {
+            let buf = &mut self.ybuf;
+            let mut node = |t: f64| -> Result<[f64; 4], Error> {
+                dense(t, buf);
+                checked_power(pw, t, buf)
+            };
+            q.step(ta, tb, cut, &mut node)?;
+        }
+        if tb >= self.w0 {
+            let a = ta.max(self.w0);
+            let mut peaks = std::mem::replace(&mut self.peaks, Peaks::new(0));
+            let mut buf = std::mem::take(&mut self.ybuf);
+            let r = peaks.step(a, tb, &mut |t| {
+                dense(t, &mut buf);
+                let o = self.mech.outputs(t, &buf);
+                self.quantities(&o)
+            });
+            self.ybuf = buf;
+            self.peaks = peaks;
+            r?;
+        }
+        Ok(())
+    }
+
+    fn event(&mut self, h: EventHit) {
+        if !self.keep_events && h.t < self.w0 {
+            return;
+        }
+        let (kind, joint) = self.names.get(h.index).copied().unwrap_or(("", None));
+        let quantity = match kind {
+            "contact" => EventQuantity::Penetration,
+            "eps_cap" => EventQuantity::FilmCap,
+            _ => EventQuantity::Other,
+        };
+        self.events.push(EventRecord {
+            t: h.t,
+            quantity,
+            rising: h.rising,
+            joint,
+            index: h.index,
+        });
+    }
+}
+
+pub(crate) fn simulate_mechanism(
+    p: &Prepared,
+    scene: &Scene,
+    req: &RunRequest,
+    t0: f64,
+    t_end: f64,
+    sink: &mut dyn TrajectorySink,
+) -> Result<RunResult, Error> {
+    let info = p
+        .info
+        .as_ref()
+        .ok_or_else(|| Error::Internal("mechanism without info".into()))?;
+    check_times(&req.extra_times, t0, t_end)?;
+    let tgrid = plan_run(p, req, t0, t_end)?;
+    options_within(req, t0, &[])?;
+    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
+    let opts = &options_within(req, t0, &mech.initial_state())?;
+    let sampler = Sampler::new(&mech, scene);
+    let window = p.metrics_window(t0, t_end);
+    let header = Header::new(sampler.fixed_present(), mech.output_columns())?;
+    sink.start(&header)?;
+    let y0 = mech.initial_state();
+    let n = y0.len();
+    let clr_names = mech.clearance_names();
+    let names: Vec<(&'static str, Option<usize>)> = (0..mech.n_events())
+        .map(|i| match mech.event_name(i) {
+            Some((kind, j)) => (kind, clr_names.iter().position(|c| *c == j)),
+            None => ("", None),
+        })
+        .collect();
+    let power = |t: f64, y: &[f64]| {
+        let p = mech.power(t, y);
+        [p.driver, p.contact_damping, p.friction, p.film]
+    };
+    let power_ref: PowerFn<'_> = &power;
+    let max_panel = info
+        .period
+        .map_or(f64::INFINITY, |t| t * QUADRATURE_PANEL_PER_PERIOD);
+    let quad = if req.energy {
+        Some(Quadrature::new(
+            opts.method.is_fixed_step(),
+            max_panel,
+            t0,
+            checked_power(power_ref, t0, &y0)?,
+        ))
+    } else {
+        None
+    };
+    let has_slider = mech.roles().slider.is_some();
+    let n_clr = clr_names.len();
+    let n_q = if has_slider { 2 } else { 0 } + 4 * n_clr;
+    let w0 = window.t_end - window.period;
+    let mut obs = MechanismRun {
+        mech: &mech,
+        sampler,
+        header,
+        sink,
+        row: Vec::new(),
+        wgrid: metrics::grid(window.t_end, window.period),
+        tgrid,
+        extra_times: &req.extra_times,
+        idx: [0; 3],
+        t0,
+        t_end,
+        window: Vec::with_capacity(GRID_POINTS),
+        extra: Vec::with_capacity(req.extra_times.len()),
+        extra_states: empty_solution(n),
+        rows: 0,
+        w0,
+        peaks: Peaks::new(n_q),
+        cv_max: 0.0,
+        has_slider,
+        n_clr,
+        quad,
+        power: req.energy.then_some(power_ref),
+        names,
+        keep_events: req.keep_events,
+        events: Vec::new(),
+        ybuf: vec![0.0; n],
+    };
+    let d = drive(&mech, t0, t_end, &y0, opts, &mut obs)?;
+    // The window's grid samples are samples of the extrema too.
+    let mut dense = obs.dense_extremes(scene);
+    for s in &obs.window {
+        if let (Some(a), Some((lo, hi))) = (s.slider_a, dense.slider_acc.as_mut()) {
+            *lo = lo.min(a);
+            *hi = hi.max(a);
+        }
+    }
+    let mut extra_states = std::mem::replace(&mut obs.extra_states, empty_solution(n));
+    extra_states.stats = d.stats;
+    extra_states.t_final = d.t_final;
+    extra_states.y_final = d.y_final.clone();
+    let energy = match obs.quad.as_mut() {
+        Some(q) => {
+            q.finish();
+            let o0 = mech.outputs(t0, &y0);
+            let o1 = mech.outputs(d.t_final, &d.y_final);
+            Some(EnergyTotals {
+                driver_work: q.total[0],
+                kinetic_change: o1.kinetic_energy - o0.kinetic_energy,
+                potential_change: o1.potential_energy - o0.potential_energy,
+                dissipated_damping: q.total[1],
+                dissipated_friction: q.total[2],
+                dissipated_film: q.total[3],
+                quadrature_error: q.err.iter().sum(),
+            })
+        }
+        None => None,
+    };
+    let metrics = metrics::compute(
+        &obs.window,
+        window,
+        info.joint,
+        &obs.events,
+        energy,
+        Some(&dense),
+    )?;
+    let mut summary = d.summary(p, opts, t_end);
+    summary.metrics = Some(metrics);
+    Ok(RunResult {
+        summary,
+        window: std::mem::take(&mut obs.window),
+        trajectory: Columns::new(),
+        trajectory_rows: obs.rows,
+        extra: std::mem::take(&mut obs.extra),
+        extra_states,
+        events: std::mem::take(&mut obs.events),
+        event_names: info.event_names.clone(),
+        ideal: obs.sampler.ideal,
+    })
+}

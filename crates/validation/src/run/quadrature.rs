@@ -1,0 +1,285 @@
+//! Time integrals of the power terms over accepted steps: the energy balance of a run.
+//!
+//! Source: Boole's rule and Richardson extrapolation of Simpson's rule (Davis & Rabinowitz,
+//! Methods of Numerical Integration, §2.2, §6.3); docs/model.md §1.8.
+
+use crate::error::Error;
+
+/// Time integrals of the power terms over accepted steps.
+///
+/// ```text
+/// panel of 5 equally spaced nodes f0..f4, spacing d:
+///   S1 = 2d/3 (f0 + 4 f2 + f4),  S2 = d/3 (f0 + 4 f1 + 2 f2 + 4 f3 + f4)
+///   value = S2 + (S2 − S1)/15 (Boole's rule),  error estimate |S2 − S1|/15
+/// adaptive step [a, b]: ⌈(b − a)/w⌉ panels (w = max_panel), each with 3 interior nodes from
+///   the dense output
+/// fixed-step method: four consecutive equal steps form one panel (nodes = step ends);
+///   a partial group (at the end, or before an unequal or event-cut step) uses Simpson 3/8,
+///   Simpson or the trapezoid, error estimated by the difference with the trapezoid
+///   (trapezoid alone: d/2 |f1 − f0|)
+/// ```
+///
+/// Source: Boole's rule and Richardson extrapolation of Simpson's rule (Davis & Rabinowitz,
+/// Methods of Numerical Integration, §2.2, §6.3).
+#[derive(Clone, Debug)]
+pub(crate) struct Quadrature {
+    fixed: bool,
+    max_panel: f64,
+    group: Vec<(f64, [f64; 4])>,
+    /// Integrals so far of (driver, contact damping, friction, film), J.
+    pub total: [f64; 4],
+    /// Error estimates so far, J.
+    pub err: [f64; 4],
+    /// Power evaluations so far (the initial one included).
+    pub evals: usize,
+}
+
+impl Quadrature {
+    /// Starts at (t0, P(t0)); `fixed` groups equal steps; a step longer than `max_panel`
+    /// (> 0, may be ∞) is split into panels no longer than it.
+    pub(crate) fn new(fixed: bool, max_panel: f64, t0: f64, p0: [f64; 4]) -> Quadrature {
+        Quadrature {
+            fixed,
+            max_panel,
+            group: vec![(t0, p0)],
+            total: [0.0; 4],
+            err: [0.0; 4],
+            evals: 1,
+        }
+    }
+
+    fn last(&self) -> (f64, [f64; 4]) {
+        *self
+            .group
+            .last()
+            .expect("the group always holds its left node")
+    }
+
+    /// Adds the accepted step [ta, tb]; `cut` when it ended at an event; `node(t)` evaluates
+    /// the power on the step's dense output.
+    pub(crate) fn step(
+        &mut self,
+        ta: f64,
+        tb: f64,
+        cut: bool,
+        node: &mut dyn FnMut(f64) -> Result<[f64; 4], Error>,
+    ) -> Result<(), Error> {
+        let h = tb - ta;
+        if h <= 0.0 {
+            return Ok(());
+        }
+        if self.fixed && !cut {
+            let k = self.group.len();
+            let equal = k < 2 || {
+                let d = self.group[1].0 - self.group[0].0;
+                (h - d).abs() <= 1e-6 * d
+            };
+            if equal {
+                self.group.push((tb, node(tb)?));
+                self.evals += 1;
+                if self.group.len() == 5 {
+                    self.boole();
+                }
+                return Ok(());
+            }
+        }
+        self.flush();
+        let panels = if self.max_panel.is_finite() {
+            ((h / self.max_panel).ceil() as usize).max(1)
+        } else {
+            1
+        };
+        let w = h / panels as f64;
+        for k in 0..panels {
+            let a = self.last();
+            let pa = a.0;
+            let pb = if k + 1 == panels {
+                tb
+            } else {
+                ta + w * (k + 1) as f64
+            };
+            let mut nodes = [a; 5];
+            for (j, nd) in nodes.iter_mut().enumerate().skip(1) {
+                let t = if j == 4 {
+                    pb
+                } else {
+                    pa + (pb - pa) * j as f64 / 4.0
+                };
+                *nd = (t, node(t)?);
+            }
+            self.evals += 4;
+            self.group = nodes.to_vec();
+            self.boole();
+        }
+        Ok(())
+    }
+
+    /// Boole's rule on the five nodes of the group; the group restarts at its last node.
+    fn boole(&mut self) {
+        let g = &self.group;
+        let d = (g[4].0 - g[0].0) / 4.0;
+        for c in 0..4 {
+            let f: [f64; 5] = std::array::from_fn(|j| g[j].1[c]);
+            let s1 = 2.0 * d / 3.0 * (f[0] + 4.0 * f[2] + f[4]);
+            let s2 = d / 3.0 * (f[0] + 4.0 * f[1] + 2.0 * f[2] + 4.0 * f[3] + f[4]);
+            self.total[c] += s2 + (s2 - s1) / 15.0;
+            self.err[c] += (s2 - s1).abs() / 15.0;
+        }
+        let last = self.last();
+        self.group = vec![last];
+    }
+
+    /// Integrates a partial group of 2–4 equally spaced nodes.
+    fn flush(&mut self) {
+        let g = &self.group;
+        let k = g.len();
+        if k >= 2 {
+            let d = (g[k - 1].0 - g[0].0) / (k - 1) as f64;
+            for c in 0..4 {
+                let f: Vec<f64> = g.iter().map(|x| x.1[c]).collect();
+                let trap = d * (f.iter().sum::<f64>() - 0.5 * (f[0] + f[k - 1]));
+                let (v, e) = match k {
+                    2 => (trap, 0.5 * d * (f[1] - f[0]).abs()),
+                    3 => {
+                        let s = d / 3.0 * (f[0] + 4.0 * f[1] + f[2]);
+                        (s, (s - trap).abs())
+                    }
+                    _ => {
+                        let s = 3.0 * d / 8.0 * (f[0] + 3.0 * f[1] + 3.0 * f[2] + f[3]);
+                        (s, (s - trap).abs())
+                    }
+                };
+                self.total[c] += v;
+                self.err[c] += e;
+            }
+        }
+        let last = self.last();
+        self.group = vec![last];
+    }
+
+    /// Integrates what is left at the end of the run.
+    pub(crate) fn finish(&mut self) {
+        self.flush();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poly(t: f64) -> [f64; 4] {
+        // Degree 5: Boole's rule is exact up to degree 5.
+        [
+            1.0 + t + t * t * t * t * t,
+            3.0 * t * t,
+            4.0 * t * t * t,
+            (2.0 * t).cos(),
+        ]
+    }
+
+    fn exact(a: f64, b: f64) -> [f64; 4] {
+        let f0 = |t: f64| t + t * t / 2.0 + t.powi(6) / 6.0;
+        [
+            f0(b) - f0(a),
+            b.powi(3) - a.powi(3),
+            b.powi(4) - a.powi(4),
+            ((2.0 * b).sin() - (2.0 * a).sin()) / 2.0,
+        ]
+    }
+
+    #[test]
+    fn boole_panels_integrate_quintics_exactly_on_uneven_steps() {
+        let mut q = Quadrature::new(false, f64::INFINITY, 0.0, poly(0.0));
+        let ts = [0.0, 0.1, 0.35, 0.4, 1.0, 1.7];
+        for w in ts.windows(2) {
+            q.step(w[0], w[1], false, &mut |t| Ok(poly(t))).unwrap();
+        }
+        q.finish();
+        let ex = exact(0.0, 1.7);
+        for c in 0..3 {
+            assert!((q.total[c] - ex[c]).abs() < 1e-13 * ex[c].abs(), "{c}");
+            // The error estimate is |S2 − S1|/15: zero for cubics (Simpson exact), not for
+            // the quintic.
+        }
+        assert!(q.err[1] < 1e-15 && q.err[2] < 1e-15);
+        assert!(q.err[0] > 0.0);
+        // cos: the estimate bounds the actual error of the Boole value.
+        let e3 = (q.total[3] - ex[3]).abs();
+        assert!(e3 <= q.err[3], "{e3} vs {}", q.err[3]);
+        assert_eq!(q.evals, 1 + 4 * 5);
+    }
+
+    #[test]
+    fn long_steps_are_split_into_panels() {
+        // One step over [0, 3] of cos(2t): one panel vs 12 panels (max_panel 0.25).
+        let integrate = |max_panel: f64| {
+            let mut q = Quadrature::new(false, max_panel, 0.0, poly(0.0));
+            q.step(0.0, 3.0, false, &mut |t| Ok(poly(t))).unwrap();
+            q.finish();
+            (q.total[3], q.err[3], q.evals)
+        };
+        let ex = exact(0.0, 3.0)[3];
+        let (one, est_one, n1) = integrate(f64::INFINITY);
+        let (many, est_many, n12) = integrate(0.25);
+        assert_eq!((n1, n12), (5, 1 + 4 * 12));
+        assert!(
+            (one - ex).abs() > 1e-3,
+            "one panel is coarse: {one} vs {ex}"
+        );
+        assert!((many - ex).abs() < 1e-8 && (many - ex).abs() <= est_many);
+        assert!(est_many < 1e-3 * est_one);
+    }
+
+    #[test]
+    fn fixed_steps_group_into_fours_and_converge_at_order_six() {
+        // ∫₀^1 cos(2t) with n equal steps: Boole panels of 4 steps, error O(h⁶).
+        let run = |n: usize| {
+            let h = 1.0 / n as f64;
+            let mut q = Quadrature::new(true, f64::INFINITY, 0.0, poly(0.0));
+            for k in 0..n {
+                let (a, b) = (k as f64 * h, (k + 1) as f64 * h);
+                q.step(a, b, false, &mut |t| Ok(poly(t))).unwrap();
+            }
+            q.finish();
+            assert_eq!(q.evals, n + 1, "one evaluation per step");
+            ((q.total[3] - exact(0.0, 1.0)[3]).abs(), q.err[3])
+        };
+        let ((e1, est1), (e2, est2)) = (run(8), run(16));
+        let order = (e1 / e2).log2();
+        assert!((5.7..6.5).contains(&order), "order {order}: {e1} {e2}");
+        assert!(e1 <= est1 && e2 <= est2, "{e1} {est1} {e2} {est2}");
+        // A partial group (10 steps = 2 panels + 2 steps) is closed by Simpson, whose error
+        // is estimated by its difference with the trapezoid.
+        let (e, est) = run(10);
+        assert!(e <= est && est < 1e-3, "{e} {est}");
+    }
+
+    #[test]
+    fn event_cut_steps_flush_the_group() {
+        let mut q = Quadrature::new(true, f64::INFINITY, 0.0, poly(0.0));
+        let h = 0.01;
+        for k in 0..6 {
+            q.step(k as f64 * h, (k + 1) as f64 * h, false, &mut |t| {
+                Ok(poly(t))
+            })
+            .unwrap();
+        }
+        // A step cut by an event: the two pending steps are closed with Simpson, the cut step
+        // gets its own Boole panel.
+        q.step(0.06, 0.063, true, &mut |t| Ok(poly(t))).unwrap();
+        q.step(0.063, 0.073, false, &mut |t| Ok(poly(t))).unwrap();
+        q.finish();
+        let ex = exact(0.0, 0.073);
+        for c in 0..4 {
+            let e = (q.total[c] - ex[c]).abs();
+            assert!(
+                e <= q.err[c] + 1e-16 && q.err[c] < 1e-4,
+                "{c}: {e} {}",
+                q.err[c]
+            );
+        }
+        // Nodes: the start, 6 step ends, 4 for the cut step (its own Boole panel), 1 for the
+        // last step (closed alone by the trapezoid, error bound d/2 |f1 − f0|).
+        assert_eq!(q.evals, 1 + 6 + 4 + 1);
+    }
+}
