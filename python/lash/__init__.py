@@ -6,7 +6,8 @@ interface:
 
 - :func:`run` — a scene run as ``lash run`` runs it (same defaults, same numbers), the
   results in memory: :class:`Run` with ``summary`` (summary.json as a dict), ``columns``
-  (trajectory.csv as numpy arrays), ``events`` (:class:`Event`) and ``to_pandas()``.
+  (trajectory.csv as numpy arrays), ``events`` (:class:`Event`), ``to_pandas()`` and
+  ``animate()`` (:class:`Animation`: the mechanism moving, a page a notebook shows).
 - :func:`solve_ivp` — scipy's ``solve_ivp`` with lash's methods (Rodas5P, BDF, TR-BDF2,
   ESDIRK3(4), the embedded pairs BS3(2), DP5(4), Tsit5(4), DOP853, fixed-step RK4), its
   Söderlind step-size controllers, and events with direction, terminal counts and hooks.
@@ -31,12 +32,13 @@ from ._errors import (InternalError, LashError, OutOfMemoryError, SceneError, So
                       UsageError)
 from ._ivp import CONTROLLERS, METHODS, OdeResult, OdeSolution, solve_ivp
 from ._lash import __version__
-from ._run import Event, Run, run
+from ._run import Animation, Event, Run, run
 
 __all__ = [
     "run",
     "Run",
     "Event",
+    "Animation",
     "solve_ivp",
     "OdeResult",
     "OdeSolution",

@@ -1,6 +1,6 @@
 """Type stub of the extension module lash._lash (python/src/lib.rs)."""
 
-from typing import Any, Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 __version__: str
 METHODS: Tuple[str, ...]
@@ -18,3 +18,9 @@ def run_core(args: Dict[str, Any]) -> Dict[str, Any]:
     (path, text, name, method, rtol, atol, controller, step, t_end, samples_per_revolution,
     output_every, max_wall_time, max_steps, max_memory), each None for "as the case says"
     (name: a string)."""
+
+
+def animation_html(scene_json: str, names: List[str], columns: bytes, rows: int, title: str,
+                   trace: Optional[str] = ..., column: Optional[str] = ...,
+                   max_frames: Optional[int] = ...) -> str:
+    """A run's animation page (python/src/animation.rs)."""

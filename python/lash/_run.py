@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import json
 import math
 import numbers
@@ -13,7 +14,7 @@ import numpy as np
 from . import _lash
 from ._errors import UsageError
 
-__all__ = ["run", "Run", "Event"]
+__all__ = ["run", "Run", "Event", "Animation"]
 
 
 class Event(NamedTuple):
@@ -62,14 +63,61 @@ class Run:
         Wall time of the engine's part of the call (reading the scene, the run with its
         outputs and metrics), s, without Python: ``summary["wall_time_s"]`` is the
         integration's alone. BENCHMARKS.md ("Python") compares both with the whole call.
+    scene : str or None
+        The scene's JSON text as it ran (what ``lash run`` keeps as scene.json); None for a
+        built-in test problem.
     """
 
     def __init__(self, summary: Dict[str, Any], columns: Dict[str, np.ndarray],
-                 events: List[Event], engine_time_s: float = math.nan) -> None:
+                 events: List[Event], engine_time_s: float = math.nan,
+                 scene: Optional[str] = None) -> None:
         self.summary = summary
         self.columns = columns
         self.events = events
         self.engine_time_s = engine_time_s
+        self.scene = scene
+
+    def animate(self, trace: Optional[str] = None, column: Optional[str] = None,
+                max_frames: Optional[int] = None) -> "Animation":
+        """The run as the page ``lash animate`` writes (docs/outputs.md, "lash animate
+        RUN_DIR"): the mechanism moving, each clearance joint's journal magnified in its
+        bearing with its forces as arrows, the path of a point, a time-series panel; one
+        self-contained HTML text, nothing fetched. In a notebook the returned
+        :class:`Animation` shows itself (``_repr_html_``); ``.save(path)`` writes the page.
+
+        Parameters
+        ----------
+        trace : str, optional
+            ``BODY.POINT`` or ``BODY`` (its centre of mass): the point whose path is drawn.
+            Default: the centre of mass of the body carrying the clearance joint's journal.
+        column : str, optional
+            The column the time-series panel shows first. Default: ``contact_force``, else
+            ``slider_a``, else the first body's angle.
+        max_frames : int, optional
+            Most frames (>= 2; default 2500): rows are decimated to at most this.
+
+        Raises
+        ------
+        UsageError
+            A built-in test problem (no mechanism), an unknown trace point or column, a bad
+            ``max_frames``.
+        SceneError
+            The columns do not fit the scene.
+        """
+        if self.scene is None:
+            raise UsageError("Run.animate needs a scene: a built-in test problem has no "
+                             "mechanism to draw")
+        for name, value in (("trace", trace), ("column", column)):
+            if value is not None and not isinstance(value, str):
+                raise UsageError(f"{name} must be a string, got {value!r}")
+        max_frames = _whole("max_frames", max_frames, 2)
+        names = list(self.columns)
+        rows = len(self.columns["t"])
+        data = b"".join(np.ascontiguousarray(self.columns[n], dtype=np.float64).tobytes()
+                        for n in names)
+        page = _lash.animation_html(self.scene, names, data, rows, _title(self.summary),
+                                    trace, column, max_frames)
+        return Animation(page)
 
     def to_pandas(self):
         """The trajectory as a :class:`pandas.DataFrame`, one column per trajectory.csv
@@ -86,6 +134,56 @@ class Run:
         rows = len(self.columns.get("t", ()))
         return (f"Run(case={s.get('case')!r}, method={s.get('method')!r}, "
                 f"t_end={s.get('t_end')!r}, rows={rows}, events={len(self.events)})")
+
+
+def _short(x: float) -> str:
+    """``1e-8``, ``2.5e-4``: a number as the engine's title writes it."""
+    m, e = f"{x:e}".split("e")
+    return f"{m.rstrip('0').rstrip('.')}e{int(e)}"
+
+
+def _title(summary: Dict[str, Any]) -> str:
+    """The page's heading: case, method and setting (as ``lash animate`` heads it)."""
+    title = str(summary.get("case") or "run")
+    method, rtol, step = summary.get("method"), summary.get("rtol"), summary.get("step")
+    if method and isinstance(rtol, (int, float)):
+        title += f", {method} rtol {_short(rtol)}"
+    elif method and isinstance(step, (int, float)):
+        title += f", {method} step {_short(step)} s"
+    elif method:
+        title += f", {method}"
+    return title
+
+
+class Animation:
+    """A run's animation page (:meth:`Run.animate`): one self-contained HTML document.
+
+    Attributes
+    ----------
+    html : str
+        The page, as ``lash animate`` writes animation.html.
+    height : int
+        Height in pixels of its frame in a notebook.
+    """
+
+    def __init__(self, page: str, height: int = 980) -> None:
+        self.html = page
+        self.height = height
+
+    def save(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes the page to ``path`` (UTF-8)."""
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(self.html)
+
+    def _repr_html_(self) -> str:
+        # In an iframe of its own, so that the page's script, ids and styles stay apart from
+        # the notebook's (and of other animations); sandboxed: scripts only.
+        return (f'<iframe srcdoc="{html.escape(self.html, quote=True)}" '
+                f'style="width:100%;height:{int(self.height)}px;border:0" '
+                f'sandbox="allow-scripts"></iframe>')
+
+    def __repr__(self) -> str:
+        return f"Animation({len(self.html)} characters of HTML)"
 
 
 def _positive(name: str, value, what: str = "a finite number > 0") -> Optional[float]:
@@ -214,7 +312,7 @@ def run(
     >>> r = lash.run("cases/press/lubricated_150rpm_c0.1.json", t_end=0.1)  # doctest: +SKIP
     >>> r.summary["metrics"]["slider_acc_max"], r.columns["slider_a"].max()  # doctest: +SKIP
     """
-    path, text = None, None
+    path, text, scene_text = None, None, None
     if isinstance(scene, dict):
         if not isinstance(name, str) or not name:
             raise UsageError(f"name must be a non-empty string, got {name!r}")
@@ -228,6 +326,9 @@ def run(
             path = os.fsdecode(path)
         if not path.startswith("testset:") and not os.path.isfile(path):
             raise FileNotFoundError(2, "No such scene file", path)
+        if not path.startswith("testset:"):
+            with open(path, "rb") as f:
+                scene_text = f.read().decode("utf-8", errors="replace")
     else:
         raise UsageError(f"scene must be a path or a dict, got {type(scene).__name__}")
     if method is not None:
@@ -281,4 +382,6 @@ def run(
     for k, col in enumerate(raw["names"]):
         columns[col] = data[k * rows:(k + 1) * rows]
     events = [Event(float(t), n, kind) for (t, n, kind) in raw["events"]]
-    return Run(summary, columns, events, raw["engine_time_s"])
+    if text is not None:
+        scene_text = text.decode("utf-8")
+    return Run(summary, columns, events, raw["engine_time_s"], scene=scene_text)

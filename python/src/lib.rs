@@ -33,6 +33,7 @@
 //! (`errors::guard`): a panic becomes `lash.InternalError`, or `lash.OutOfMemoryError` for an
 //! allocation that failed, never pyo3's `PanicException` (a `BaseException`).
 
+mod animation;
 mod convert;
 mod errors;
 mod ivp;
@@ -49,6 +50,7 @@ fn _lash(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(ivp::solve_ivp_core, m)?)?;
     m.add_function(wrap_pyfunction!(scene::run_core, m)?)?;
+    m.add_function(wrap_pyfunction!(animation::animation_html, m)?)?;
     m.add(
         "METHODS",
         PyTuple::new(py, Method::ALL.iter().map(|x| x.name()))?,

@@ -72,7 +72,7 @@ fn path_and_reason(e: &SceneError) -> (String, String) {
 }
 
 /// The Python exception of an engine error (module doc).
-fn engine_error(py: Python<'_>, e: Error) -> PyErr {
+pub(crate) fn engine_error(py: Python<'_>, e: Error) -> PyErr {
     match e {
         Error::Scene { error, .. } => {
             let (path, reason) = path_and_reason(&error);

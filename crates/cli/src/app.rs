@@ -109,6 +109,8 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
         Command::Stiffness(a) => stiffness_command(&a).map(|_| ()),
         Command::Poincare(a) => poincare_command(&a).map(|_| ()),
         Command::Extremes(a) => extremes_command(&a).map(|_| ()),
+        Command::Animate(a) => crate::viz::animate_command(&a).map(|_| ()),
+        Command::Plot(a) => crate::viz::plot_command(&a).map(|_| ()),
         Command::Merge(a) => {
             let m = engine::merge(&a.options()).map_err(flagged)?;
             let missing = m.table.unfinished.len() + m.table.corrupt.len();
@@ -146,6 +148,12 @@ pub fn default_command() -> Result<Written<Headline>, Error> {
 /// Returns the result and the output directory. With `--max-wall-time` a watchdog stops the
 /// process (exit 3) if the engine overruns the budget inside work it cannot interrupt.
 pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
+    // `testset:NAME` (docs/outputs.md, "`lash run CASE`"): a test problem, no mechanism.
+    if a.animate && a.case.starts_with("testset:") {
+        return Err(Error::Usage(
+            "--animate needs a scene: a built-in test problem has no mechanism to draw".into(),
+        ));
+    }
     let _watchdog = a.solver.max_wall_time.map(Watchdog::start);
     let w = engine::run(&a.options(), &StderrProgress::new())?;
     out(&describe_run(&w.result));
@@ -154,6 +162,9 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
         w.files.len(),
         w.dir.display()
     ));
+    if a.animate {
+        crate::viz::animate_run(&w.dir)?;
+    }
     Ok((w.result, w.dir))
 }
 

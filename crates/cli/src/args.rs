@@ -16,6 +16,8 @@
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
 //!                    [solver flags] [--out DIR]
 //! lash extremes [--quick] [--jobs N] [--max-steps N] [--max-wall-time S] [--out DIR]
+//! lash animate RUN_DIR [--trace BODY[.POINT]] [--column NAME] [--max-frames N] [--out FILE]
+//! lash plot RUN_DIR COLUMN... [--x COLUMN] [--out FILE]          (module `viz`)
 //! ```
 //!
 //! Names and list syntax are the contract of docs/outputs.md ("Method and controller names"):
@@ -96,6 +98,11 @@ pub enum Command {
     /// exit 0 when no run fails (each agrees with its reference within its promise, ends in a
     /// typed solver error, or is a documented known finding), 1 otherwise.
     Extremes(ExtremesArgs),
+    /// Animate a run: RUN_DIR/animation.html, one self-contained page a browser opens (the
+    /// mechanism moving, its clearance joints magnified, forces, a time-series panel).
+    Animate(crate::viz::AnimateArgs),
+    /// Plot trajectory columns of a run against time or another column (SVG and PNG).
+    Plot(crate::viz::PlotArgs),
 }
 
 /// The solver flags of `lash run`.
@@ -229,6 +236,10 @@ pub struct RunArgs {
     #[arg(long = "max-revolutions", value_name = "N", value_parser = parse_max_revolutions,
           requires = "until_periodic")]
     pub max_revolutions: Option<usize>,
+    /// Also write DIR/animation.html, the run as a page a browser opens (as `lash animate
+    /// DIR`; scenes only). Default: off.
+    #[arg(long)]
+    pub animate: bool,
 }
 
 impl RunArgs {

@@ -15,7 +15,7 @@
 //! [`exit`] (exit codes, error reports, engine option names spelled as flags), [`out`]
 //! (standard output and error without panics), [`progress`] (notes, the progress bar or
 //! per-item log lines on standard error), [`signals`] (SIGINT and SIGTERM stop the work
-//! cleanly).
+//! cleanly), [`viz`] (`lash animate`, `lash plot`, `lash run --animate`).
 
 #![warn(missing_docs)]
 
@@ -25,3 +25,4 @@ pub mod exit;
 pub mod out;
 pub mod progress;
 pub mod signals;
+pub mod viz;

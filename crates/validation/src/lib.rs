@@ -24,11 +24,13 @@
 //! files), `compare` (errors against a reference, work–precision), `studies` (the default
 //! run, the paper's §4 and its claims, their robustness, the extremes matrix), `diagnostics`
 //! (stiffness, Poincaré section and Lyapunov exponent), `sweep` (grids, shards, resume,
-//! merge). No source file imports one that imports it back.
+//! merge), `animation` (a run as one self-contained HTML page: the mechanism moving). No
+//! source file imports one that imports it back.
 
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
 
+mod animation;
 mod commands;
 mod compare;
 mod diagnostics;
@@ -47,6 +49,7 @@ pub use commands::{
     run::{default_run, describe_run, run, run_in_memory, RunOptions},
     study::{extremes, study_paper, study_robustness, ExtremesOptions, StudyOptions},
     sweep::{merge, sweep, sweep_with, MergeOptions, Merged, SweepOutcome, SweepRunOptions},
+    viz::{animate, animate_in_memory, plot, AnimateOptions, Animated, PlotOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};
 pub use options::SolverChoice;

@@ -16,6 +16,9 @@
 //! stiffness(StiffnessOptions, progress) → Written<StiffnessResult>
 //! poincare(PoincareOptions, progress)   → Written<PoincareResult>
 //! extremes(ExtremesOptions, progress)   → Written<Matrix>       extremes.md, extremes.json
+//! animate(AnimateOptions)               → Written<Animated>     RUN_DIR/animation.html
+//! animate_in_memory(scene, columns, title, AnimateOptions) → String   the same page, in memory
+//! plot(PlotOptions)                     → Written<()>           a figure of trajectory columns
 //! out = the option, else default_out(COMMAND, case name) = out/COMMAND/NAME
 //! ```
 //!
@@ -37,6 +40,7 @@ pub(crate) mod diagnose;
 pub(crate) mod run;
 pub(crate) mod study;
 pub(crate) mod sweep;
+pub(crate) mod viz;
 
 /// Default output directory of a command for a case: `out/COMMAND/NAME` (a `:` in a built-in
 /// name becomes `_`).

@@ -3,7 +3,7 @@
 //!
 //! Source: docs/outputs.md ("`lash run CASE`", "Files each command writes").
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use lash_solver::stepper::deadline_after;
@@ -95,6 +95,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         Ok(mut r) => {
             r.summary.until_periodic = settled;
             let mut files = vec![traj];
+            files.extend(write_scene(&prepared, dir.path())?);
             files.extend(r.write(dir.path())?);
             let files = files.iter().map(|f| dir.final_path(f)).collect();
             dir.commit()?;
@@ -140,6 +141,20 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         }),
         Err(e) => Err(e),
     }
+}
+
+/// Keeps the scene a run ran in its directory as `scene.json` (before summary.json): the
+/// file's bytes as read (so its SHA-256 is the summary's `scene_sha256`), a catalogue scene as
+/// JSON; a built-in test problem has none.
+fn write_scene(p: &Prepared, dir: &Path) -> Result<Option<PathBuf>, Error> {
+    let path = dir.join(crate::animation::SCENE_FILE);
+    let bytes = match (&p.case.source, p.scene()) {
+        (crate::run::case::CaseSource::File { bytes, .. }, _) => bytes.clone(),
+        (_, Some(scene)) => scene.to_json_pretty().into_bytes(),
+        (_, None) => return Ok(None),
+    };
+    crate::store::io::write_atomic(&path, &bytes)?;
+    Ok(Some(path))
 }
 
 /// The checked case and the request of a run (the same for [`run`] and [`run_in_memory`]):

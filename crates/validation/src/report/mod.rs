@@ -1,5 +1,7 @@
-//! What runs report: summary.json, trajectory.csv, the metrics, the figures.
+//! What runs report: summary.json, trajectory.csv, the metrics, the figures; `lash plot`'s
+//! figures of any trajectory columns (`column_plot`).
 
+pub(crate) mod column_plot;
 pub(crate) mod metrics;
 pub(crate) mod plot;
 pub(crate) mod summary;

@@ -12,7 +12,8 @@
 //!          (time in s when the scene has no crank driver):
 //!   slider_x, slider_v, slider_a   lash and the ideal closed form (dashed)     [slider]
 //!   orbit                          e/c inside the unit clearance circle        [clearance joint]
-//!   joint_forces                   contact force F_N and film force |F_film|   [clearance joint]
+//!   joint_forces                   contact force F_N, and film force |F_film|  [clearance joint]
+//!                                  when the joint has a film
 //! ```
 //!
 //! Source: docs/outputs.md ("`lash run CASE`": DIR/summary.json, DIR/trajectory.csv and
@@ -49,8 +50,11 @@ pub(crate) fn run_file(name: &str, is_dir: bool) -> bool {
         TRAJECTORY_FILE,
         PARTIAL_TRAJECTORY_FILE,
         FAILURE_FILE,
+        crate::animation::SCENE_FILE,
+        crate::animation::ANIMATION_FILE,
     ]
     .contains(&name)
+        || crate::report::column_plot::is_plot_file(name)
         || FIGURES
             .iter()
             .any(|f| name == format!("{f}.svg") || name == format!("{f}.png"))
@@ -332,7 +336,13 @@ pub(crate) fn write_run(dir: &Path, out: &RunOutput<'_>) -> Result<Vec<PathBuf>,
             y: &fn_,
             style: SeriesStyle::Line,
         }];
-        let film = col(w, |s| s.film_force.map(f64::abs));
+        // The film's force only for a joint with a film (a dry one's is zeros): the scene
+        // says so through film_thickness_min (null when dry); without metrics, the data.
+        let film =
+            col(w, |s| s.film_force.map(f64::abs)).filter(|f| match out.summary.metrics.as_ref() {
+                Some(m) => m.film_thickness_min.is_some(),
+                None => f.iter().any(|v| *v != 0.0),
+            });
         if let Some(f) = &film {
             series.push(Series {
                 name: "film force, magnitude",
