@@ -42,7 +42,7 @@ impl Rule {
     pub const STEP: Rule = Rule::new(OptionField::Step, Allowed::FiniteAbove(0.0));
     /// `h0` finite and > 0.
     pub const H0: Rule = Rule::new(OptionField::H0, Allowed::FiniteAbove(0.0));
-    /// `h_min` finite and ≥ 0 (`h_max` > `h_min` is a relation: [`StepBounds::new`]).
+    /// `h_min` finite and ≥ 0 (`h_max` > `h_min` is a relation: [`crate::options::StepBounds::new`]).
     pub const H_MIN: Rule = Rule::new(OptionField::HMin, Allowed::FiniteAtLeast(0.0));
     /// `max_steps` ≥ 1.
     pub const MAX_STEPS: Rule = Rule::new(OptionField::MaxSteps, Allowed::AtLeast(1.0));
