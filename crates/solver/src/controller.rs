@@ -21,8 +21,6 @@
 //! norms are floored at 1e-10 before taking powers, so an exact step (ε = 0) gives a finite
 //! factor that the growth cap then limits.
 
-use crate::options::{OptionError, Rule};
-
 /// The controller presets. Names are the contract of docs/outputs.md ("Method and controller
 /// names").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -271,23 +269,6 @@ impl Default for StepLimits {
             max_after_repeated_reject: 0.3,
             deadband: (1.0, 1.0),
         }
-    }
-}
-
-impl StepLimits {
-    /// Checks the ranges documented on each field (the rules `Rule::SAFETY`, … of
-    /// [`crate::options`]).
-    pub fn validate(&self) -> Result<(), OptionError> {
-        Rule::SAFETY.check(self.safety)?;
-        Rule::MAX_GROWTH.check(self.max_growth)?;
-        Rule::MAX_FIRST_GROWTH.check(self.max_first_growth)?;
-        Rule::MIN_SHRINK.check(self.min_shrink)?;
-        Rule::MAX_AFTER_REJECT.check(self.max_after_reject)?;
-        Rule::MAX_GROWTH_AFTER_REJECT.check(self.max_growth_after_reject)?;
-        Rule::MAX_AFTER_REPEATED_REJECT.check(self.max_after_repeated_reject)?;
-        Rule::DEADBAND_LOWER.check_entry(0, self.deadband.0)?;
-        Rule::DEADBAND_UPPER.check_entry(1, self.deadband.1)?;
-        Ok(())
     }
 }
 

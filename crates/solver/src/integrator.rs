@@ -53,11 +53,12 @@
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
+use crate::method::Method;
 use crate::options::{
     Allowed, Config, OptionError, OptionField, Output, Reason, Rule, SolverOptions,
 };
 use crate::stats::Stats;
-use crate::stepper::{make_stepper, Stepper};
+use crate::stepper::Stepper;
 use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
 /// κ of the far test (module documentation): an event function whose distance from zero at
@@ -202,6 +203,44 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
     pub fn solve(&self, t_span: (f64, f64), y0: &[f64]) -> Result<Solution, SolveError> {
         let it = self.integrator(t_span.0, t_span.1, y0)?;
         drive(it, t_span.0, y0, &self.opts.output)
+    }
+}
+
+/// Builds the stepper of the problem's method at (t0, y0), from the validated configuration
+/// of its family ([`Problem::config`]).
+pub fn make_stepper<'p, S: OdeSystem + ?Sized>(
+    problem: &'p Problem<'_, S>,
+    t0: f64,
+    y0: &[f64],
+) -> Result<Box<dyn Stepper + 'p>, SolveError> {
+    let sys = problem.system();
+    match problem.config() {
+        Config::Fixed(c) => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, c)?)),
+        Config::OneStep(c) if c.method() == Method::Rodas5p => {
+            let m = crate::rosenbrock::Rodas5pMethod::new(sys, c.tolerances());
+            Ok(Box::new(crate::onestep::OneStepDriver::new(
+                sys, m, t0, y0, c,
+            )))
+        }
+        Config::OneStep(c) => {
+            let m = crate::erk::ErkMethod::new(c.method(), c.tolerances(), y0.len())?;
+            Ok(Box::new(crate::onestep::OneStepDriver::new(
+                sys, m, t0, y0, c,
+            )))
+        }
+        Config::Diffsol(c) => {
+            // Problem::new builds diffsol's problem for every diffsol configuration.
+            let backend = problem.diffsol().ok_or(OptionError::new(
+                OptionField::Method,
+                Reason::Invalid(format!("{} has no diffsol problem", c.method())),
+            ))?;
+            Ok(Box::new(crate::diffsol_backend::DiffsolStepper::new(
+                backend,
+                t0,
+                y0,
+                problem.options(),
+            )?))
+        }
     }
 }
 

@@ -131,9 +131,9 @@ pub mod testset;
 
 pub use controller::{Controller, ControllerKind, Soderlind, StepLimits, StepSizeControl};
 pub use error::SolveError;
-pub use integrator::{solve, Integrator, Problem, Solution, StepOutcome};
+pub use integrator::{make_stepper, solve, Integrator, Problem, Solution, StepOutcome};
 pub use method::{Method, MethodInfo};
 pub use options::{Atol, Config, OptionError, OptionField, Output, Rule, SolverOptions};
 pub use stats::Stats;
-pub use stepper::{make_stepper, Stepper};
+pub use stepper::Stepper;
 pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};

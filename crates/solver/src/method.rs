@@ -58,7 +58,7 @@ pub enum Method {
 }
 
 /// How a method steps, which decides the options it takes ([`crate::options`]) and the
-/// stepper that runs it ([`crate::stepper::make_stepper`]).
+/// stepper that runs it ([`crate::make_stepper`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Family {
     /// A fixed step, no error control (RK4): takes `step`, no tolerances.

@@ -50,7 +50,7 @@
 //! kinks flag a few steps in a row and a real instability hundreds (BENCHMARKS.md, "RK4 beyond
 //! its stability limit").
 
-use crate::analysis::{eigenvalues, jacobian_at, rk4_amplification, rk4_ray_limit};
+use crate::analysis::spectrum::{eigenvalues, jacobian_at, rk4_amplification, rk4_ray_limit};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::options::FixedConfig;

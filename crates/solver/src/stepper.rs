@@ -1,5 +1,6 @@
-//! The interface every method implements, the rules they share, and the factory that builds
-//! a stepper for a [`Method`].
+//! The interface every method implements and the rules they share. The factory that builds
+//! the stepper of a [`Method`] ([`crate::integrator::make_stepper`]) lives with the
+//! [`crate::Integrator`] that drives it, so that this file needs none of its implementors.
 //!
 //! A stepper owns the state (t, y) and the dense output of its last accepted step. It never
 //! sees events or output requests: the [`crate::Integrator`] drives it, locates events on its
@@ -24,9 +25,8 @@
 use std::time::{Duration, Instant};
 
 use crate::error::SolveError;
-use crate::integrator::Problem;
 use crate::method::Method;
-use crate::options::{Atol, Budgets, Config, OptionError, OptionField, Reason, Tolerances};
+use crate::options::{Atol, Budgets, OptionError, OptionField, Reason, Tolerances};
 use crate::stats::Stats;
 use crate::system::OdeSystem;
 
@@ -53,44 +53,6 @@ pub trait Stepper {
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError>;
     /// Counters so far, by value. Reading them never changes them.
     fn stats(&self) -> Stats;
-}
-
-/// Builds the stepper of the problem's method at (t0, y0), from the validated configuration
-/// of its family ([`Problem::config`]).
-pub fn make_stepper<'p, S: OdeSystem + ?Sized>(
-    problem: &'p Problem<'_, S>,
-    t0: f64,
-    y0: &[f64],
-) -> Result<Box<dyn Stepper + 'p>, SolveError> {
-    let sys = problem.system();
-    match problem.config() {
-        Config::Fixed(c) => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, c)?)),
-        Config::OneStep(c) if c.method() == Method::Rodas5p => {
-            let m = crate::rosenbrock::Rodas5pMethod::new(sys, c.tolerances());
-            Ok(Box::new(crate::onestep::OneStepDriver::new(
-                sys, m, t0, y0, c,
-            )))
-        }
-        Config::OneStep(c) => {
-            let m = crate::erk::ErkMethod::new(c.method(), c.tolerances(), y0.len())?;
-            Ok(Box::new(crate::onestep::OneStepDriver::new(
-                sys, m, t0, y0, c,
-            )))
-        }
-        Config::Diffsol(c) => {
-            // Problem::new builds diffsol's problem for every diffsol configuration.
-            let backend = problem.diffsol().ok_or(OptionError::new(
-                OptionField::Method,
-                Reason::Invalid(format!("{} has no diffsol problem", c.method())),
-            ))?;
-            Ok(Box::new(crate::diffsol_backend::DiffsolStepper::new(
-                backend,
-                t0,
-                y0,
-                problem.options(),
-            )?))
-        }
-    }
 }
 
 /// The landing rule of every stepper: the step to try from `t` towards `t_stop` with the

@@ -32,7 +32,7 @@
 //! correlated between them when an adaptive method picks different steps: keep the tolerance
 //! well below d0 (rtol·‖y‖ ≪ d0), or use fixed-step RK4, whose errors are correlated.
 
-use super::AnalysisError;
+use super::error::AnalysisError;
 use crate::integrator::solve;
 use crate::options::{Output, SolverOptions};
 use crate::system::OdeSystem;

@@ -17,7 +17,7 @@
 use crate::controller::{ControllerKind, StepLimits};
 use crate::method::{Family, Method};
 use crate::options::error::{OptionError, OptionField, Reason};
-use crate::options::{Atol, Rule};
+use crate::options::rules::Rule;
 
 /// The validated options of one integration, by family ([`Family`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -94,6 +94,33 @@ impl Budgets {
     /// Wall-clock budget in seconds (None: no budget).
     pub fn max_wall_time(&self) -> Option<f64> {
         self.max_wall_time
+    }
+}
+
+/// Absolute tolerance: one number for every component, or one per component.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Atol {
+    /// The same absolute tolerance for every component.
+    Scalar(f64),
+    /// One absolute tolerance per component (length n).
+    Vector(Vec<f64>),
+}
+
+impl Atol {
+    /// The absolute tolerance of component `i`.
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        match self {
+            Atol::Scalar(a) => *a,
+            Atol::Vector(v) => v[i],
+        }
+    }
+}
+
+impl Default for Atol {
+    fn default() -> Self {
+        Atol::Scalar(1e-9)
     }
 }
 
