@@ -222,6 +222,15 @@ pub struct RunArgs {
     #[arg(long = "max-revolutions", value_name = "N", value_parser = parse_max_revolutions,
           requires = "until_periodic")]
     pub max_revolutions: Option<usize>,
+    /// How the constraints are enforced, over the scene's `formulation`:
+    /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
+    #[arg(long, value_name = "F", value_parser = parse_formulation)]
+    pub formulation: Option<lash_validation::FormulationName>,
+}
+
+/// Parses --formulation.
+fn parse_formulation(s: &str) -> Result<lash_validation::FormulationName, String> {
+    s.parse()
 }
 
 impl RunArgs {
@@ -238,6 +247,7 @@ impl RunArgs {
                 tol,
                 max_revolutions: self.max_revolutions.unwrap_or(DEFAULT_MAX_REVOLUTIONS),
             }),
+            formulation: self.formulation,
         }
     }
 }

@@ -126,7 +126,8 @@ pub fn simple_pendulum() -> (Scene, OneDof) {
 }
 
 /// A02: the N-four-bar (module doc) over `t_end` s, and its reference. Bodies in chain order
-/// (crank 0, coupler 0, crank 1, …), so that M + Φ_qᵀαΦ_q is banded.
+/// (crank 0, coupler 0, crank 1, …), so that M + Φ_qᵀαΦ_q is banded. The scene chooses the
+/// augmented Lagrangian with penalty 1e7 and ω = 300 1/s (its notes say why).
 pub fn n_four_bar(n: usize, t_end: f64) -> (Scene, OneDof) {
     let (m, l) = (1.0, 1.0);
     let half = std::f64::consts::FRAC_PI_2;
@@ -154,9 +155,19 @@ pub fn n_four_bar(n: usize, t_end: f64) -> (Scene, OneDof) {
     let nf = n as f64;
     let s = scene(json!({
         "description": format!("IFToMM A02: N-four-bar, N = {n}, B0 at 1 m/s in +x"),
+        "notes": [
+            "Singular (N + 1 degrees of freedom) at every horizontal position: needs the \
+             augmented Lagrangian (Lagrange-Baumgarte stops there or changes branch).",
+            "penalty 1e7 and omega 300 1/s: near the singular positions the multiplier \
+             iteration corrects the near-null constraint modes by about alpha sigma per \
+             iteration, and a stiff violation dynamics keeps the parallelograms on their \
+             branch; with the defaults (1e4, 10 1/s) N = 2 is 1.3e-2 m off after 10 s."
+        ],
         "bodies": bodies,
         "joints": joints,
         "gravity": [0.0, -G],
+        "formulation": "augmented_lagrangian",
+        "augmented_lagrangian": {"penalty": 1e7, "omega": 300.0},
         "t_end": t_end
     }));
     (

@@ -77,34 +77,45 @@ fn check_crank_tip(r: &Run, reference: &OneDof, tip: f64) -> (f64, f64) {
     (err, drift)
 }
 
-#[test]
-fn a02_n_four_bar_n1_and_n2_follow_the_one_dof_reference() {
-    // N = 1 over 10 s (eight horizontal, singular, positions); N = 2 through the first
-    // (t ≈ 0.71 s): over 10 s it is 1.3e-2 m off (issue 26's report: not met yet).
-    for (n, t_end) in [(1, 10.0), (2, 1.0)] {
-        let (scene, reference) = n_four_bar(n, t_end);
-        let r = run(&scene, Method::Dop853, 1e-10).unwrap();
-        let (err, drift) = check_crank_tip(&r, &reference, 1.0);
-        eprintln!("A02 N = {n}: B0 error {err:.3e} m, energy drift {drift:.3e}");
-        // N = 2 loses 9e-8 of its energy at the first singular pass (target 1e-8: not met).
-        let drift_bound = if n == 1 { 1e-8 } else { 2e-7 };
-        assert!(err < 1e-6, "N = {n}: B0 error {err:e}");
-        assert!(drift < drift_bound, "N = {n}: energy drift {drift:e}");
-        assert!(r.violation < 1e-6, "N = {n}: violation {:e}", r.violation);
-        // Every crank keeps the angle of crank 0 (to 1e-5 rad; a flip is π apart).
-        for p in &r.poses {
-            for i in 1..=n {
-                assert!(angle_err(p[2 * i][2], p[0][2]) < 1e-5);
-            }
+/// A02 over `t_end` at rtol 1e-10: B0 within 1e-6 m of the reference, energy drift below
+/// 1e-8, no parallelogram flipped.
+fn a02_meets_its_targets(n: usize, t_end: f64) {
+    let (scene, reference) = n_four_bar(n, t_end);
+    let r = run(&scene, Method::Dop853, 1e-10).unwrap();
+    let (err, drift) = check_crank_tip(&r, &reference, 1.0);
+    eprintln!("A02 N = {n}, {t_end} s: B0 error {err:.3e} m, energy drift {drift:.3e}");
+    assert!(err < 1e-6, "N = {n}: B0 error {err:e}");
+    assert!(drift < 1e-8, "N = {n}: energy drift {drift:e}");
+    assert!(r.violation < 1e-6, "N = {n}: violation {:e}", r.violation);
+    // Every crank keeps the angle of crank 0 (to 1e-5 rad; a flip is π apart).
+    for p in &r.poses {
+        for i in 1..=n {
+            assert!(angle_err(p[2 * i][2], p[0][2]) < 1e-5);
         }
     }
 }
 
 #[test]
+fn a02_n_four_bar_n1_and_n2_follow_the_one_dof_reference() {
+    // 20 s as published: about 15 horizontal (singular) positions.
+    a02_meets_its_targets(1, 20.0);
+    a02_meets_its_targets(2, 20.0);
+}
+
+/// The published case, N = 40 over 20 s (about 200 s of wall time: run it with
+/// `cargo test --release -p lash-model --test iftomm -- --ignored`).
+#[test]
+#[ignore]
+fn a02_n_four_bar_n40_follows_the_one_dof_reference() {
+    a02_meets_its_targets(40, 20.0);
+}
+
+#[test]
 fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
-    // Through the first singular position (t ≈ 0.71 s), where Lagrange–Baumgarte stops
-    // ("step size too small") or, with bdf, flips to the anti-parallelogram.
-    let (scene, reference) = n_four_bar(1, 1.0);
+    // 20 s as published, through about 15 singular positions; Lagrange–Baumgarte stops at
+    // the first (t ≈ 0.71 s, "step size too small") or, with bdf, flips to the
+    // anti-parallelogram.
+    let (scene, reference) = n_four_bar(1, 20.0);
     for method in [
         Method::Dop853,
         Method::Rodas5p,
@@ -127,7 +138,9 @@ fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
                 p[2][2]
             );
         }
-        assert!(err < 1e-5, "{method:?}: B0 error {err:e}");
+        // A branch switch is about 1 m off; at rtol 1e-8 over 20 s the global error of the
+        // methods is 2e-7 (dopri54) to 3.2e-3 (bs32, third order).
+        assert!(err < 1e-2, "{method:?}: B0 error {err:e}");
     }
 }
 
@@ -171,4 +184,19 @@ fn redundant_parallel_cranks_follow_the_one_dof_reference() {
     }
     eprintln!("parallel cranks: crank angle error {err:.3e} rad");
     assert!(err < 1e-6, "{err:e}");
+}
+
+#[test]
+fn the_scene_files_are_the_generators_scenes() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../cases/iftomm");
+    for (name, want) in [
+        ("a01_pendulum", simple_pendulum().0),
+        ("a02_n1", n_four_bar(1, 20.0).0),
+        ("a02_n2", n_four_bar(2, 20.0).0),
+        ("a02_n40", n_four_bar(40, 20.0).0),
+        ("parallel_cranks", parallel_cranks(10.0).0),
+    ] {
+        let got = Scene::from_path(format!("{dir}/{name}.json")).unwrap();
+        assert_eq!(got, want, "cases/iftomm/{name}.json");
+    }
 }

@@ -49,6 +49,8 @@ pub use commands::{
     sweep::{merge, sweep, sweep_with, MergeOptions, Merged, SweepOutcome, SweepRunOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};
+/// The formulations a run can choose (`RunOptions::formulation`; docs/model.md §12).
+pub use lash_model::FormulationName;
 pub use options::SolverChoice;
 pub use progress::{NoProgress, Progress};
 pub use store::io::Written;

@@ -42,7 +42,7 @@ use self::core::{AlCore, Mass, SparseRows};
 
 /// Iteration statistics of a formulation that iterates (the augmented Lagrangian), summed
 /// over every evaluation since the mechanism was built (or [`crate::Mechanism::reset_formulation_stats`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct FormulationStats {
     /// Acceleration solves (right-hand sides and Jacobians' evaluations).
     pub evaluations: u64,
