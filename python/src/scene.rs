@@ -115,7 +115,7 @@ fn events<'py>(
 /// the GIL released: what the same run costs without Python).
 #[pyfunction]
 #[pyo3(signature = (path, text, name, method, rtol, atol, controller, step, t_end,
-    samples_per_revolution, output_every, max_wall_time, max_steps))]
+    samples_per_revolution, output_every, max_wall_time, max_steps, formulation=None))]
 pub fn run_core<'py>(
     py: Python<'py>,
     path: Option<String>,
@@ -131,7 +131,15 @@ pub fn run_core<'py>(
     output_every: Option<f64>,
     max_wall_time: Option<f64>,
     max_steps: Option<usize>,
+    formulation: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let formulation = match formulation {
+        None => None,
+        Some(f) => Some(
+            f.parse::<lash_validation::FormulationName>()
+                .map_err(|e| usage_error(py, &e))?,
+        ),
+    };
     let method = match method {
         None => None,
         Some(m) => Some(
@@ -166,6 +174,7 @@ pub fn run_core<'py>(
         output_every,
         out: None,
         until_periodic: None,
+        formulation,
     };
     let name = name.to_string();
     let outcome: Result<Ran, Error> = py.detach(move || {
