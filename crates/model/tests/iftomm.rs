@@ -200,3 +200,21 @@ fn the_scene_files_are_the_generators_scenes() {
         assert_eq!(got, want, "cases/iftomm/{name}.json");
     }
 }
+
+#[test]
+fn contradictory_constraints_are_refused_naming_the_joints() {
+    // The third crank's ground pin at x = 5 m instead of 2 m: its tip is at least 2 m from
+    // the first crank's tip (within 1 m of x = 0), the bar's end pins are 2 m apart — no pose
+    // meets every equation. Redundant constraints are accepted (the test above);
+    // contradictory ones are an error naming the joints.
+    let (scene, _) = parallel_cranks(1.0);
+    let mut text = serde_json::to_value(&scene).unwrap();
+    text["joints"][2]["b"]["at"] = serde_json::json!([5.0, 0.0]);
+    let bad = Scene::from_json_str(&text.to_string()).unwrap();
+    let e = Mechanism::from_scene(&bad).unwrap_err();
+    let msg = e.to_string();
+    assert!(msg.contains("contradictory"), "{msg}");
+    assert!(msg.contains("joints["), "{msg}");
+    // The equations left unmet are those of the loop through the moved pin.
+    assert!(msg.contains("ground2") || msg.contains("bar2"), "{msg}");
+}
