@@ -622,6 +622,8 @@ impl PoincareArgs {
 ///
 /// Source: clap's error kinds DisplayHelp, DisplayVersion.
 #[derive(Debug)]
+// Built once per process: the size of the larger variant costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 pub enum Parsed {
     /// A command to execute.
     Cli(Cli),
