@@ -102,7 +102,7 @@ pub enum Command {
 ///
 /// ```text
 /// [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
-/// [--max-steps N] [--max-wall-time S]
+/// [--max-steps N] [--max-wall-time S] [--max-memory BYTES]
 /// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only;  budgets: any method
 /// ```
 ///
@@ -145,6 +145,12 @@ pub struct SolverFlags {
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
+    /// Memory budget of the implicit methods' dense Jacobian and LU (n² each), bytes, a whole
+    /// number >= 1. A run whose matrices need more fails before it starts with "not enough
+    /// memory" (exit 3). Default: half of the memory available (MemAvailable, the cgroup's
+    /// limit, the address-space limit).
+    #[arg(long = "max-memory", value_name = "BYTES", value_parser = parse_max_memory)]
+    pub max_memory: Option<u64>,
 }
 
 impl SolverFlags {
@@ -158,6 +164,7 @@ impl SolverFlags {
             controller: self.controller,
             max_steps: self.max_steps,
             max_wall_time: self.max_wall_time,
+            max_memory: self.max_memory,
         }
     }
 
@@ -625,8 +632,8 @@ impl PoincareArgs {
 // Built once per process: the size of the larger variant costs nothing worth a box.
 #[allow(clippy::large_enum_variant)]
 pub enum Parsed {
-    /// A command to execute.
-    Cli(Cli),
+    /// A command to execute (boxed: far larger than the text).
+    Cli(Box<Cli>),
     /// Help or version text to print on standard output, then exit 0.
     Print(String),
 }
@@ -639,7 +646,7 @@ where
     T: Into<OsString> + Clone,
 {
     match Cli::try_parse_from(args) {
-        Ok(cli) => Ok(Parsed::Cli(cli)),
+        Ok(cli) => Ok(Parsed::Cli(Box::new(cli))),
         Err(e) => {
             use clap::error::ErrorKind;
             match e.kind() {
@@ -779,6 +786,16 @@ pub fn parse_max_steps(s: &str) -> Result<usize, String> {
     parse_whole(s, "max-steps", 1)
 }
 
+/// Parses a memory budget: a whole number of bytes >= 1.
+pub fn parse_max_memory(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<u64>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "max-memory must be a whole number of bytes >= 1, got '{s}'"
+        )),
+    }
+}
+
 /// Parses a wall-clock budget: finite and > 0 (s).
 pub fn parse_wall_time(s: &str) -> Result<f64, String> {
     let v = parse_number(s, "max-wall-time")?;
@@ -805,7 +822,7 @@ mod tests {
         let mut v = vec!["lash"];
         v.extend_from_slice(args);
         match parse(v)? {
-            Parsed::Cli(c) => Ok(c),
+            Parsed::Cli(c) => Ok(*c),
             Parsed::Print(_) => panic!("help printed"),
         }
     }
