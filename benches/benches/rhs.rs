@@ -5,7 +5,10 @@
 //! ```text
 //! f(t, y) = (q̇, q̈),  q̈ from the Schur complement of the KKT system (crates/model)
 //! ```
-//! Also the mechanism's Jacobian ∂f/∂y at the contact state (what Rodas5P and BDF call).
+//! Also the mechanism's Jacobian ∂f/∂y at the contact state (what Rodas5P and BDF call), and
+//! group `formulation`: the right-hand side and the Jacobian of each formulation
+//! (docs/model.md §12) on the dry press at its contact state and on IFToMM A02 (N = 1, 40) at
+//! its initial state: the Jacobian's cost in right-hand sides is the ratio of the two.
 
 // criterion_group! defines an undocumented public function.
 #![allow(missing_docs)]
@@ -50,5 +53,44 @@ fn jacobian(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, rhs, jacobian);
+fn formulation(c: &mut Criterion) {
+    use lash_model::{iftomm::n_four_bar, FormulationName, Mechanism};
+    let mut group = c.benchmark_group("formulation");
+    group.measurement_time(Duration::from_secs(2));
+    group.warm_up_time(Duration::from_millis(500));
+    let dry = press("dry_150rpm_c0.1", 2.0);
+    let (contact, _) = contact_and_free_states(&dry);
+    let mut cases = vec![(
+        "dry_press",
+        dry.scene().clone(),
+        contact.t,
+        contact.y.clone(),
+    )];
+    for n in [1, 40] {
+        let scene = n_four_bar(n, 20.0).0;
+        let y0 = Mechanism::from_scene(&scene).unwrap().initial_state();
+        cases.push((if n == 1 { "a02_n1" } else { "a02_n40" }, scene, 0.0, y0));
+    }
+    for (name, scene, t, y) in cases {
+        for f in FormulationName::ALL {
+            let mut s = scene.clone();
+            s.formulation = f;
+            let Ok(m) = Mechanism::from_scene(&s) else {
+                continue;
+            };
+            let n = m.dim();
+            let mut dy = vec![0.0; n];
+            let mut jac = Mat::<f64>::zeros(n, n);
+            group.bench_function(format!("{name}/{f}/rhs"), |b| {
+                b.iter(|| m.rhs(black_box(t), black_box(&y), black_box(&mut dy)))
+            });
+            group.bench_function(format!("{name}/{f}/jacobian"), |b| {
+                b.iter(|| m.jacobian(black_box(t), black_box(&y), jac.as_mut()))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, rhs, jacobian, formulation);
 criterion_main!(benches);

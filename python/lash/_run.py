@@ -226,6 +226,7 @@ def run(
     output_every: Optional[float] = None,
     name: str = "scene",
     max_memory: Optional[int] = None,
+    formulation: Optional[str] = None,
 ) -> Run:
     """Run a scene as ``lash run`` does and return its results in memory.
 
@@ -267,6 +268,10 @@ def run(
     output_every : float, optional
         ``--output-every``: time between trajectory rows, s (any scene); not together with
         ``samples_per_revolution``. Keyword only.
+    formulation : str, optional
+        ``--formulation``: ``"lagrange_baumgarte"`` or ``"augmented_lagrangian"``
+        (docs/model.md §12), over the scene's own ``formulation``. Recorded in
+        ``summary["formulation"]``. Keyword only.
     name : str, optional
         The case name recorded in the summary for a dict scene (``lash run`` records a
         file's stem); its ``scene_sha256`` is the sha256 of the JSON text the dict is
@@ -369,11 +374,16 @@ def run(
         raise UsageError("samples_per_revolution and output_every exclude each other: give "
                          "one")
 
+    if formulation is not None and formulation not in ("lagrange_baumgarte",
+                                                       "augmented_lagrangian"):
+        raise UsageError(f"unknown formulation {formulation!r}; lash's formulations are "
+                         "lagrange_baumgarte, augmented_lagrangian")
     raw = _lash.run_core(dict(
         path=path, text=text, name=name, method=method, rtol=rtol, atol=atol_list,
         controller=controller, step=step, t_end=t_end,
         samples_per_revolution=samples_per_revolution, output_every=output_every,
-        max_wall_time=max_wall_time, max_steps=max_steps, max_memory=max_memory))
+        max_wall_time=max_wall_time, max_steps=max_steps, max_memory=max_memory,
+        formulation=formulation))
 
     summary = json.loads(raw["summary"])
     rows = raw["rows"]

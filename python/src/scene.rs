@@ -132,7 +132,7 @@ fn events<'py>(
 ///   controller, step,
 ///   max_steps, max_wall_time,
 ///   max_memory
-/// t_end, samples_per_revolution, output_every  → RunOptions
+/// t_end, samples_per_revolution, output_every, formulation  → RunOptions
 /// ```
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
@@ -165,6 +165,8 @@ pub struct RunArgs {
     pub max_steps: Option<usize>,
     /// Memory budget of the implicit methods' dense matrices, bytes.
     pub max_memory: Option<u64>,
+    /// The formulation over the scene's, or None (docs/model.md §12).
+    pub formulation: Option<String>,
 }
 
 /// How often the calling thread looks for a pending signal while the engine runs.
@@ -251,6 +253,13 @@ pub fn run_core<'py>(py: Python<'py>, args: RunArgs) -> PyResult<Bound<'py, PyDi
 
 /// The body of [`run_core`] (inside its panic guard).
 fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
+    let formulation = match a.formulation.as_deref() {
+        None => None,
+        Some(f) => Some(
+            f.parse::<lash_validation::FormulationName>()
+                .map_err(|e| usage_error(py, &e))?,
+        ),
+    };
     let method = match a.method.as_deref() {
         None => None,
         Some(m) => Some(
@@ -286,6 +295,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
         output_every: a.output_every,
         out: None,
         until_periodic: None,
+        formulation,
     };
     let (path, text, name) = (a.path, a.text, a.name);
     let outcome: Result<Ran, Error> = run_watched(py, "lash.run", move || {

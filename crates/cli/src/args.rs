@@ -240,6 +240,15 @@ pub struct RunArgs {
     /// DIR`; scenes only). Default: off.
     #[arg(long)]
     pub animate: bool,
+    /// How the constraints are enforced, over the scene's `formulation`:
+    /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
+    #[arg(long, value_name = "F", value_parser = parse_formulation)]
+    pub formulation: Option<lash_validation::FormulationName>,
+}
+
+/// Parses --formulation.
+fn parse_formulation(s: &str) -> Result<lash_validation::FormulationName, String> {
+    s.parse()
 }
 
 impl RunArgs {
@@ -256,6 +265,7 @@ impl RunArgs {
                 tol,
                 max_revolutions: self.max_revolutions.unwrap_or(DEFAULT_MAX_REVOLUTIONS),
             }),
+            formulation: self.formulation,
         }
     }
 }
@@ -630,6 +640,8 @@ impl PoincareArgs {
 ///
 /// Source: clap's error kinds DisplayHelp, DisplayVersion.
 #[derive(Debug)]
+// Built once per process: the size of the larger variant costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 pub enum Parsed {
     /// A command to execute (boxed: far larger than the text).
     Cli(Box<Cli>),

@@ -215,6 +215,39 @@ pub(crate) fn check_rank(mech: &Mechanism, rows: &[Row], jac: &Mat<f64>) -> Resu
     Ok(())
 }
 
+/// For a formulation that accepts redundant equations (the augmented Lagrangian), a failed
+/// Newton iteration cannot be told from redundancy by the rank: the error names every joint
+/// whose equation is left unmet (|Φ| > 1e3 · POS_TOL) at the last iterate, largest first —
+/// the equations that contradict each other (or a guess too far from any assembly).
+fn contradictory(mech: &Mechanism, rows: &[Row], phi: &[f64]) -> Result<(), SceneError> {
+    let mut unmet: Vec<(usize, f64)> = phi
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.abs() > 1e3 * POS_TOL)
+        .map(|(i, v)| (i, v.abs()))
+        .collect();
+    unmet.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let Some(&(first, _)) = unmet.first() else {
+        return Ok(());
+    };
+    let mut joints: Vec<String> = Vec::new();
+    for &(i, v) in &unmet {
+        let name = format!("{} (residual {v:.3e})", describe(&rows[i], mech.scene()));
+        if !joints.contains(&name) {
+            joints.push(name);
+        }
+    }
+    Err(SceneError::Assembly {
+        path: format!("joints[{}]", rows[first].joint),
+        reason: format!(
+            "contradictory constraints: no pose meets all {} equations from the scene's \
+             guesses; left unmet after the Newton iteration: {}",
+            rows.len(),
+            joints.join("; ")
+        ),
+    })
+}
+
 /// The report of what assembly changed: `given` and `assembled` states (q, q̇).
 fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
     let nq = mech.nq();
@@ -285,7 +318,11 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         })
     };
     let fail = |mech: &Mechanism, phi: &[f64], jac: &Mat<f64>, what: &str, iters: usize| {
-        check_rank(mech, &rows, jac)?;
+        if mech.formulation().needs_full_rank() {
+            check_rank(mech, &rows, jac)?;
+        } else {
+            contradictory(mech, &rows, phi)?;
+        }
         let (i, v) = worst(phi);
         let (path, name) = row_name(mech, &rows[i]);
         Err(SceneError::Assembly {

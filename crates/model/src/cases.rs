@@ -238,6 +238,8 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         revolutions: Some(2.0),
         roles,
         kink_events: false,
+        formulation: Default::default(),
+        augmented_lagrangian: Default::default(),
     }
 }
 

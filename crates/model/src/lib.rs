@@ -18,6 +18,8 @@
 //!   formulation (the state layout and the acceleration solve), events.
 //! - [`outputs`]: named outputs, energy terms, the closed-form ideal slider-crank.
 //! - [`cases`]: generators of the paper's press scenes (`cases/press/`).
+//! - [`iftomm`]: generators of the benchmark scenes of `cases/iftomm/` (IFToMM A01, A02,
+//!   parallel cranks) and their one-degree-of-freedom references.
 //!
 //! # Layers
 //!
@@ -34,7 +36,7 @@
 //! 6  scene::{format, validate, parse}; scene (the public facade)
 //! 7  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
 //! 8  mechanism (the struct, its views and its evaluation)
-//! 9  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases
+//! 9  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases, iftomm
 //! ```
 //! Inside the crate, parts name the scene's submodules (`scene::format`, `scene::refs`, …),
 //! never the facade `scene`, which re-exports them for users.
@@ -84,6 +86,7 @@ mod assembly;
 pub mod cases;
 pub mod clearance;
 pub mod elements;
+pub mod iftomm;
 mod initial_check;
 mod jacobian;
 mod labels;
@@ -98,6 +101,7 @@ pub mod scene;
 pub use clearance::{geometry, laws};
 pub use labels::{Column, EventLabels};
 pub use mechanism::events::event_label;
+pub use mechanism::formulation::augmented_lagrangian::FormulationStats;
 pub use mechanism::Mechanism;
 pub use outputs::{
     BodyOutput, ClearanceOutput, ElementOutput, IdealSliderCrank, Outputs, PointKinematics,
@@ -105,4 +109,4 @@ pub use outputs::{
 };
 pub use projection::{CoordinateChange, ProjectionReport};
 pub use roles::Roles;
-pub use scene::{Scene, SceneError, GROUND};
+pub use scene::{AugmentedLagrangianParams, FormulationName, Scene, SceneError, GROUND};

@@ -6,7 +6,8 @@
 //! 3 constrain       Constraints::build: the equations of the other joints (a joint acting
 //!                   only on prescribed bodies is an error)
 //! 4 forces          Forces::build: clearance joints and force elements, compiled
-//! 5 formulate       the formulation's structure (Lagrange–Baumgarte: the shape of S)
+//! 5 formulate       the scene's formulation and its structure (Lagrange–Baumgarte: the
+//!                   shape of S; augmented Lagrangian: the envelope of M + Φ_qᵀαΦ_q)
 //! 6 lay out         events, buffers, roles, the end time
 //! 7 assemble        assembly.rs: a consistent initial state, the rank check; then the
 //!                   elements' defaults of that state (a spring's free length)
@@ -19,12 +20,12 @@ use crate::mechanism::bodies::Bodies;
 use crate::mechanism::constraints::Constraints;
 use crate::mechanism::events::event_list;
 use crate::mechanism::forces::Forces;
-use crate::mechanism::formulation::{Formulation, LagrangeBaumgarte};
+use crate::mechanism::formulation::{AugmentedLagrangian, Formulation, LagrangeBaumgarte};
 use crate::mechanism::scratch::Scratch;
 use crate::mechanism::Mechanism;
 use crate::roles::Roles;
 use crate::scene::error::SceneError;
-use crate::scene::format::Scene;
+use crate::scene::format::{FormulationName, Scene};
 
 impl Mechanism {
     /// Validates the scene, finds the prescribed bodies, builds the constraint equations,
@@ -38,11 +39,14 @@ impl Mechanism {
         let bodies = Bodies::prescribe(scene);
         let constraints = Constraints::build(scene, &bodies)?;
         let forces = Forces::build(scene);
-        let formulation = Formulation::LagrangeBaumgarte(LagrangeBaumgarte::new(
-            &constraints,
-            &bodies,
-            scene.baumgarte,
-        ));
+        let formulation = match scene.formulation {
+            FormulationName::LagrangeBaumgarte => Formulation::LagrangeBaumgarte(
+                LagrangeBaumgarte::new(&constraints, &bodies, scene.baumgarte),
+            ),
+            FormulationName::AugmentedLagrangian => Formulation::AugmentedLagrangian(
+                AugmentedLagrangian::new(&constraints, &bodies, scene.augmented_lagrangian),
+            ),
+        };
         let mut mech = Mechanism::laid_out(scene, bodies, constraints, forces, formulation);
         mech.assemble()?;
         crate::initial_check::check(&mech)?;

@@ -39,7 +39,7 @@ use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::Constraints;
 use crate::mechanism::events::EventKind;
 use crate::mechanism::forces::{ForceJacWork, Forces};
-use crate::mechanism::formulation::Formulation;
+use crate::mechanism::formulation::{Formulation, FormulationStats};
 use crate::mechanism::scratch::Scratch;
 use crate::planar::{cross, perp, rot};
 use crate::projection::ProjectionReport;
@@ -126,9 +126,22 @@ impl Mechanism {
         &self.roles
     }
 
-    /// The name of the formulation (mechanism/formulation): `lagrange_baumgarte`.
+    /// The name of the formulation (mechanism/formulation): `lagrange_baumgarte` or
+    /// `augmented_lagrangian`.
     pub fn formulation_name(&self) -> &'static str {
         self.formulation.name()
+    }
+
+    /// The iteration statistics of the formulation since the mechanism was built or the last
+    /// [`Mechanism::reset_formulation_stats`]; None for one that does not iterate
+    /// (`lagrange_baumgarte`).
+    pub fn formulation_stats(&self) -> Option<FormulationStats> {
+        self.formulation.stats()
+    }
+
+    /// Sets the formulation's iteration statistics back to zero (before a run).
+    pub fn reset_formulation_stats(&self) {
+        self.formulation.reset_stats();
     }
 
     /// ω (rad/s) of the `crank_driver` role, if declared.

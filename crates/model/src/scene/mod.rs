@@ -31,7 +31,7 @@ pub use check::{MAX_MAGNITUDE, MIN_MAGNITUDE};
 pub use de::NoData;
 pub use error::SceneError;
 pub use format::{
-    Baumgarte, BodySpec, DriverSpec, InitialVelocity, JointSpec, RevoluteSpec, RoleNames, Scene,
-    TranslationalSpec,
+    AugmentedLagrangianParams, Baumgarte, BodySpec, DriverSpec, FormulationName, InitialVelocity,
+    JointSpec, RevoluteSpec, RoleNames, Scene, TranslationalSpec,
 };
 pub use refs::{Attachment, GROUND};

@@ -138,6 +138,23 @@ impl Scene {
         C::finite2("gravity", self.gravity)?;
         C::non_negative("baumgarte.alpha", self.baumgarte.alpha, "alpha")?;
         C::non_negative("baumgarte.beta", self.baumgarte.beta, "beta")?;
+        let al = &self.augmented_lagrangian;
+        C::positive("augmented_lagrangian.penalty", al.penalty, "penalty")?;
+        C::non_negative("augmented_lagrangian.xi", al.xi, "xi")?;
+        C::non_negative("augmented_lagrangian.omega", al.omega, "omega")?;
+        C::positive("augmented_lagrangian.tol", al.tol, "tol")?;
+        if !(al.tol < 1.0) {
+            return Err(invalid(
+                "augmented_lagrangian.tol",
+                format!("tol = {} must be below 1 (a relative change of q̈)", al.tol),
+            ));
+        }
+        if al.max_iterations == 0 {
+            return Err(invalid(
+                "augmented_lagrangian.max_iterations",
+                "at least one iteration",
+            ));
+        }
         C::finite("t_start", self.t_start)
     }
 

@@ -59,6 +59,8 @@ pub struct RunOptions {
     /// Run until the clearance joint's once-per-revolution section settles
     /// (crate::run::steady); excludes `t_end`.
     pub until_periodic: Option<crate::run::steady::UntilPeriodic>,
+    /// The formulation over the scene's own (scene cases only; docs/model.md §12).
+    pub formulation: Option<lash_model::FormulationName>,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -174,7 +176,10 @@ fn run_request(
     Error,
 > {
     o.solver.apply(&SolverOptions::default())?;
-    let prepared = Prepared::load(case)?;
+    let mut prepared = Prepared::load(case)?;
+    if let Some(f) = o.formulation {
+        prepared = prepared.with_formulation(f)?;
+    }
     let opts = prepared.options(&o.solver)?;
     let settled = match &o.until_periodic {
         Some(u) => {
@@ -260,6 +265,16 @@ pub fn describe_run(r: &RunResult) -> String {
     );
     if let Some(e) = s.reference_error {
         out.push_str(&format!("  reference error {e:.3e}\n"));
+    }
+    if let Some(f) = &s.formulation {
+        out.push_str(&format!("  formulation: {f}"));
+        if let Some(st) = &s.formulation_stats {
+            out.push_str(&format!(
+                " ({} evaluations, {} iterations, at most {} in one, {} unconverged)",
+                st.evaluations, st.iterations, st.max_iterations, st.unconverged
+            ));
+        }
+        out.push('\n');
     }
     if let Some(u) = &s.until_periodic {
         out.push_str(&format!("  {}\n", u.describe()));

@@ -123,6 +123,15 @@ pub struct Summary {
     /// whether the section settled, its change per revolution (`run::steady`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub until_periodic: Option<Settled>,
+    /// The formulation of a mechanism case (`lagrange_baumgarte`, `augmented_lagrangian`;
+    /// docs/model.md §12); absent for built-in test problems.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<String>,
+    /// The formulation's iteration statistics over the run (the augmented Lagrangian's:
+    /// evaluations, iterations, max_iterations, unconverged); absent for one that does not
+    /// iterate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation_stats: Option<lash_model::FormulationStats>,
 }
 
 impl Summary {
@@ -154,6 +163,8 @@ impl Summary {
             final_state: None,
             reference_error: None,
             until_periodic: None,
+            formulation: None,
+            formulation_stats: None,
         }
     }
 

@@ -254,6 +254,7 @@ pub(crate) fn simulate_mechanism(
     let tgrid = plan_run(p, req, t0, t_end)?;
     options_within(req, t0, &[])?;
     let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
+    mech.reset_formulation_stats();
     let opts = &options_within(req, t0, &mech.initial_state())?;
     let sampler = Sampler::new(&mech, scene);
     let window = p.metrics_window(t0, t_end);
@@ -358,6 +359,8 @@ pub(crate) fn simulate_mechanism(
     )?;
     let mut summary = d.summary(p, opts, t_end);
     summary.metrics = Some(metrics);
+    summary.formulation = Some(mech.formulation_name().to_string());
+    summary.formulation_stats = mech.formulation_stats();
     Ok(RunResult {
         summary,
         window: std::mem::take(&mut obs.window),

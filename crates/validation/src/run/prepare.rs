@@ -227,6 +227,25 @@ impl Prepared {
         })
     }
 
+    /// The same case with its scene's formulation replaced by `f` (docs/model.md §12); an
+    /// input error for a built-in test problem, which has no constraints.
+    pub(crate) fn with_formulation(
+        self,
+        f: lash_model::FormulationName,
+    ) -> Result<Prepared, Error> {
+        match self.scene() {
+            Some(s) => {
+                let mut scene = s.clone();
+                scene.formulation = f;
+                Prepared::with_scene(self.case, scene)
+            }
+            None => Err(Error::Input(format!(
+                "formulation {f}: {} is a built-in test problem, not a scene",
+                self.case.name
+            ))),
+        }
+    }
+
     /// The scene, for mechanism cases.
     pub(crate) fn scene(&self) -> Option<&Scene> {
         match &self.model {

@@ -48,8 +48,11 @@
 //! `state_of`, its `jacobian` chaining dg through ∂(q, q̇)/∂(θ, θ̇). Neither touches the
 //! clearance joints, the force elements or the outputs.
 //!
-//! Only `lagrange_baumgarte` exists today.
+//! `lagrange_baumgarte` (the default) and `augmented_lagrangian` exist today; the latter's
+//! core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a reduced system's
+//! included.
 
+pub(crate) mod augmented_lagrangian;
 pub(crate) mod lagrange_baumgarte;
 
 use faer::MatMut;
@@ -60,6 +63,7 @@ use crate::mechanism::scratch::Scratch;
 use crate::scene::error::SceneError;
 use crate::scene::format::Scene;
 
+pub(crate) use augmented_lagrangian::{AugmentedLagrangian, FormulationStats};
 pub(crate) use lagrange_baumgarte::LagrangeBaumgarte;
 
 /// The formulation of a mechanism (module doc).
@@ -67,6 +71,8 @@ pub(crate) use lagrange_baumgarte::LagrangeBaumgarte;
 pub(crate) enum Formulation {
     /// Lagrange multipliers with Baumgarte stabilisation (docs/model.md §1.3–§1.5).
     LagrangeBaumgarte(LagrangeBaumgarte),
+    /// The augmented Lagrangian (augmented_lagrangian/, docs/model.md §12).
+    AugmentedLagrangian(AugmentedLagrangian),
 }
 
 impl Formulation {
@@ -74,13 +80,16 @@ impl Formulation {
     pub(crate) fn name(&self) -> &'static str {
         match self {
             Formulation::LagrangeBaumgarte(_) => "lagrange_baumgarte",
+            Formulation::AugmentedLagrangian(_) => "augmented_lagrangian",
         }
     }
 
     /// Length of the state y.
     pub(crate) fn dim(&self, bodies: &Bodies) -> usize {
         match self {
-            Formulation::LagrangeBaumgarte(_) => 2 * bodies.nq(),
+            Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
+                2 * bodies.nq()
+            }
         }
     }
 
@@ -88,14 +97,18 @@ impl Formulation {
     #[inline]
     pub(crate) fn kinematics(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
         match self {
-            Formulation::LagrangeBaumgarte(_) => bodies.kinematics(t, y, sc),
+            Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
+                bodies.kinematics(t, y, sc)
+            }
         }
     }
 
     /// y of the absolute (q, q̇) of the integrated bodies.
     pub(crate) fn state_of(&self, y_abs: &[f64]) -> Vec<f64> {
         match self {
-            Formulation::LagrangeBaumgarte(_) => y_abs.to_vec(),
+            Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
+                y_abs.to_vec()
+            }
         }
     }
 
@@ -111,6 +124,7 @@ impl Formulation {
     ) -> bool {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.accelerations(t, cons, info, sc, full),
+            Formulation::AugmentedLagrangian(f) => f.accelerations(t, cons, info, sc),
         }
     }
 
@@ -118,7 +132,7 @@ impl Formulation {
     #[inline]
     pub(crate) fn derivative(&self, y: &[f64], qdd: &[f64], ok: bool, dy: &mut [f64]) {
         match self {
-            Formulation::LagrangeBaumgarte(_) => {
+            Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
                 let nq = qdd.len();
                 dy[..nq].copy_from_slice(&y[nq..2 * nq]);
                 if ok {
@@ -140,6 +154,7 @@ impl Formulation {
     ) {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.jacobian(cons, sc, dg, jac),
+            Formulation::AugmentedLagrangian(f) => f.jacobian(cons, sc, dg, jac),
         }
     }
 
@@ -153,6 +168,7 @@ impl Formulation {
     ) {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.reactions(cons, cf, torques),
+            Formulation::AugmentedLagrangian(f) => f.reactions(cons, cf, torques),
         }
     }
 
@@ -160,6 +176,7 @@ impl Formulation {
     pub(crate) fn constraint_violation(&self) -> f64 {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.constraint_violation(),
+            Formulation::AugmentedLagrangian(f) => f.constraint_violation(),
         }
     }
 
@@ -167,6 +184,22 @@ impl Formulation {
     pub(crate) fn needs_full_rank(&self) -> bool {
         match self {
             Formulation::LagrangeBaumgarte(_) => true,
+            Formulation::AugmentedLagrangian(_) => false,
+        }
+    }
+
+    /// Iteration statistics (None for a formulation that does not iterate).
+    pub(crate) fn stats(&self) -> Option<FormulationStats> {
+        match self {
+            Formulation::LagrangeBaumgarte(_) => None,
+            Formulation::AugmentedLagrangian(f) => Some(f.stats()),
+        }
+    }
+
+    /// Sets the iteration statistics back to zero.
+    pub(crate) fn reset_stats(&self) {
+        if let Formulation::AugmentedLagrangian(f) = self {
+            f.reset_stats();
         }
     }
 
@@ -179,6 +212,8 @@ impl Formulation {
     ) -> Result<(), SceneError> {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.check_point_mobility(scene, cons, info),
+            // M + Φ_qᵀαΦ_q is positive definite at every angle: no mobility bound.
+            Formulation::AugmentedLagrangian(_) => Ok(()),
         }
     }
 
@@ -194,6 +229,7 @@ impl Formulation {
     ) -> Result<(), SceneError> {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.check_equations(t, scene, cons, info, sc),
+            Formulation::AugmentedLagrangian(f) => f.check_equations(t, scene, cons, info, sc),
         }
     }
 }

@@ -188,7 +188,9 @@ mod tests {
 
     /// The pivot ratios of S at the mechanism's initial state, and its first weak pivot.
     fn pivots(mech: &Mechanism) -> (Vec<f64>, Option<(usize, f64)>) {
-        let Formulation::LagrangeBaumgarte(f) = mech.formulation();
+        let Formulation::LagrangeBaumgarte(f) = mech.formulation() else {
+            unreachable!("the default formulation")
+        };
         let sc = mech.evaluated(0.0, &mech.initial_state()).unwrap();
         let mut w = Work::new(mech.constraints().len(), f.nq);
         f.constraint_rows(0.0, mech.constraints(), mech.body_info(), &sc, &mut w, true);

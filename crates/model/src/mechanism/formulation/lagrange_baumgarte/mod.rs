@@ -321,7 +321,9 @@ mod tests {
     #[test]
     fn schur_complement_equals_the_full_kkt_solve() {
         let m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
-        let Formulation::LagrangeBaumgarte(f) = m.formulation();
+        let Formulation::LagrangeBaumgarte(f) = m.formulation() else {
+            unreachable!("the default formulation")
+        };
         let nq = m.nq();
         let nc = m.constraints().len();
         // A perturbed state: off the constraint manifold, in contact, moving.

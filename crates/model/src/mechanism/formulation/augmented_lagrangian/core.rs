@@ -1,0 +1,385 @@
+//! The augmented Lagrangian solve on any (M, Φ_q, c): absolute coordinates or a reduced
+//! (joint-coordinate) system alike. Nothing here knows about bodies or joints.
+//!
+//! ```text
+//! find q̈ with  M q̈ + Φ_qᵀ λ = f,   Φ_q q̈ = c      (c = γ − 2ξωΦ̇ − ω²Φ in an ODE)
+//! A = M + α Φ_qᵀ Φ_q   (symmetric positive definite for any Φ_q, M > 0)
+//! λ₀ = 0;  A q̈ₖ₊₁ = f − Φ_qᵀ λₖ + α Φ_qᵀ c,   λₖ₊₁ = λₖ + α (Φ_q q̈ₖ₊₁ − c)
+//! stop when max|q̈ₖ₊₁ − q̈ₖ| ≤ tol · max|q̈ₖ₊₁|  (k ≥ 1)
+//! ```
+//! When Φ_q q̈ = c can be met (full row rank, or redundant rows with consistent c), the iterates
+//! converge to the q̈ of the KKT system — with redundant rows to its unique q̈ and to one of
+//! its multipliers — and the error in the constraint space shrinks by about
+//! 1/(1 + α σ) per iteration, σ the smallest nonzero eigenvalue of Φ_q M⁻¹ Φ_qᵀ (Bayo &
+//! Ledesma, Nonlinear Dynamics 9 (1996) 113–130; García de Jalón & Bayo, Kinematic and Dynamic
+//! Simulation of Multibody Systems, 1994, §5.3). When it cannot (c outside the range of Φ_q:
+//! a singular configuration with a nonzero stabilisation term), λ grows in the null space of
+//! Φ_qᵀ, which q̈ does not see: q̈ still converges, to the least-squares compromise.
+//!
+//! A is stored dense (row-major, n × n) but only its envelope — from the first nonzero of
+//! each row to the diagonal, fixed by the sparsity of M and Φ_q — is written, factored and
+//! read: the Cholesky factor of a matrix has no fill outside its envelope (George & Liu,
+//! Computer Solution of Large Sparse Positive Definite Systems, 1981, §4.2). A chain of bodies
+//! numbered along the chain (the N-four-bar) is then banded and costs O(n b²).
+
+/// A sparse constraint Jacobian by rows (compressed sparse rows; repeated columns add up).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SparseRows {
+    /// Row r's entries are `start[r]..start[r + 1]`.
+    pub start: Vec<usize>,
+    /// Column of each entry.
+    pub col: Vec<usize>,
+    /// Value of each entry.
+    pub val: Vec<f64>,
+}
+
+impl SparseRows {
+    /// Number of rows.
+    pub(crate) fn rows(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    /// out = Φ_q x.
+    #[inline]
+    pub(crate) fn mul(&self, x: &[f64], out: &mut [f64]) {
+        for (r, o) in out.iter_mut().enumerate().take(self.rows()) {
+            let mut s = 0.0;
+            for e in self.start[r]..self.start[r + 1] {
+                s += self.val[e] * x[self.col[e]];
+            }
+            *o = s;
+        }
+    }
+
+    /// out += Φ_qᵀ v.
+    #[inline]
+    pub(crate) fn mul_t_add(&self, v: &[f64], out: &mut [f64]) {
+        for (r, &vr) in v.iter().enumerate().take(self.rows()) {
+            for e in self.start[r]..self.start[r + 1] {
+                out[self.col[e]] += self.val[e] * vr;
+            }
+        }
+    }
+}
+
+/// The mass matrix given to [`AlCore::assemble`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Mass<'a> {
+    /// Diagonal (absolute coordinates: m, m, I of every body).
+    Diagonal(&'a [f64]),
+    /// Dense symmetric, n × n row-major (a reduced system); only its lower triangle inside
+    /// the envelope is read. (The absolute coordinates use `Diagonal`; this is the door for a
+    /// reduced system's loop closures, issue 26.)
+    #[cfg_attr(not(test), allow(dead_code))]
+    Dense(&'a [f64]),
+}
+
+/// What one solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Iterations {
+    /// Solves with the factor of A (iterations of the multipliers).
+    pub count: usize,
+    /// Whether the change of q̈ fell below the tolerance.
+    pub converged: bool,
+}
+
+/// The leading matrix A = M + αΦ_qᵀΦ_q, its factor, and the multiplier iteration.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct AlCore {
+    n: usize,
+    /// α (the penalty, in the units that make αΦ_qᵀΦ_q comparable with M).
+    pub alpha: f64,
+    /// Relative tolerance on the change of q̈.
+    pub tol: f64,
+    /// Most iterations of one solve.
+    pub max_iter: usize,
+    /// First column of the envelope of each row of A.
+    first: Vec<usize>,
+    /// A, then its factor: strict lower triangle L, diagonal 1/L_jj (within the envelope).
+    a: Vec<f64>,
+    /// Scratch: the right-hand side and the previous iterate.
+    b: Vec<f64>,
+    prev: Vec<f64>,
+    res: Vec<f64>,
+}
+
+impl AlCore {
+    /// The structure for n coordinates: the envelope of M (`dense_mass`: full lower triangle;
+    /// else diagonal) together with that of Φ_qᵀΦ_q for the sparsity pattern of `phi`.
+    pub(crate) fn new(
+        n: usize,
+        dense_mass: bool,
+        phi: &SparseRows,
+        alpha: f64,
+        tol: f64,
+        max_iter: usize,
+    ) -> AlCore {
+        let mut first: Vec<usize> = if dense_mass {
+            vec![0; n]
+        } else {
+            (0..n).collect()
+        };
+        for r in 0..phi.rows() {
+            let cols = &phi.col[phi.start[r]..phi.start[r + 1]];
+            if let Some(&lo) = cols.iter().min() {
+                for &c in cols {
+                    first[c] = first[c].min(lo);
+                }
+            }
+        }
+        AlCore {
+            n,
+            alpha,
+            tol,
+            max_iter,
+            first,
+            a: vec![0.0; n * n],
+            b: vec![0.0; n],
+            prev: vec![0.0; n],
+            res: vec![0.0; phi.rows()],
+        }
+    }
+
+    /// A = M + αΦ_qᵀΦ_q (lower triangle, within the envelope).
+    pub(crate) fn assemble(&mut self, mass: Mass<'_>, phi: &SparseRows) {
+        let n = self.n;
+        for i in 0..n {
+            self.a[i * n + self.first[i]..i * n + i + 1].fill(0.0);
+        }
+        match mass {
+            Mass::Diagonal(d) => {
+                for i in 0..n {
+                    self.a[i * n + i] = d[i];
+                }
+            }
+            Mass::Dense(m) => {
+                for i in 0..n {
+                    for j in self.first[i]..=i {
+                        self.a[i * n + j] = m[i * n + j];
+                    }
+                }
+            }
+        }
+        let alpha = self.alpha;
+        for r in 0..phi.rows() {
+            let range = phi.start[r]..phi.start[r + 1];
+            for e in range.clone() {
+                let (ci, vi) = (phi.col[e], alpha * phi.val[e]);
+                for f in range.clone() {
+                    let cj = phi.col[f];
+                    if cj <= ci {
+                        self.a[ci * n + cj] += vi * phi.val[f];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Cholesky factorisation of A in place (envelope only). `Err(j)`: the pivot of row j is
+    /// not a positive number (A is not positive definite in f64: M is not, or α overflows).
+    pub(crate) fn factor(&mut self) -> Result<(), usize> {
+        let n = self.n;
+        let a = &mut self.a;
+        for i in 0..n {
+            let fi = self.first[i];
+            for j in fi..i {
+                let fj = self.first[j].max(fi);
+                let mut s = a[i * n + j];
+                for k in fj..j {
+                    s -= a[i * n + k] * a[j * n + k];
+                }
+                a[i * n + j] = s * a[j * n + j];
+            }
+            let mut d = a[i * n + i];
+            for k in fi..i {
+                d -= a[i * n + k] * a[i * n + k];
+            }
+            if !(d > 0.0) {
+                return Err(i);
+            }
+            a[i * n + i] = 1.0 / d.sqrt();
+        }
+        Ok(())
+    }
+
+    /// Solves A x = b in place with the factor.
+    #[inline]
+    pub(crate) fn apply_inverse(&self, x: &mut [f64]) {
+        let n = self.n;
+        let a = &self.a;
+        for i in 0..n {
+            let fi = self.first[i];
+            let mut s = x[i];
+            for k in fi..i {
+                s -= a[i * n + k] * x[k];
+            }
+            x[i] = s * a[i * n + i];
+        }
+        for i in (0..n).rev() {
+            let v = x[i] * a[i * n + i];
+            x[i] = v;
+            let fi = self.first[i];
+            for k in fi..i {
+                x[k] -= a[i * n + k] * v;
+            }
+        }
+    }
+
+    /// The multiplier iteration (module doc) after [`AlCore::factor`]: q̈ into `x`, the
+    /// multipliers into `lam` (which it starts from: zero for a right-hand side, so that q̈
+    /// is a function of (t, y) alone).
+    pub(crate) fn solve(
+        &mut self,
+        phi: &SparseRows,
+        f: &[f64],
+        c: &[f64],
+        lam: &mut [f64],
+        x: &mut [f64],
+    ) -> Iterations {
+        let n = self.n;
+        let alpha = self.alpha;
+        let mut b = std::mem::take(&mut self.b);
+        let mut prev = std::mem::take(&mut self.prev);
+        let mut res = std::mem::take(&mut self.res);
+        let mut out = Iterations::default();
+        for k in 1..=self.max_iter {
+            // b = f + Φ_qᵀ (α c − λ).
+            b[..n].copy_from_slice(&f[..n]);
+            for ((r, &ci), &li) in res.iter_mut().zip(c).zip(lam.iter()) {
+                *r = alpha * ci - li;
+            }
+            phi.mul_t_add(&res, &mut b);
+            self.apply_inverse(&mut b);
+            // λ += α (Φ_q q̈ − c).
+            phi.mul(&b, &mut res);
+            for ((l, &r), &ci) in lam.iter_mut().zip(&res).zip(c) {
+                *l += alpha * (r - ci);
+            }
+            out.count = k;
+            if k > 1 {
+                let mut diff = 0.0f64;
+                let mut size = 0.0f64;
+                for (bi, pi) in b[..n].iter().zip(&prev[..n]) {
+                    diff = diff.max((bi - pi).abs());
+                    size = size.max(bi.abs());
+                }
+                if diff <= self.tol * size {
+                    out.converged = true;
+                    prev[..n].copy_from_slice(&b[..n]);
+                    break;
+                }
+            }
+            prev[..n].copy_from_slice(&b[..n]);
+        }
+        x[..n].copy_from_slice(&prev[..n]);
+        self.b = b;
+        self.prev = prev;
+        self.res = res;
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three unit masses on a line (coordinates x₀, x₁, x₂), M = diag(1, 2, 3).
+    fn rows(entries: &[&[(usize, f64)]]) -> SparseRows {
+        let mut s = SparseRows {
+            start: vec![0],
+            ..Default::default()
+        };
+        for r in entries {
+            for &(c, v) in *r {
+                s.col.push(c);
+                s.val.push(v);
+            }
+            s.start.push(s.col.len());
+        }
+        s
+    }
+
+    #[test]
+    fn redundant_consistent_rows_give_the_kkt_acceleration() {
+        // Constraint x₀ − x₁ = 0 (accelerations: q̈₀ − q̈₁ = c), written twice (redundant).
+        // KKT with one row: q̈₀ = q̈₁ = a, (1 + 2) a = f₀ + f₁ + ... with c = 0:
+        // M q̈ + Φᵀλ = f, Φ q̈ = 0: a = (f₀ + f₁)/(m₀ + m₁); q̈₂ = f₂/m₂.
+        let phi = rows(&[&[(0, 1.0), (1, -1.0)], &[(0, 2.0), (1, -2.0)]]);
+        let mass = [1.0, 2.0, 3.0];
+        let mut core = AlCore::new(3, false, &phi, 1e2, 1e-15, 60);
+        core.assemble(Mass::Diagonal(&mass), &phi);
+        core.factor().unwrap();
+        let f = [3.0, -1.5, 6.0];
+        let (mut lam, mut x) = (vec![0.0; 2], vec![0.0; 3]);
+        let it = core.solve(&phi, &f, &[0.0, 0.0], &mut lam, &mut x);
+        assert!(it.converged && it.count <= 12, "{it:?}");
+        let a = (3.0 - 1.5) / 3.0;
+        for (got, want) in x.iter().zip([a, a, 2.0]) {
+            assert!((got - want).abs() < 1e-13, "{x:?}");
+        }
+        // The reaction Φᵀλ balances: m₀ a = f₀ − (λ₀ + 2λ₁).
+        assert!((1.0 * a - (3.0 - (lam[0] + 2.0 * lam[1]))).abs() < 1e-9);
+    }
+
+    #[test]
+    fn an_inconsistent_row_leaves_the_least_squares_acceleration_finite() {
+        // Φ = [1 −1 0] twice with c = (1, 3): no q̈ meets both; the iterates of q̈ still settle
+        // (λ grows along (2, −1)/√5, the null space of Φᵀ... here (1, 1) rows are equal: the
+        // null space of Φᵀ is (1, −1)) on q̈₀ − q̈₁ = 2, the mean of the targets.
+        let phi = rows(&[&[(0, 1.0), (1, -1.0)], &[(0, 1.0), (1, -1.0)]]);
+        let mass = [1.0, 1.0, 1.0];
+        let mut core = AlCore::new(3, false, &phi, 1e2, 1e-15, 60);
+        core.assemble(Mass::Diagonal(&mass), &phi);
+        core.factor().unwrap();
+        let (mut lam, mut x) = (vec![0.0; 2], vec![0.0; 3]);
+        let it = core.solve(&phi, &[0.0; 3], &[1.0, 3.0], &mut lam, &mut x);
+        assert!(it.converged, "{it:?}");
+        assert!((x[0] - x[1] - 2.0).abs() < 1e-12, "{x:?}");
+        assert!((x[0] + x[1]).abs() < 1e-12 && x[2] == 0.0, "{x:?}");
+    }
+
+    #[test]
+    fn the_envelope_factor_equals_the_dense_solve() {
+        // A chain: rows couple (0,1), (1,2), (2,3), (3,4); dense SPD mass on top. The
+        // envelope solve of A x = b against a solve of the dense A by faer.
+        let phi = rows(&[
+            &[(0, 1.0), (1, -0.5)],
+            &[(1, 1.0), (2, -1.0)],
+            &[(2, 0.3), (3, -1.0)],
+            &[(3, 1.0), (4, -2.0)],
+        ]);
+        let n = 5;
+        let mut mass = vec![0.0; n * n];
+        for i in 0..n {
+            mass[i * n + i] = 2.0 + i as f64;
+            if i > 0 {
+                mass[i * n + i - 1] = 0.4;
+                mass[(i - 1) * n + i] = 0.4;
+            }
+        }
+        let mut core = AlCore::new(n, false, &phi, 10.0, 1e-14, 30);
+        // The mass couples neighbours: inside the envelope of Φ_qᵀΦ_q already.
+        core.assemble(Mass::Dense(&mass), &phi);
+        let mut dense = faer::Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..n {
+                dense[(i, j)] = mass[i * n + j];
+            }
+        }
+        for r in 0..phi.rows() {
+            for e in phi.start[r]..phi.start[r + 1] {
+                for f in phi.start[r]..phi.start[r + 1] {
+                    dense[(phi.col[e], phi.col[f])] += 10.0 * phi.val[e] * phi.val[f];
+                }
+            }
+        }
+        core.factor().unwrap();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+        let mut x = b.clone();
+        core.apply_inverse(&mut x);
+        for i in 0..n {
+            let ax: f64 = (0..n).map(|j| dense[(i, j)] * x[j]).sum();
+            assert!((ax - b[i]).abs() < 1e-13, "row {i}: {ax} vs {}", b[i]);
+        }
+    }
+}
