@@ -243,11 +243,11 @@ pub struct RunArgs {
     /// How the constraints are enforced, over the scene's `formulation`:
     /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
-    pub formulation: Option<lash_validation::FormulationName>,
+    pub formulation: Option<lash_model::FormulationName>,
 }
 
 /// Parses --formulation.
-fn parse_formulation(s: &str) -> Result<lash_validation::FormulationName, String> {
+fn parse_formulation(s: &str) -> Result<lash_model::FormulationName, String> {
     s.parse()
 }
 

@@ -52,8 +52,6 @@ pub use commands::{
     viz::{animate, animate_in_memory, plot, AnimateOptions, Animated, PlotOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};
-/// The formulations a run can choose (`RunOptions::formulation`; docs/model.md §12).
-pub use lash_model::FormulationName;
 pub use options::SolverChoice;
 pub use progress::{NoProgress, Progress};
 pub use store::io::Written;

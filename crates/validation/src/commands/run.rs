@@ -59,7 +59,8 @@ pub struct RunOptions {
     /// Run until the clearance joint's once-per-revolution section settles
     /// (crate::run::steady); excludes `t_end`.
     pub until_periodic: Option<crate::run::steady::UntilPeriodic>,
-    /// The formulation over the scene's own (scene cases only; docs/model.md §12).
+    /// The formulation over the scene's own (scene cases only; docs/model.md §12): a
+    /// [`lash_model::FormulationName`], which front ends take from the model crate.
     pub formulation: Option<lash_model::FormulationName>,
 }
 

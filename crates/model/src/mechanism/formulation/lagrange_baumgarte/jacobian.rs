@@ -19,26 +19,9 @@ use faer::MatMut;
 
 use crate::linalg::{cholesky_solve, zeroed};
 use crate::mechanism::constraints::{Constraints, TermKind};
-use crate::mechanism::formulation::lagrange_baumgarte::{LagrangeBaumgarte, Work};
+use crate::mechanism::formulation::lagrange_baumgarte::{JacWork, LagrangeBaumgarte, Work};
 use crate::mechanism::scratch::Scratch;
 use crate::planar::{perp, rot};
-
-/// The buffers of [`LagrangeBaumgarte::jacobian`], kept with the formulation so that a
-/// Jacobian allocates nothing after the first (each is resized on use).
-#[derive(Debug, Default)]
-pub(crate) struct JacWork {
-    /// P = M⁻¹Φ_qᵀS⁻¹, nq × m row-major.
-    pmat: Vec<f64>,
-    /// S⁻¹, m × m.
-    sinv: Vec<f64>,
-    /// ∂r/∂q̇, m × nq row-major.
-    drdv: Vec<f64>,
-    /// The lower blocks of ∂f/∂y, nq × n column-major.
-    low: Vec<f64>,
-    /// m-vector scratch.
-    w: Vec<f64>,
-    w2: Vec<f64>,
-}
 
 impl LagrangeBaumgarte {
     /// The lower blocks of ∂f/∂y (y = (q, q̇), f = (q̇, q̈)) into `jac` (n × n, its upper

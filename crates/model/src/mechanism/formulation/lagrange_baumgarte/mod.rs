@@ -30,8 +30,6 @@ use crate::mechanism::constraints::{eval_row, Constraints};
 use crate::mechanism::scratch::Scratch;
 use crate::scene::format::Baumgarte;
 
-pub(crate) use jacobian::JacWork;
-
 /// One block product of the Schur complement S = Φ_q M⁻¹ Φ_qᵀ: term `ta` of row `a` and term
 /// `tb` of row `b` (a ≥ b) act on the same integrated body `i`, and add
 /// J_{a,ta} M_i⁻¹ J_{b,tb}ᵀ (3-vectors, M_i⁻¹ = diag(1/m, 1/m, 1/I)) to S_ab. Built once per
@@ -76,6 +74,23 @@ impl Work {
 }
 
 /// The formulation (module doc).
+/// The buffers of [`LagrangeBaumgarte::jacobian`], kept with the formulation so that a
+/// Jacobian allocates nothing after the first (each is resized on use).
+#[derive(Debug, Default)]
+pub(crate) struct JacWork {
+    /// P = M⁻¹Φ_qᵀS⁻¹, nq × m row-major.
+    pmat: Vec<f64>,
+    /// S⁻¹, m × m.
+    sinv: Vec<f64>,
+    /// ∂r/∂q̇, m × nq row-major.
+    drdv: Vec<f64>,
+    /// The lower blocks of ∂f/∂y, nq × n column-major.
+    low: Vec<f64>,
+    /// m-vector scratch.
+    w: Vec<f64>,
+    w2: Vec<f64>,
+}
+
 #[derive(Debug)]
 pub(crate) struct LagrangeBaumgarte {
     nq: usize,
