@@ -209,6 +209,14 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
                 }
             }
         }
+        // lib.rs's re-exports (`pub use room::…`) are imports of the rooms.
+        if m.is_empty() {
+            for l in text.split("pub use ").skip(1) {
+                for p in use_tree(l) {
+                    add(p);
+                }
+            }
+        }
         // Paths through a child module: `child::…`.
         for child in files
             .keys()
@@ -221,14 +229,6 @@ fn imports(files: &Files) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
                 rest = &rest[at + name.len()..];
                 if !before.is_some_and(|c| is_ident(c) || c == ':') {
                     to.insert(child.clone());
-                }
-            }
-        }
-        // lib.rs's re-exports (`pub use room::…`) are imports of the rooms.
-        if m.is_empty() {
-            for l in text.split("pub use ").skip(1) {
-                for p in use_tree(l) {
-                    add(p);
                 }
             }
         }
