@@ -460,3 +460,74 @@ fn sweep_runs_real_points_resumes_and_merges() {
     let s = json(&first[0].join("summary.json"));
     assert_eq!(s["case"], "lub_short");
 }
+
+/// `--max-wall-time` bounds every integration of the long commands (issue 22): a budget far
+/// below one step's cost ends each sweep point as a recorded solver failure ("budget
+/// exhausted"), and compare's reference as a solver failure (exit 3); a generous one changes
+/// nothing.
+#[test]
+fn long_commands_stop_each_integration_at_the_wall_time_budget() {
+    let d = tempfile::tempdir().unwrap();
+    short_press(d.path(), "lub", PressJoint::Lubricated, 1e-4, 0.02);
+    std::fs::write(
+        d.path().join("grid.json"),
+        r#"{"case": "lub.json", "method": ["bdf", "dopri54"]}"#,
+    )
+    .unwrap();
+    let o = lash(
+        &[
+            "sweep",
+            "grid.json",
+            "--out",
+            "s",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("2 solver failures"), "{err}");
+    for e in std::fs::read_dir(d.path().join("s")).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            let r = json(&p.join("result.json"));
+            assert_eq!(r["status"], "solver_failed", "{r}");
+            assert!(
+                r["error"].as_str().unwrap().contains("budget exhausted"),
+                "{r}"
+            );
+        }
+    }
+    ok(
+        &["sweep", "grid.json", "--out", "t", "--max-wall-time", "600"],
+        d.path(),
+    );
+    let o = lash(
+        &[
+            "compare",
+            "lub.json",
+            "--out",
+            "c",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("budget exhausted"), "{err}");
+    let o = lash(
+        &[
+            "work-precision",
+            "lub.json",
+            "--out",
+            "w",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("budget exhausted"), "{err}");
+}

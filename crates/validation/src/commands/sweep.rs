@@ -33,6 +33,9 @@ pub struct SweepRunOptions {
     pub shard: Option<Shard>,
     /// Output directory (one subdirectory per point); None = `out/sweep/STEM` of the file.
     pub out: Option<PathBuf>,
+    /// Wall-clock budget of each point's integration, s; a point over it is a solver failure
+    /// ("budget exhausted", recorded like any other). None = no budget.
+    pub max_wall_time: Option<f64>,
 }
 
 /// What a sweep did.
@@ -55,7 +58,8 @@ pub struct SweepOutcome {
 pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
     let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
     spec.points()?;
-    let base = Prepared::load(spec.case.clone())?;
+    let mut base = Prepared::load(spec.case.clone())?;
+    base.max_wall_time = o.max_wall_time;
     sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
 }
 
@@ -113,7 +117,9 @@ pub(crate) fn sweep_point(
         Some(scene) if physical => {
             let mut s = scene.clone();
             crate::sweep::spec::apply_params(&mut s, pp)?;
-            Prepared::with_scene(base.case.clone(), s)?
+            let mut p = Prepared::with_scene(base.case.clone(), s)?;
+            p.max_wall_time = base.max_wall_time;
+            p
         }
         None if physical => {
             return Err(Error::Input(format!(
