@@ -124,6 +124,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         reference_agreement: reference.agreement.clone(),
         window: reference.window.clone(),
         t_end: reference.t_end,
+        error_measure: reference.measure(),
         runs,
     };
     let files = c.write(&out)?;
