@@ -14,8 +14,10 @@ interface:
 - :data:`METHODS`, :data:`CONTROLLERS` — the names lash accepts.
 - Exceptions: :class:`UsageError` (bad arguments), :class:`SolveError` (the integration
   failed, with time and state), :class:`SceneError` (a scene that cannot be used, with its
-  JSON path), all derived from :class:`LashError`. An exception raised inside your own
-  callback propagates as itself.
+  JSON path), :class:`OutOfMemoryError` (an implicit method's dense matrices over the memory
+  budget; a :class:`MemoryError`), :class:`InternalError` (a bug), all derived from
+  :class:`LashError`. An exception raised inside your own callback propagates as itself;
+  Ctrl-C during :func:`run` raises :class:`KeyboardInterrupt`.
 
 Example
 -------
@@ -25,7 +27,8 @@ Example
 True
 """
 
-from ._errors import LashError, SceneError, SolveError, UsageError
+from ._errors import (InternalError, LashError, OutOfMemoryError, SceneError, SolveError,
+                      UsageError)
 from ._ivp import CONTROLLERS, METHODS, OdeResult, OdeSolution, solve_ivp
 from ._lash import __version__
 from ._run import Event, Run, run
@@ -43,5 +46,7 @@ __all__ = [
     "UsageError",
     "SolveError",
     "SceneError",
+    "OutOfMemoryError",
+    "InternalError",
     "__version__",
 ]

@@ -1,13 +1,16 @@
 """The exceptions lash raises.
 
-Every lash exception derives from :class:`LashError`. An exception raised by your own code
-inside a callback (``fun``, ``jac``, an event function or its hook) is not wrapped: it
-propagates as itself, with its traceback, after lash has stopped the integration.
+Every lash exception derives from :class:`LashError` (an :class:`Exception`): nothing lash
+raises escapes ``except Exception``. An exception raised by your own code inside a callback
+(``fun``, ``jac``, an event function or its hook) is not wrapped: it propagates as itself,
+with its traceback, after lash has stopped the integration. Ctrl-C during :func:`lash.run`
+raises Python's own :class:`KeyboardInterrupt`.
 """
 
 from __future__ import annotations
 
-__all__ = ["LashError", "UsageError", "SceneError", "SolveError"]
+__all__ = ["LashError", "UsageError", "SceneError", "SolveError", "OutOfMemoryError",
+           "InternalError"]
 
 
 class LashError(Exception):
@@ -74,7 +77,8 @@ class SolveError(LashError, RuntimeError):
     kind : str
         ``"step_size_too_small"``, ``"too_many_steps"``, ``"non_finite_state"``,
         ``"rk4_unstable"`` (fixed-step RK4 beyond its stability limit, only where a scene
-        asks for the check), ``"newton_failure"`` or ``"budget_exhausted"``.
+        asks for the check), ``"newton_failure"``, ``"budget_exhausted"`` or
+        ``"event_nan"`` (an event function returned NaN: the message names it).
     result : OdeResult or None
         What :func:`lash.solve_ivp` had computed up to the failure, with ``status = -1``,
         ``success = False`` and ``message`` (scipy's failed result).
@@ -94,3 +98,43 @@ class SolveError(LashError, RuntimeError):
 
     def __reduce__(self):
         return (type(self), (self.args[0], self.t, self.y, self.kind, self.result))
+
+
+class OutOfMemoryError(LashError, MemoryError):
+    """Memory refused before it was allocated: the dense n × n matrices of an implicit method
+    (its Jacobian and LU; 4 of them for ``bdf``, ``trbdf2``, ``esdirk34``, 3 for ``rodas5p``)
+    need more than the budget, which is ``max_memory`` when given, else half of the memory
+    available to the process (the smallest of /proc/meminfo's MemAvailable, the cgroup's
+    memory limit and the address-space limit ``RLIMIT_AS``). Also raised when the allocator
+    itself refused a matrix. Nothing was integrated. An explicit method (``dopri54``, ...)
+    needs no such matrices.
+
+    Also a :class:`MemoryError`.
+
+    Parameters
+    ----------
+    message : str
+        What needed how much, and the budget.
+    needed : int
+        Bytes needed.
+    budget : int
+        The budget in bytes (0 when the allocator refused).
+
+    Attributes
+    ----------
+    needed, budget
+        As given.
+    """
+
+    def __init__(self, message: str, needed: int = 0, budget: int = 0) -> None:
+        super().__init__(message)
+        self.needed = needed
+        self.budget = budget
+
+    def __reduce__(self):
+        return (type(self), (self.args[0], self.needed, self.budget))
+
+
+class InternalError(LashError, RuntimeError):
+    """A bug in lash: an internal inconsistency (a Rust panic, caught where it would have
+    left the extension). The message says where; please report it."""

@@ -30,6 +30,8 @@ _SCIPY_NAMES = {"rk45": "dopri54", "rk23": "bs32", "dop853": "dop853", "bdf": "b
 _EXPLICIT = {"rk4", "bs32", "dopri54", "tsit54", "dop853"}
 #: scipy's floor of rtol (100 ε): smaller values are raised to it, with scipy's warning.
 _RTOL_FLOOR = 100 * np.finfo(float).eps
+#: The largest whole number lash's counters hold (a 64-bit unsigned integer).
+_WHOLE_MAX = 2 ** 64 - 1
 
 
 class _EmptyArray(np.ndarray):
@@ -259,7 +261,8 @@ def _event_decl(ev) -> tuple:
         count = int(bool(terminal))
     elif (isinstance(terminal, numbers.Real) and math.isfinite(terminal) and terminal >= 0
           and int(terminal) == terminal):
-        count = int(terminal)
+        # A count beyond lash's counters is never reached: the same as the largest.
+        count = min(int(terminal), _WHOLE_MAX)
     else:
         raise UsageError("The `terminal` attribute of each event must be a boolean or "
                          f"positive integer (event {getattr(ev, '__name__', ev)!r}: got "
@@ -278,6 +281,15 @@ def _event_decl(ev) -> tuple:
         raise UsageError(f"event {getattr(ev, '__name__', ev)!r}: hook must be callable "
                          f"or None, got {hook!r}")
     return (ev, sign, count, hook)
+
+
+def _whole(name: str, value) -> int:
+    """A whole number in [1, 2**64 - 1], or a UsageError naming the argument."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise UsageError(f"{name} must be an int >= 1, got {value!r}")
+    if value > _WHOLE_MAX:
+        raise UsageError(f"{name} must be at most 2**64 - 1, got {value!r}")
+    return int(value)
 
 
 def _array(raw: bytes, shape) -> np.ndarray:
@@ -305,6 +317,7 @@ def solve_ivp(
     min_step: float = 0.0,
     max_steps: int = 1_000_000,
     step: Optional[float] = None,
+    max_memory: Optional[int] = None,
 ) -> OdeResult:
     """Solve an initial value problem ``dy/dt = fun(t, y)``, ``y(t0) = y0``, with lash.
 
@@ -394,9 +407,16 @@ def solve_ivp(
     min_step : float, optional
         Smallest step size before the integration fails. Default 0 (then 16 ulps of t).
     max_steps : int, optional
-        Step attempts before the integration fails. Default 1 000 000.
+        Step attempts before the integration fails, 1 to 2**64 - 1. Default 1 000 000.
     step : float or None, optional
         The fixed step of ``rk4`` (required for it, rejected by the other methods).
+    max_memory : int or None, optional
+        Budget in bytes of the implicit methods' dense n × n matrices (the Jacobian and its
+        LU: 4 of them for ``bdf``, ``trbdf2`` and ``esdirk34``, 3 for ``rodas5p``, 8 bytes
+        per entry); a problem that needs more raises :class:`OutOfMemoryError` before the
+        first step. None (default): half of the memory available to the process (the
+        smallest of MemAvailable, the cgroup's memory limit and ``RLIMIT_AS``). The explicit
+        methods need no such matrices.
 
     Returns
     -------
@@ -411,12 +431,16 @@ def solve_ivp(
     TypeError
         ``args`` that cannot be unpacked (scipy's message).
     UsageError
-        A bad argument: unknown method or controller, tolerance out of range, malformed
-        ``t_span``, ``y0``, ``t_eval``, ``atol`` or ``jac``, or a callback that returned the
-        wrong shape. Also a ``ValueError``.
+        A bad argument: unknown method or controller, tolerance out of range or NaN,
+        malformed ``t_span``, ``y0``, ``t_eval``, ``atol`` or ``jac`` (NaN in any of them
+        included), an integer option beyond 2**64 - 1, or a callback that returned the wrong
+        shape. Also a ``ValueError``.
+    OutOfMemoryError
+        The method's dense matrices need more than ``max_memory`` (a :class:`MemoryError`).
     SolveError
         The integration failed (step size too small, ``max_steps`` reached, non-finite
-        state, Newton failure). ``.t`` and ``.y`` are the last good time and state,
+        state, Newton failure, an event function that returned NaN: kind ``"event_nan"``,
+        the message names the function). ``.t`` and ``.y`` are the last good time and state,
         ``.kind`` names the failure and ``.result`` holds everything computed up to it, with
         scipy's ``status = -1`` and ``success = False``. scipy returns such a result
         instead of raising; lash raises so that a failed run is never taken for a good one.
@@ -428,9 +452,9 @@ def solve_ivp(
     -----
     The callbacks are Python functions called from Rust with the GIL held, one call per
     evaluation. Each call of ``fun`` costs, besides the time of ``fun`` itself, the creation
-    of the array ``y`` and the reading of the result: a few microseconds, a list or tuple
-    result being the cheapest, an order of magnitude less than scipy's own step loop per
-    call (measured in BENCHMARKS.md, "Python", with python/bench/callbacks.py). For an RHS
+    of the array ``y`` and the reading of the result: under a microsecond, a list or tuple
+    result being the cheapest, 5-10 times less than scipy's own step loop per call
+    (measured in BENCHMARKS.md, "Python", with python/bench/callbacks.py). For an RHS
     written in Python the run time is about ``nfev`` times (the time of ``fun`` plus that
     cost): choose the method that needs the fewest evaluations (``stats`` has the counts).
 
@@ -488,9 +512,11 @@ def solve_ivp(
     n = y0.shape[0]
     direction = 1.0 if t1 >= t0 else -1.0
 
-    rtol = np.asarray(rtol, dtype=np.float64)
+    rtol = _floats("rtol", rtol)
     if rtol.ndim > 0 and rtol.shape != (n,):
         raise UsageError(f"`rtol` has wrong shape: {rtol.shape}, expected ({n},) or a number.")
+    if not np.isfinite(rtol).all():
+        raise UsageError(f"rtol must be finite (in [1e-14, 1)), got {rtol}")
     if np.any(rtol < _RTOL_FLOOR):
         warnings.warn("At least one element of `rtol` is too small. "
                       f"Setting `rtol = np.maximum(rtol, {_RTOL_FLOOR})`.", stacklevel=2)
@@ -503,12 +529,17 @@ def solve_ivp(
     elif atol_arr.shape != (n,):
         raise UsageError(f"`atol` has wrong shape: {atol_arr.shape}, expected ({n},) or a "
                          "number.")
+    if not np.isfinite(atol_arr).all():
+        raise UsageError(f"atol must be finite and > 0, got {atol_arr}")
 
     t_eval_arr = None
     if t_eval is not None:
         te = _floats("t_eval", t_eval)
         if te.ndim != 1:
             raise UsageError("`t_eval` must be 1-dimensional.")
+        if not np.isfinite(te).all():
+            bad = int(np.flatnonzero(~np.isfinite(te))[0])
+            raise UsageError(f"Values in `t_eval` must be finite: t_eval[{bad}] = {te[bad]}")
         lo, hi = min(t0, t1), max(t0, t1)
         if te.size and (te.min() < lo or te.max() > hi):
             raise UsageError("Values in `t_eval` are not within `t_span`.")
@@ -534,10 +565,16 @@ def solve_ivp(
             raise UsageError("`first_step` must be positive.")
         if first_step > abs(t1 - t0):
             raise UsageError("`first_step` exceeds bounds.")
+    min_step = float(min_step)
+    if not (math.isfinite(min_step) and min_step >= 0):
+        raise UsageError(f"min_step must be finite and >= 0, got {min_step}")
     if step is not None:
         step = float(step)
-    if not isinstance(max_steps, numbers.Integral) or max_steps < 1:
-        raise UsageError(f"max_steps must be an int >= 1, got {max_steps!r}")
+        if not (math.isfinite(step) and step > 0):
+            raise UsageError(f"step must be finite and > 0, got {step}")
+    max_steps = _whole("max_steps", max_steps)
+    if max_memory is not None:
+        max_memory = _whole("max_memory", max_memory)
 
     extraneous = []
     jac_fun, jac_matrix = None, None
@@ -575,8 +612,8 @@ def solve_ivp(
         atol=atol_arr.tobytes(), jac=jac_fun,
         jac_matrix=None if jac_matrix is None else jac_matrix.tobytes(),
         jac_sparsity=sparsity, vectorized=bool(vectorized), controller=controller,
-        max_step=max_step, first_step=first_step, min_step=float(min_step),
-        max_steps=int(max_steps), step=step, args=list(args)))
+        max_step=max_step, first_step=first_step, min_step=min_step,
+        max_steps=max_steps, step=step, max_memory=max_memory, args=list(args)))
 
     t = _array(raw["t"], (-1,))
     y = _array(raw["y"], (len(t), m)).T

@@ -9,8 +9,10 @@
 //! lash.run (python/lash/_run.py)             checks the options as `lash run` does, builds
 //!        │                                    Run (summary dict, numpy columns, events)
 //!        ▼
-//! _lash.run_core (scene.rs)                   lash_validation::run_in_memory with the GIL
-//!                                             released
+//! _lash.run_core (scene.rs)                   RunArgs (the keyword arguments, one dict) →
+//!                                             lash_validation::run_in_memory on an engine
+//!                                             thread, the GIL released, while the
+//!                                             caller's thread looks for Ctrl-C every 50 ms
 //!
 //! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's
 //!        │                                    meaning), builds OdeResult / OdeSolution
@@ -25,8 +27,11 @@
 //! conversion); the Python side wraps them with `numpy.frombuffer`. Errors: option errors
 //! raise `lash.UsageError`, a rejected scene `lash.SceneError` with its JSON path, solver
 //! failures `lash.SolveError` with time and state (`lash.solve_ivp` adds the partial result),
-//! and an exception raised inside a Python callback stops the integration and propagates as
-//! itself (python/lash/_errors.py).
+//! dense matrices over the memory budget `lash.OutOfMemoryError` (a `MemoryError`), and an
+//! exception raised inside a Python callback stops the integration and propagates as itself
+//! (python/lash/_errors.py). Every entry point runs inside a panic guard
+//! (`errors::guard`): a panic becomes `lash.InternalError`, or `lash.OutOfMemoryError` for an
+//! allocation that failed, never pyo3's `PanicException` (a `BaseException`).
 
 mod convert;
 mod errors;

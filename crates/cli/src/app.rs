@@ -172,7 +172,11 @@ impl Watchdog {
         let done = std::sync::Arc::new(AtomicBool::new(false));
         let flag = done.clone();
         let grace = (0.25 * w).max(1.0);
-        let limit = std::time::Duration::from_secs_f64(w + grace);
+        // A budget longer than a Duration holds (finite w up to 1.8e308 passes the rule) has
+        // no end to watch for.
+        let Ok(limit) = std::time::Duration::try_from_secs_f64(w + grace) else {
+            return Watchdog { done };
+        };
         let started = std::time::Instant::now();
         std::thread::spawn(move || {
             while started.elapsed() < limit {

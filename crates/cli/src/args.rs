@@ -110,7 +110,7 @@ pub enum Command {
 ///
 /// ```text
 /// [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
-/// [--max-steps N] [--max-wall-time S]
+/// [--max-steps N] [--max-wall-time S] [--max-memory BYTES]
 /// fixed-step: --step only;  adaptive: --rtol, --atol, --controller only;  budgets: any method
 /// ```
 ///
@@ -153,6 +153,12 @@ pub struct SolverFlags {
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
+    /// Memory budget of the implicit methods' dense Jacobian and LU (n² each), bytes, a whole
+    /// number >= 1. A run whose matrices need more fails before it starts with "not enough
+    /// memory" (exit 3). Default: half of the memory available (MemAvailable, the cgroup's
+    /// limit, the address-space limit).
+    #[arg(long = "max-memory", value_name = "BYTES", value_parser = parse_max_memory)]
+    pub max_memory: Option<u64>,
 }
 
 impl SolverFlags {
@@ -166,6 +172,7 @@ impl SolverFlags {
             controller: self.controller,
             max_steps: self.max_steps,
             max_wall_time: self.max_wall_time,
+            max_memory: self.max_memory,
         }
     }
 
@@ -639,7 +646,7 @@ impl PoincareArgs {
 /// Source: clap's error kinds DisplayHelp, DisplayVersion.
 #[derive(Debug)]
 pub enum Parsed {
-    /// A command to execute.
+    /// A command to execute (boxed: far larger than the text).
     Cli(Box<Cli>),
     /// Help or version text to print on standard output, then exit 0.
     Print(String),
@@ -791,6 +798,16 @@ pub fn parse_perturbation(s: &str) -> Result<f64, String> {
 /// Parses a step budget: a whole number >= 1.
 pub fn parse_max_steps(s: &str) -> Result<usize, String> {
     parse_whole(s, "max-steps", 1)
+}
+
+/// Parses a memory budget: a whole number of bytes >= 1.
+pub fn parse_max_memory(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<u64>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "max-memory must be a whole number of bytes >= 1, got '{s}'"
+        )),
+    }
 }
 
 /// Parses a wall-clock budget: finite and > 0 (s).

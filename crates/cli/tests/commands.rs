@@ -578,8 +578,13 @@ fn sweep_sets_any_scene_field_by_path() {
     seen.sort();
     assert_eq!(
         seen,
-        [("0.05", "0.8"), ("0.05", "2.0"), ("0.3", "0.8"), ("0.3", "2.0")]
-            .map(|(a, b)| (a.to_string(), b.to_string()))
+        [
+            ("0.05", "0.8"),
+            ("0.05", "2.0"),
+            ("0.3", "0.8"),
+            ("0.3", "2.0")
+        ]
+        .map(|(a, b)| (a.to_string(), b.to_string()))
     );
     // Distinct values give distinct runs: friction dissipation differs between the rows.
     let mut f: Vec<&str> = rows.iter().map(|r| r[fric]).collect();

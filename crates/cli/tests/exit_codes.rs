@@ -205,3 +205,25 @@ fn exhausted_budgets_exit_3_and_name_the_budget() {
         "wall-clock budget of 0.000001 s used before the integration started",
     );
 }
+
+/// A wall-clock budget longer than the clock holds (`--max-wall-time 1e300`: finite and > 0,
+/// so the rule accepts it) is no budget: the run ends with exit 0 and writes its summary,
+/// where the watchdog's and the engine's deadlines used to panic (exit 101).
+#[test]
+fn a_wall_time_budget_beyond_the_clock_is_no_budget() {
+    let d = tempfile::tempdir().unwrap();
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/press/dry_150rpm_c0.1.json");
+    let case = case.to_str().unwrap();
+    let args = [
+        "run",
+        case,
+        "--t-end",
+        "0.01",
+        "--max-wall-time",
+        "1e300",
+        "--out",
+        "far",
+    ];
+    common::ok(&args, d.path());
+    assert!(d.path().join("far/summary.json").is_file());
+}

@@ -15,6 +15,10 @@
 //!                        PIVOT_TOL · S_jj)                                       → joints[k]
 //!    accelerations       q̈ = f(t, y)[n_q..] finite                               → bodies[k]
 //!    Jacobian            ∂f/∂y finite (the Newton matrix of the implicit methods) → bodies[k]
+//!                        (when its n² f64, twice over with the Jacobian's work buffers,
+//!                        fit the memory budget of lash_solver::memory;
+//!                        beyond, an implicit method refuses the run itself, and an
+//!                        explicit one needs no Jacobian)
 //! ```
 //! The formulation's checks, with the reasons for their bounds, are in
 //! mechanism/formulation/lagrange_baumgarte/check.rs.
@@ -68,9 +72,18 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
             ),
         ));
     }
-    // The Jacobian of the implicit methods (lower half: the upper half is [0 I]).
+    // The Jacobian of the implicit methods (lower half: the upper half is [0 I]). Skipped
+    // when its n² f64 and the n² of the Jacobian's own work buffers (jacobian.rs: ∂g/∂y and
+    // the lower blocks, nq × n each) do not fit the memory budget (lash_solver::memory), or
+    // when the allocator refuses the matrix: an explicit method needs no Jacobian, and an
+    // implicit one refuses the run itself with its typed OutOfMemory error before allocating
+    // its own.
     let n = y.len();
-    let mut jac = faer::Mat::<f64>::zeros(n, n);
+    let fits =
+        lash_solver::memory::check(lash_solver::memory::dense_bytes(n, 2), String::new, None);
+    let Ok(mut jac) = fits.and_then(|()| lash_solver::memory::try_zeros(n, n)) else {
+        return Ok(());
+    };
     mech.jacobian(t, &y, jac.as_mut());
     for j in 0..n {
         for i in nq..n {

@@ -632,10 +632,14 @@ impl Mechanism {
         };
         // Crank pivot on the ground.
         let (s_o, ground_o) = scene.joints.iter().find_map(|j| match j {
-            JointSpec::Revolute(r) if &r.a.body == crank_name && r.b.body == crate::GROUND => {
+            JointSpec::Revolute(r)
+                if &r.a.body == crank_name && r.b.body == crate::scene::GROUND =>
+            {
                 Some((pt(&r.a.body, &r.a.point)?, r.b.at?))
             }
-            JointSpec::Revolute(r) if &r.b.body == crank_name && r.a.body == crate::GROUND => {
+            JointSpec::Revolute(r)
+                if &r.b.body == crank_name && r.a.body == crate::scene::GROUND =>
+            {
                 Some((pt(&r.b.body, &r.b.point)?, r.a.at?))
             }
             _ => None,
@@ -644,7 +648,7 @@ impl Mechanism {
         let (rod, s_a, a_r) = scene.joints.iter().find_map(|j| match j {
             JointSpec::Revolute(r)
                 if &r.a.body == crank_name
-                    && r.b.body != crate::GROUND
+                    && r.b.body != crate::scene::GROUND
                     && &r.b.body != slider_name =>
             {
                 Some((
@@ -655,7 +659,7 @@ impl Mechanism {
             }
             JointSpec::Revolute(r)
                 if &r.b.body == crank_name
-                    && r.a.body != crate::GROUND
+                    && r.a.body != crate::scene::GROUND
                     && &r.a.body != slider_name =>
             {
                 Some((

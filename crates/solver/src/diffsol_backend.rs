@@ -32,7 +32,11 @@
 //! - `restart(t, y)` builds a new diffsol solver on the same problem from a fresh state
 //!   (t, y, f(t, y), h): no history survives, BDF starts again at order 1, the Jacobian is
 //!   re-evaluated. The first trial step is chosen as at the start: `opts.h0`, else Hairer's
-//!   estimate (diffsol's `set_step_size`), capped by h_max. States are built from diffsol's
+//!   estimate (diffsol's `set_step_size`, redone here so that its probe f(t + h0, ·) stays
+//!   inside the span to the stop time: diffsol's own evaluates f up to 0.01 d0/d1 ahead,
+//!   beyond a short span), capped by h_max. The solver is built at the first step after a
+//!   start or restart, when the stop time is known; f(t, y) is evaluated (and checked) at the
+//!   start itself. States are built from diffsol's
 //!   `StateCommon`, so a BDF difference table is never inherited: the known pitfall of a
 //!   solver built from a state taken after `state_mut_back` (stale history unless `as_mut()`
 //!   is called first) cannot arise. diffsol's `set_state` with such a fresh state (after
@@ -298,18 +302,16 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
         let ctx = Cx::default();
         let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
         let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
+        // The first of the n² matrices (crate::memory): a refusal of the allocator is an
+        // error here; diffsol's own (nalgebra's) allocations are covered by the budget only.
+        let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
         let eqn = SysEqn {
             rhs: SysRhs {
                 sys,
                 n,
                 ctx,
                 jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
-                work: RefCell::new((
-                    vec![0.0; n],
-                    vec![0.0; n],
-                    vec![0.0; n],
-                    faer::Mat::zeros(n, n),
-                )),
+                work: RefCell::new((vec![0.0; n], vec![0.0; n], vec![0.0; n], jac_work)),
                 counts: RefCell::new(Stats::default()),
             },
             // Never evaluated: states are built directly from (t, y).
@@ -363,16 +365,23 @@ macro_rules! with_solver {
 /// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
 pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
     problem: &'p DiffsolProblem<'a, S>,
-    /// The live solver, borrowing `problem`. Always `Some` outside a failed restart.
+    /// The live solver, borrowing `problem`: None between a start (or restart) and the first
+    /// step after it, which builds it (`pending`), and after a failed restart.
     solver: Option<Solver<'p, 'a, S>>,
+    /// f(t, y) of a start whose solver is built at the next step, when the stop time is known
+    /// (the starting-step estimate keeps its probe inside it: `initial_h`).
+    pending: Option<Vec<f64>>,
     method: Method,
     opts: SolverOptions,
     budget: Budget,
     t: f64,
     t_prev: f64,
     y: Vec<f64>,
-    /// The stop time currently set in diffsol.
+    /// The stop time the current steps head for (t_stop, or the h_max stop).
     tstop: Option<f64>,
+    /// The stop time set in diffsol: `tstop`, or the natural end of a step that would stop a
+    /// sliver short of it (the landing rule in `step`).
+    tstop_set: Option<f64>,
     /// The state before an explicit Euler sliver step (see `sliver_step`), while the last
     /// step is one.
     sliver: Option<Vec<f64>>,
@@ -439,6 +448,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
         let mut st = DiffsolStepper {
             problem,
             solver: None,
+            pending: None,
             method,
             opts: opts.clone(),
             budget: Budget::new(Budgets::new(opts.max_steps, opts.max_wall_time)?),
@@ -446,6 +456,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             t_prev: t0,
             y: y0.to_vec(),
             tstop: None,
+            tstop_set: None,
             sliver: None,
             counts_at_start: problem.counts(),
             base: Stats::default(),
@@ -460,23 +471,51 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// Current order of the method: BDF's variable order (1 right after a start or restart),
     /// the tableau's order for the SDIRK methods.
     pub fn order(&self) -> usize {
-        self.solver
-            .as_ref()
-            .map_or(0, |solver| with_solver!(solver, s => s.order()))
+        match &self.solver {
+            Some(solver) => with_solver!(solver, s => s.order()),
+            None if self.pending.is_some() => self.start_order(),
+            None => 0,
+        }
     }
 
-    /// Builds a fresh diffsol solver at (t, y) with first trial step `opts.h0` or diffsol's
-    /// starting-step estimate.
+    /// The order a fresh solver starts with.
+    fn start_order(&self) -> usize {
+        match self.method {
+            Method::Bdf => 1,
+            Method::Trbdf2 => Tableau::<f64>::tr_bdf2().order(),
+            _ => Tableau::<f64>::esdirk34().order(),
+        }
+    }
+
+    /// Starts at (t, y): evaluates f(t, y) (a non-finite value fails here) and leaves the
+    /// solver to be built by the next step, which knows the stop time (`build`).
     fn start(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
-        let problem = &self.problem.problem;
-        let ctx = *problem.context();
         let n = y.len();
-        let yv = Vd::from_slice(y, ctx);
-        let mut dy = Vd::zeros(n, ctx);
-        problem.eqn.rhs.call_inplace(&yv, t, &mut dy);
-        if !dy.inner().as_slice().iter().all(|v| v.is_finite()) {
+        let mut dy = vec![0.0; n];
+        self.problem.problem.eqn.rhs.eval(t, y, &mut dy);
+        self.solver = None;
+        self.pending = None;
+        if !dy.iter().all(|v| v.is_finite()) {
             return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
         }
+        self.pending = Some(dy);
+        self.tstop = None;
+        self.tstop_set = None;
+        self.t = t;
+        self.t_prev = t;
+        self.y.copy_from_slice(y);
+        Ok(())
+    }
+
+    /// Builds the fresh diffsol solver of a start at (self.t, self.y) with f = `dy`, its first
+    /// trial step `opts.h0` or the starting-step estimate with its probe inside
+    /// [t, `t_stop`] (`initial_h`).
+    fn build(&mut self, dy: Vec<f64>, t_stop: f64) -> Result<(), SolveError> {
+        let problem = &self.problem.problem;
+        let ctx = *problem.context();
+        let (t, y) = (self.t, &self.y);
+        let yv = Vd::from_slice(y, ctx);
+        let dy = Vd::from_slice(&dy, ctx);
         let empty = || Vd::zeros(0, ctx);
         let common = StateCommon {
             y: yv,
@@ -490,17 +529,14 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             t,
             h: 1.0,
         };
-        let order = match self.method {
-            Method::Bdf => 1,
-            Method::Trbdf2 => Tableau::<f64>::tr_bdf2().order(),
-            _ => Tableau::<f64>::esdirk34().order(),
-        };
+        let order = self.start_order();
         let err = |e: DiffsolError| map_err(e, t, 0.0, y);
         let h = self.opts.h0;
+        let span = t_stop - t;
         let solver = match self.method {
             Method::Bdf => {
                 let mut state = BdfState::<Vd>::new_from_common(common);
-                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Bdf(Box::new(
                     Bdf::new(problem, state, Lu::default()).map_err(err)?,
                 ))
@@ -512,36 +548,73 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
                     Tableau::<f64>::esdirk34()
                 };
                 let mut state = RkState::<Vd>::new_from_common(common);
-                Self::initial_h(&mut state, h, problem, order, &self.opts);
+                Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Sdirk(Box::new(
                     Sdirk::new(problem, state, tableau, Lu::default()).map_err(err)?,
                 ))
             }
         };
         self.solver = Some(solver);
-        self.tstop = None;
-        self.t = t;
-        self.t_prev = t;
-        self.y.copy_from_slice(y);
         Ok(())
     }
 
+    /// The first trial step: `h` when given, else diffsol's starting-step estimate
+    /// (`StateRefMut::set_step_size`, Hairer's rule of HNW I §II.4) with its probe kept inside
+    /// the `span` to the stop time, raised to h_min; then capped by h_max.
+    ///
+    /// ```text
+    /// d0 = ‖y0‖, d1 = ‖f0‖ (diffsol's weighted norms);  h0 = 1e-6 if d0 or d1 < 1e-5, else 0.01 d0/d1
+    /// h0 = min(h0, span)             (diffsol's own estimate evaluates f at t0 + h0 beyond a
+    ///                                 short span: scipy's test_tbound_respected_small_interval)
+    /// f1 = f(t0 + h0, y0 + h0 f0);   d2 = ‖f1 − f0‖ / h0
+    /// h1 = max(1e-6, 1e-3 h0) if max(d1, d2) < 1e-15, else (0.01 / max(d1, d2))^(1/(order+1))
+    /// h  = min(100 h0, h1)
+    /// ```
+    /// Where h0 ≤ span the operations are diffsol's, in its order, on its vectors: the step is
+    /// the one diffsol's `set_step_size` gives, bit for bit.
     fn initial_h<St: OdeSolverState<Vd>>(
         state: &mut St,
         h: Option<f64>,
         problem: &Problem<'a, S>,
         order: usize,
         opts: &SolverOptions,
+        span: f64,
     ) {
         match h {
             Some(h) => *state.as_mut().h = h,
             None => {
-                // Hairer's estimate, raised to h_min (the estimate is a heuristic; a step
-                // below h_min must come from a rejection to count as a failure).
-                state
-                    .as_mut()
-                    .set_step_size(1.0, &problem.atol, problem.rtol, &problem.eqn, order);
                 let hs = state.as_mut();
+                let (atol, rtol) = (&problem.atol, problem.rtol);
+                let (y0, f0, t0) = (&*hs.y, &*hs.dy, *hs.t);
+                let d0 = y0.squared_norm(y0, atol, rtol).sqrt();
+                let d1 = f0.squared_norm(y0, atol, rtol).sqrt();
+                let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+                    1e-6
+                } else {
+                    0.01 * (d0 / d1)
+                };
+                let t1 = if h0 < span {
+                    t0 + h0
+                } else {
+                    h0 = span;
+                    t0 + span
+                };
+                let y1 = f0.clone() * diffsol::scale(h0) + y0;
+                let f1 = problem.eqn.rhs().call(&y1, t1);
+                let df = f1 - f0;
+                let d2 = df.squared_norm(y0, atol, rtol).sqrt() / h0.abs();
+                let max_d = if d2 < d1 { d1 } else { d2 };
+                let h1 = if max_d < 1e-15 {
+                    (h0 * 1e-3).max(1e-6)
+                } else {
+                    (0.01 / max_d).powf(1.0 / (1.0 + order as f64))
+                };
+                *hs.h = 100.0 * h0;
+                if *hs.h > h1 {
+                    *hs.h = h1;
+                }
+                // Raised to h_min (the estimate is a heuristic; a step below h_min must come
+                // from a rejection to count as a failure).
                 *hs.h = hs.h.max(opts.h_min);
             }
         }
@@ -578,10 +651,12 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// Refreshes the counters from the live solver.
     fn update_stats(&mut self) {
         let counts = self.problem.counts();
-        let Some(solver) = self.solver.as_ref() else {
-            return;
-        };
-        let d = with_solver!(solver, s => s.get_statistics().clone());
+        // No live solver between a start and the first step after it: the base counters.
+        let d = self
+            .solver
+            .as_ref()
+            .map(|solver| with_solver!(solver, s => s.get_statistics().clone()))
+            .unwrap_or_default();
         let b = &self.base;
         let st = &mut self.stats;
         st.accepted = b.accepted + d.number_of_steps;
@@ -613,6 +688,9 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         check_stop(self.t, t_stop)?;
         self.budget.check(self.stats.steps, self.t, &self.y)?;
         self.sliver = None;
+        if let Some(dy) = self.pending.take() {
+            self.build(dy, t_stop)?;
+        }
         let Some(solver) = self.solver.as_mut() else {
             return Err(SolveError::NewtonFailure {
                 t: self.t,
@@ -646,11 +724,27 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         };
         let (t, y) = (self.t, &self.y);
         let floor = step_floor(self.opts.h_min, t).max(f64::MIN_POSITIVE);
-        if self.tstop != Some(want) {
-            with_solver!(&mut *solver, s => s.set_stop_time(want))
+        // The landing rule for diffsol's stop times: a step that would end short of `want`
+        // by more than diffsol's round-off but at most 10⁻¹⁰ h (a few hundred ulps: steps
+        // of equal size drifting onto a stop) stops at its own end, reported as `want`.
+        // diffsol itself would shrink the next step to the remainder, rescaling its BDF
+        // difference table by ~10⁻¹², which ruins the dense output of the step just taken
+        // and leaves thousands of steps to grow back (scipy's test_first_step).
+        let reach = t + h_now;
+        let short = want - reach;
+        let set_at = if short > 200.0 * f64::EPSILON * (reach.abs() + h_now.abs())
+            && short <= 1e-10 * h_now
+        {
+            reach
+        } else {
+            want
+        };
+        if self.tstop_set != Some(set_at) {
+            with_solver!(&mut *solver, s => s.set_stop_time(set_at))
                 .map_err(|e| map_err(e, t, h_now, y))?;
-            self.tstop = Some(want);
+            self.tstop_set = Some(set_at);
         }
+        self.tstop = Some(want);
         with_solver!(&mut *solver, s => {
             *s.config_mut().as_base_mut().minimum_timestep = floor;
         });
@@ -692,6 +786,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         };
         let t_new = if reached {
             self.tstop = None;
+            self.tstop_set = None;
             want
         } else {
             t_new
@@ -793,6 +888,62 @@ mod tests {
                 faer::Mat::zeros(n, n),
             )),
             counts: RefCell::new(Stats::default()),
+        }
+    }
+
+    /// Where the probe fits the span, the starting step is diffsol's own `set_step_size`, bit
+    /// for bit (so runs whose span is longer than the probe are unchanged); where it does not,
+    /// the probe lands on the stop time.
+    #[test]
+    fn the_starting_step_is_diffsols_where_the_probe_fits() {
+        let o = SolverOptions {
+            method: Method::Bdf,
+            rtol: 1e-6,
+            atol: crate::options::Atol::Scalar(1e-9),
+            ..Default::default()
+        };
+        let crate::options::Config::Diffsol(cfg) = o.configure(3).unwrap() else {
+            panic!("bdf has a diffsol configuration")
+        };
+        let problem = DiffsolProblem::new(&OregoFd, &cfg).unwrap();
+        let p = &problem.problem;
+        let ctx = *p.context();
+        for (y, order) in [([2.0, 300.0, 40.0], 1), ([1.0, 2.0, 3.0], 3), ([0.0; 3], 5)] {
+            let common = || {
+                let yv = Vd::from_slice(&y, ctx);
+                let mut dy = Vd::zeros(3, ctx);
+                p.eqn.rhs.call_inplace(&yv, 0.5, &mut dy);
+                StateCommon {
+                    y: yv,
+                    dy,
+                    g: Vd::zeros(0, ctx),
+                    dg: Vd::zeros(0, ctx),
+                    s: Vd::zeros(0, ctx),
+                    ds: Vd::zeros(0, ctx),
+                    sg: Vd::zeros(0, ctx),
+                    dsg: Vd::zeros(0, ctx),
+                    t: 0.5,
+                    h: 1.0,
+                }
+            };
+            let mut theirs = BdfState::<Vd>::new_from_common(common());
+            theirs
+                .as_mut()
+                .set_step_size(1.0, &p.atol, p.rtol, &p.eqn, order);
+            let mut ours = BdfState::<Vd>::new_from_common(common());
+            DiffsolStepper::initial_h(&mut ours, None, p, order, &o, 1e3);
+            assert_eq!(
+                ours.as_ref().h.to_bits(),
+                theirs.as_ref().h.to_bits(),
+                "{y:?}"
+            );
+            // A span shorter than the probe: the probe is the span.
+            let mut short = BdfState::<Vd>::new_from_common(common());
+            let calls = p.eqn.rhs.counts.borrow().rhs_evals;
+            DiffsolStepper::initial_h(&mut short, None, p, order, &o, 1e-12);
+            assert_eq!(p.eqn.rhs.counts.borrow().rhs_evals, calls + 1);
+            let h = short.as_ref().h;
+            assert!(h > 0.0 && h.is_finite() && h < 1e-9, "{h}");
         }
     }
 

@@ -89,10 +89,28 @@ pub enum SolveError {
         /// Last accepted state.
         y: Vec<f64>,
     },
+    /// An event function returned NaN, which has no sign: its crossings cannot be told, so
+    /// the integration stops rather than miss them silently.
+    #[error("event function {index} returned NaN at t = {at:e}")]
+    EventNan {
+        /// Time of the last accepted state (the start of the step in which it happened).
+        t: f64,
+        /// Last accepted state.
+        y: Vec<f64>,
+        /// Which event function ([`crate::OdeSystem::events`]'s index).
+        index: usize,
+        /// Where it returned NaN.
+        at: f64,
+    },
+    /// The dense matrices the method needs (its Jacobian and LU, n² each) do not fit the
+    /// memory budget ([`crate::memory`]), or the allocator refused them; nothing was
+    /// integrated.
+    #[error("{0}")]
+    OutOfMemory(crate::memory::MemoryError),
 }
 
 impl SolveError {
-    /// Time at which the failure happened (None for invalid options).
+    /// Time at which the failure happened (None for invalid options and refused memory).
     pub fn time(&self) -> Option<f64> {
         match self {
             SolveError::StepSizeTooSmall { t, .. }
@@ -101,12 +119,13 @@ impl SolveError {
             | SolveError::Rk4Unstable { t, .. }
             | SolveError::NewtonFailure { t, .. }
             | SolveError::BudgetExhausted { t, .. }
-            | SolveError::Interrupted { t, .. } => Some(*t),
-            SolveError::InvalidOptions(_) => None,
+            | SolveError::Interrupted { t, .. }
+            | SolveError::EventNan { t, .. } => Some(*t),
+            SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }
 
-    /// State at the failure (None for invalid options).
+    /// State at the failure (None for invalid options and refused memory).
     pub fn state(&self) -> Option<&[f64]> {
         match self {
             SolveError::StepSizeTooSmall { y, .. }
@@ -115,8 +134,9 @@ impl SolveError {
             | SolveError::Rk4Unstable { y, .. }
             | SolveError::NewtonFailure { y, .. }
             | SolveError::BudgetExhausted { y, .. }
-            | SolveError::Interrupted { y, .. } => Some(y),
-            SolveError::InvalidOptions(_) => None,
+            | SolveError::Interrupted { y, .. }
+            | SolveError::EventNan { y, .. } => Some(y),
+            SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }
 }

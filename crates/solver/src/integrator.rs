@@ -45,6 +45,11 @@
 //! the far side of the root, or exactly on it when g is exactly zero there; in that case the
 //! triggering function keeps the sign the crossing gave it (`handle_event`), so a restart
 //! never begins with an unknown sign (the diffsol pitfall of a missed next crossing).
+//!
+//! An event function that returns NaN (at the start, a step end, an interior sample, a trial
+//! point of the root finder or after a hook) ends the integration with
+//! [`SolveError::EventNan`] naming it: NaN has no sign, so skipping it could miss a crossing
+//! silently.
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
@@ -143,10 +148,13 @@ pub struct Problem<'a, S: OdeSystem + ?Sized> {
 }
 
 impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
-    /// Validates `opts` for `sys` ([`SolverOptions::configure`]) and builds what the method
-    /// needs besides the state.
+    /// Validates `opts` for `sys` ([`SolverOptions::configure`]), checks the method's dense
+    /// matrices against the memory budget ([`crate::memory`]: `OutOfMemory` before anything
+    /// is allocated) and builds what the method needs besides the state.
     pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
         let config = opts.configure(sys.dim())?;
+        crate::memory::check_method(opts.method, sys.dim(), opts.max_memory)
+            .map_err(SolveError::OutOfMemory)?;
         let diffsol = match &config {
             Config::Diffsol(c) => Some(DiffsolProblem::new(sys, c)?),
             _ => None,
@@ -283,6 +291,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
                 it.sys.events(t0, y0, &mut it.g_a);
             }
             it.event_evals += 1;
+            it.check_nan(&it.g_a, t0)?;
             for i in 0..m {
                 it.signs[i] = sign(it.g_a[i]);
             }
@@ -350,7 +359,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             }
         }
         if !self.specs.is_empty() {
-            if let Some((t_ev, hits)) = self.locate_events(t_b) {
+            if let Some((t_ev, hits)) = self.locate_events(t_b)? {
                 return self.handle_event(t_ev, hits);
             }
         }
@@ -365,14 +374,29 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         }
     }
 
-    fn eval_g_dense(&mut self, t: f64, g: &mut [f64]) {
+    /// [`SolveError::EventNan`] when some g_i evaluated at `at` is NaN (NaN has no sign, so
+    /// a crossing could not be told), with the last accepted state.
+    fn check_nan(&self, g: &[f64], at: f64) -> Result<(), SolveError> {
+        match g.iter().position(|v| v.is_nan()) {
+            None => Ok(()),
+            Some(index) => Err(SolveError::EventNan {
+                t: self.t_cur,
+                y: self.y_cur.clone(),
+                index,
+                at,
+            }),
+        }
+    }
+
+    fn eval_g_dense(&mut self, t: f64, g: &mut [f64]) -> Result<(), SolveError> {
         self.stepper.interpolate(t, &mut self.ybuf);
         self.sys.events(t, &self.ybuf, g);
         self.event_evals += 1;
+        self.check_nan(g, t)
     }
 
     /// Evaluates g (and ġ when the system gives it) at the end of the step into `g_b`/`gd_b`.
-    fn eval_end(&mut self, t_b: f64) {
+    fn eval_end(&mut self, t_b: f64) -> Result<(), SolveError> {
         let y = self.stepper.y();
         if self.rates {
             self.sys.event_rates(t_b, y, &mut self.g_b, &mut self.gd_b);
@@ -380,6 +404,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             self.sys.events(t_b, y, &mut self.g_b);
         }
         self.event_evals += 1;
+        self.check_nan(&self.g_b, t_b)
     }
 
     /// Interior samples skipped by the far test so far (module documentation).
@@ -388,11 +413,13 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
     }
 
     /// Scans the step [t_prev, t_b]; returns the earliest event time and its hits, having
-    /// updated the signs, or None (signs updated to the end of the step).
-    fn locate_events(&mut self, t_b: f64) -> Option<(f64, Vec<EventHit>)> {
+    /// updated the signs, or None (signs updated to the end of the step); an event function
+    /// that returns NaN is [`SolveError::EventNan`].
+    #[allow(clippy::type_complexity)]
+    fn locate_events(&mut self, t_b: f64) -> Result<Option<(f64, Vec<EventHit>)>, SolveError> {
         let m = self.specs.len();
         let t_a0 = self.stepper.t_prev();
-        self.eval_end(t_b);
+        self.eval_end(t_b)?;
         let mut samples = self.opts.event_samples;
         if self.rates && samples > 0 {
             let h = t_b - t_a0;
@@ -417,8 +444,9 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             };
             if last {
                 g_s.copy_from_slice(&self.g_b);
-            } else {
-                self.eval_g_dense(t_j, &mut g_s);
+            } else if let Err(e) = self.eval_g_dense(t_j, &mut g_s) {
+                (self.g_l, self.g_s) = (g_l, g_s);
+                return Err(e);
             }
             // Components crossing in [t_a, t_j].
             let mut crossing: Vec<usize> = Vec::new();
@@ -450,7 +478,13 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
                         // artefact): use the sign that was recorded.
                         -(self.signs[i] as f64) * f64::MIN_POSITIVE
                     };
-                    let r = self.brent(i, t_a, left, t_j, g_s[i]);
+                    let r = match self.brent(i, t_a, left, t_j, g_s[i]) {
+                        Ok(r) => r,
+                        Err(e) => {
+                            (self.g_l, self.g_s) = (g_l, g_s);
+                            return Err(e);
+                        }
+                    };
                     roots.push((i, r));
                 }
                 let t_star = roots.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
@@ -477,7 +511,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             self.g_a.copy_from_slice(&self.g_b);
             self.gd_a.copy_from_slice(&self.gd_b);
         }
-        found
+        Ok(found)
     }
 
     /// Brent's method (Brent 1973, ch. 4: bisection, secant and inverse quadratic
@@ -486,7 +520,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
     /// (`|b − c| ≤ 2 ε |b|`), or g is exactly zero. Returns the end of the final bracket on the
     /// side after the crossing (where g has the sign of gb, the sign the event's direction
     /// gives it), or the point where g is exactly zero.
-    fn brent(&mut self, i: usize, ta: f64, ga: f64, tb: f64, gb: f64) -> f64 {
+    fn brent(&mut self, i: usize, ta: f64, ga: f64, tb: f64, gb: f64) -> Result<f64, SolveError> {
         let mut g = std::mem::take(&mut self.g_t);
         let new_sign = sign(gb);
         // b: best estimate; c: the other end of the bracket (g(b), g(c) of opposite signs);
@@ -554,11 +588,14 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             a = b;
             fa = fb;
             b += if d.abs() > tol { d } else { tol.copysign(m) };
-            self.eval_g_dense(b, &mut g);
+            if let Err(e) = self.eval_g_dense(b, &mut g) {
+                self.g_t = g;
+                return Err(e);
+            }
             fb = g[i];
         }
         self.g_t = g;
-        root.unwrap_or(if sign(fb) == new_sign { b } else { c })
+        Ok(root.unwrap_or(if sign(fb) == new_sign { b } else { c }))
     }
 
     fn handle_event(&mut self, t_ev: f64, hits: Vec<EventHit>) -> Result<StepOutcome, SolveError> {
@@ -581,6 +618,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             self.sys.events(t_ev, &y, &mut g);
         }
         self.event_evals += 1;
+        self.check_nan(&g, t_ev)?;
         for i in 0..m {
             let s = sign(g[i]);
             if s != 0 {

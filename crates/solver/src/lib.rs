@@ -118,6 +118,7 @@ pub mod error;
 pub mod integrator;
 pub mod interrupt;
 pub mod jacobian;
+pub mod memory;
 pub mod method;
 pub mod onestep;
 pub mod options;

@@ -127,6 +127,22 @@ pub fn step_floor(h_min: f64, t: f64) -> f64 {
     h_min.max(16.0 * f64::EPSILON * t.abs())
 }
 
+/// The instant `w` seconds after `start`: the deadline of a wall-clock budget.
+///
+/// ```text
+/// w finite, > 0, within the clock's range → Some(start + w)
+/// anything else (NaN, ≤ 0, ∞, beyond ~2⁶⁴ s) → None: no deadline
+/// ```
+/// The option rules reject NaN and w ≤ 0 (`Rule::MAX_WALL_TIME`) before a budget runs; a
+/// finite budget too long for the clock is no budget. `Duration::from_secs_f64` would panic
+/// on both.
+pub fn deadline_after(start: Instant, w: f64) -> Option<Instant> {
+    Duration::try_from_secs_f64(w)
+        .ok()
+        .filter(|d| !d.is_zero())
+        .and_then(|d| start.checked_add(d))
+}
+
 /// The budgets of one integration: step attempts and wall-clock time.
 ///
 /// ```text
@@ -147,7 +163,7 @@ impl Budget {
             max_steps: budgets.max_steps(),
             deadline: budgets
                 .max_wall_time()
-                .map(|w| (Instant::now() + Duration::from_secs_f64(w), w)),
+                .and_then(|w| deadline_after(Instant::now(), w).map(|d| (d, w))),
         }
     }
 

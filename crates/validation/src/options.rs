@@ -1,7 +1,8 @@
 //! The solver choice of a request, laid over a case's own options.
 //!
 //! ```text
-//! SolverChoice { method, rtol, atol, step, controller, max_steps, max_wall_time }  (each optional)
+//! SolverChoice { method, rtol, atol, step, controller, max_steps, max_wall_time, max_memory }
+//!   (each optional)
 //! choice.apply(base) = base with the choice laid over it; the solver's rules decide
 //!   which option fits which method and what values are allowed (lash_solver::options)
 //! ```
@@ -9,7 +10,7 @@
 //! The rules are the solver's (`lash_solver::options`: `Family::takes` and
 //! [`SolverOptions::check`]); its typed errors become [`OptionError`]s that name the options
 //! by their engine names: `rtol`, `atol`, `step`, `controller`, `method`, `max_steps`,
-//! `max_wall_time`.
+//! `max_wall_time`, `max_memory`.
 //!
 //! Source: docs/outputs.md ("Method and controller names", "Defaults of a run").
 
@@ -21,6 +22,8 @@ use crate::error::{Error, OptionError};
 ///
 /// ```text
 /// method, rtol, atol, step, controller:  the method and its error or step control
+/// max_memory:                           the budget of the implicit methods' n² matrices
+///                                       (lash_solver::memory; "not enough memory")
 /// max_steps, max_wall_time:             budgets; running out is a solver failure
 ///                                       ("too many steps", "budget exhausted")
 /// ```
@@ -42,6 +45,8 @@ pub struct SolverChoice {
     pub max_steps: Option<usize>,
     /// Wall-clock budget of the integration, s.
     pub max_wall_time: Option<f64>,
+    /// Memory budget of the dense n² matrices, bytes (default: half of what is available).
+    pub max_memory: Option<u64>,
 }
 
 impl SolverChoice {
@@ -53,7 +58,7 @@ impl SolverChoice {
     /// an option given that the method does not take is an error (Family::takes):
     ///   rtol, atol on fixed-step methods; step on adaptive ones; controller on fixed-step
     ///   and diffsol's methods
-    /// rtol, atol, max_steps, max_wall_time = the choice, else base's
+    /// rtol, atol, max_steps, max_wall_time, max_memory = the choice, else base's
     /// step, controller = the choice, else base's if the method did not change, where the
     ///   method takes them (none else)
     /// then SolverOptions::check (a fixed-step method needs step, the ranges)
@@ -79,6 +84,9 @@ impl SolverChoice {
         }
         if let Some(w) = self.max_wall_time {
             o.max_wall_time = Some(w);
+        }
+        if let Some(m) = self.max_memory {
+            o.max_memory = Some(m);
         }
         if let Some(r) = self.rtol {
             o.rtol = r;

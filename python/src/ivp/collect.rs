@@ -7,7 +7,7 @@ use pyo3::types::{PyDict, PyList};
 use lash_solver::SolveError;
 
 use super::drive::Record;
-use super::parse::{default_controller, Parsed};
+use super::parse::Parsed;
 use super::system::{Jac, PySystem};
 use crate::convert::bytearray_from_f64s;
 use crate::errors::failure_kind;
@@ -62,7 +62,7 @@ pub fn collect<'py>(
         p.opts
             .controller
             .map(|c| c.name())
-            .or_else(|| default_controller(p.opts.method)),
+            .or_else(|| p.opts.method.default_controller().map(|c| c.name())),
     )?;
     if p.dense_output {
         let dense = (
@@ -91,7 +91,7 @@ pub fn collect<'py>(
         Some(e) => {
             let t_fail = e.time().map_or(p.t0, |s| p.dir * s);
             let y_fail = e.state().map_or_else(|| p.y0.clone(), <[f64]>::to_vec);
-            let message = failure_message(e, t_fail);
+            let message = failure_message(e, t_fail, p.dir, &|i| event_name(sys, i));
             out.set_item("status", -1)?;
             out.set_item("message", &message)?;
             out.set_item(
@@ -108,9 +108,22 @@ pub fn collect<'py>(
     Ok(out)
 }
 
+/// An event function's name for messages: its `__name__` (a lambda's is `<lambda>`), else
+/// its `repr`.
+fn event_name(sys: &PySystem<'_>, i: usize) -> String {
+    let Some(ev) = sys.events.get(i) else {
+        return "?".into();
+    };
+    ev.fun
+        .getattr("__name__")
+        .and_then(|n| n.extract::<String>())
+        .or_else(|_| ev.fun.repr().map(|r| r.to_string()))
+        .unwrap_or_else(|_| "?".into())
+}
+
 /// The failure's message with the time in the caller's t (the solver's own message uses
-/// solver time, which is −t when integrating backwards).
-fn failure_message(e: &SolveError, t: f64) -> String {
+/// solver time, which is −t when integrating backwards: `dir`); `name` names event `i`.
+fn failure_message(e: &SolveError, t: f64, dir: f64, name: &dyn Fn(usize) -> String) -> String {
     match e {
         SolveError::StepSizeTooSmall { h, .. } => {
             format!("step size too small at t = {t:e}: h = {h:e}")
@@ -136,5 +149,12 @@ fn failure_message(e: &SolveError, t: f64) -> String {
         }
         SolveError::InvalidOptions(m) => format!("invalid options: {m}"),
         SolveError::Interrupted { .. } => format!("stop requested at t = {t:e}"),
+        SolveError::EventNan { index, at, .. } => format!(
+            "event {index} ({}) returned NaN at t = {:e}, which has no sign: its crossings \
+             cannot be told (last good state at t = {t:e})",
+            name(*index),
+            dir * at
+        ),
+        SolveError::OutOfMemory(m) => m.to_string(),
     }
 }

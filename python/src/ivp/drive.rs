@@ -3,10 +3,13 @@
 //! states before event hooks.
 //!
 //! Dense output: every step's interpolant is sampled at the m + 1 Chebyshev–Lobatto points of
-//! its interval, m the degree of the method's dense output (`parse::dense_degree`), which
+//! its interval, m the degree of the method's dense output (`Method::dense_degree`, the
+//! solver's table of method facts), which
 //! reproduces it exactly (a polynomial of degree ≤ m is determined by m + 1 values);
 //! python/lash/_ivp.py evaluates it by barycentric interpolation (Berrut & Trefethen, SIAM
-//! Review 46(3) 501–517, 2004).
+//! Review 46(3) 501–517, 2004). The end nodes are the states themselves (the step's start,
+//! after any hook; its end, before any hook), not values of the interpolant, so that the
+//! solution passes through every recorded state exactly.
 
 use pyo3::prelude::*;
 
@@ -45,7 +48,8 @@ pub struct Record {
 
 /// Integrates `sys` as `p` says. An exception a callback raised comes back as `Err` (before
 /// any solver error); a solver failure is recorded in [`Record::failure`] with what was
-/// computed up to it; an options error is `Ok(Err(e))` for the caller to raise.
+/// computed up to it; an options error or memory refused before the start is `Ok(Err(e))`
+/// for the caller to raise.
 pub fn drive(
     sys: &PySystem<'_>,
     p: &Parsed<'_>,
@@ -67,7 +71,7 @@ pub fn drive(
             if let Some(err) = sys.take_error() {
                 return Err(err);
             }
-            if let SolveError::InvalidOptions(_) = e {
+            if let SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) = e {
                 return Ok(Err(e));
             }
             rec.failure = Some(e);
@@ -89,6 +93,10 @@ pub fn drive(
         None => push(&mut rec, p.s0, &p.y0),
     }
     let mut buf = vec![0.0; p.y0.len()];
+    // The state at the start of the step (after any hook): the segment's first node, exactly
+    // (diffsol's BDF interpolates its own start to rounding only, and `sol(t)` at a step's
+    // time must be `y` there, as scipy's tests ask to 1e-15).
+    let mut y_start = p.y0.clone();
     // Length of the last recorded dense-output segment.
     let mut last_len = 0.0f64;
     loop {
@@ -121,7 +129,9 @@ pub fn drive(
             rec.seg_t0.push(dir * s_prev);
             rec.seg_t1.push(dir * s_now);
             for (j, th) in nodes.iter().enumerate() {
-                if j == degree {
+                if j == 0 {
+                    rec.seg_values.extend_from_slice(&y_start);
+                } else if j == degree {
                     // The right end: the state before any hook.
                     match &pre_hook {
                         Some(yp) => rec.seg_values.extend_from_slice(yp),
@@ -153,6 +163,7 @@ pub fn drive(
                 push(&mut rec, s_now, it.y());
             }
         }
+        y_start.copy_from_slice(it.y());
         match outcome {
             StepOutcome::Event { stopped: true, .. } => {
                 rec.status = 1;

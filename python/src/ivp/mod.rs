@@ -29,9 +29,9 @@ use pyo3::types::PyDict;
 use lash_solver::{Method, SolveError};
 
 use crate::convert::Numpy;
-use crate::errors::usage_error;
+use crate::errors::{keyword, memory_error, usage_error};
 
-pub use parse::{default_controller, IvpArgs};
+pub use parse::IvpArgs;
 use system::{EventLog, PySystem};
 
 /// Integrates a Python ODE; the engine of `lash.solve_ivp` (python/lash/_ivp.py), which
@@ -45,6 +45,15 @@ use system::{EventLog, PySystem};
 /// or `(nodes, t0s, t1s, values)` as bytes), `failure` (None or `(kind, message, t, y)`).
 #[pyfunction]
 pub fn solve_ivp_core<'py>(
+    py: Python<'py>,
+    fun: Bound<'py, PyAny>,
+    args: IvpArgs<'py>,
+) -> PyResult<Bound<'py, PyDict>> {
+    crate::errors::guard(py, "lash.solve_ivp", || solve(py, fun, args))
+}
+
+/// The body of [`solve_ivp_core`] (inside its panic guard).
+fn solve<'py>(
     py: Python<'py>,
     fun: Bound<'py, PyAny>,
     args: IvpArgs<'py>,
@@ -69,11 +78,12 @@ pub fn solve_ivp_core<'py>(
         }),
         fun_calls: Cell::new(0),
         jac_calls: Cell::new(0),
+        jac_buf: RefCell::new(Vec::new()),
     };
-    let nodes = drive::lobatto_nodes(parse::dense_degree(p.opts.method));
+    let nodes = drive::lobatto_nodes(p.opts.method.dense_degree());
     let rec = match drive::drive(&sys, &p, &nodes)? {
         Ok(rec) => rec,
-        Err(e) => return Err(solve_error_to_usage(py, &e)),
+        Err(e) => return Err(setup_error(py, &e)),
     };
     if let Some(err) = sys.take_error() {
         return Err(err);
@@ -86,13 +96,15 @@ pub fn default_controllers() -> impl ExactSizeIterator<Item = (&'static str, Opt
 {
     Method::ALL
         .iter()
-        .map(|m| (m.name(), default_controller(*m)))
+        .map(|m| (m.name(), m.default_controller().map(|c| c.name())))
 }
 
-/// An options error as `lash.UsageError`; other failures cannot reach here.
-fn solve_error_to_usage(py: Python<'_>, e: &SolveError) -> PyErr {
+/// A failure before the first step: options (`lash.UsageError`) or memory refused for the
+/// method's dense matrices (`lash.OutOfMemoryError`); other failures cannot reach here.
+fn setup_error(py: Python<'_>, e: &SolveError) -> PyErr {
     match e {
-        SolveError::InvalidOptions(m) => usage_error(py, &m.to_string()),
+        SolveError::InvalidOptions(m) => usage_error(py, &m.render(&keyword)),
+        SolveError::OutOfMemory(m) => memory_error(py, m),
         other => usage_error(py, &other.to_string()),
     }
 }

@@ -9,6 +9,7 @@
 //! first_step, max_step,     → .h0, .h_max, .h_min (diffsol's methods too: h0 and h_min are
 //! min_step                     diffsol's own, h_max is imposed by stop times)
 //! max_steps, step           → .max_steps, .step (rk4's fixed step)
+//! max_memory                → .max_memory (the budget of the n² matrices, crate lash_solver::memory)
 //! t0, t1                    → d = sign(t1 − t0), solver span [d t0, d t1]; t1 = ±∞ runs up
 //!                              to the largest finite time (until a terminal event)
 //! t_eval                    → output times in solver time
@@ -73,35 +74,10 @@ pub struct IvpArgs<'py> {
     pub max_steps: usize,
     /// rk4's fixed step.
     pub step: Option<f64>,
+    /// Memory budget of the dense n² matrices, bytes (None: half of what is available).
+    pub max_memory: Option<u64>,
     /// Extra positional arguments of every callback.
     pub args: Vec<Bound<'py, PyAny>>,
-}
-
-/// The controller a method uses when none is given (docs/outputs.md, "Method and controller
-/// names"): `pi` for the embedded explicit pairs, `gustafsson` for Rodas5P, none for RK4 and
-/// diffsol's methods (they take no controller of ours).
-pub fn default_controller(method: Method) -> Option<&'static str> {
-    match method {
-        Method::Bs32 | Method::Dopri54 | Method::Tsit54 | Method::Dop853 => {
-            Some(ControllerKind::Pi.name())
-        }
-        Method::Rodas5p => Some(ControllerKind::Gustafsson.name()),
-        Method::Rk4 | Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => None,
-    }
-}
-
-/// Degree in t of a method's dense output on one step (crates/solver: `rk4` and `bs32` cubic
-/// Hermite, `dopri54`/`tsit54` order-4 continuous extensions and Rodas5P's interpolant of
-/// degree 4, DOP853's of degree 7; diffsol's BDF interpolates its difference table, degree =
-/// order ≤ 5, and its Runge–Kutta methods use Hermite or stage-weight polynomials of lower
-/// degree, so 7 covers them). tests/test_dense.py checks that `sol(t)` equals the
-/// integrator's own interpolation at `t_eval` for every method.
-pub fn dense_degree(method: Method) -> usize {
-    match method {
-        Method::Rk4 | Method::Bs32 => 3,
-        Method::Dopri54 | Method::Tsit54 | Method::Rodas5p => 4,
-        Method::Dop853 | Method::Bdf | Method::Trbdf2 | Method::Esdirk34 => 7,
-    }
 }
 
 /// What the parse stage gives the other stages.
@@ -220,6 +196,7 @@ pub fn parse<'py>(py: Python<'py>, a: IvpArgs<'py>) -> PyResult<Parsed<'py>> {
         h_min: a.min_step,
         h_max: a.max_step,
         max_steps: a.max_steps,
+        max_memory: a.max_memory,
         controller,
         ..SolverOptions::default()
     };

@@ -13,6 +13,7 @@ use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
+use lash_solver::memory::MemoryError;
 use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
 use crate::convert::Numpy;
@@ -79,6 +80,8 @@ pub struct PySystem<'py> {
     pub fun_calls: Cell<usize>,
     /// Calls of `jac` (Python).
     pub jac_calls: Cell<usize>,
+    /// The values `jac` returned, row-major n × n (allocated at the first call).
+    pub jac_buf: RefCell<Vec<f64>>,
 }
 
 impl<'py> PySystem<'py> {
@@ -207,24 +210,44 @@ impl OdeSystem for PySystem<'_> {
 
     fn jacobian(&self, s: f64, y: &[f64], mut jac: MatMut<'_, f64>) {
         let n = self.n;
-        let mut buf = vec![f64::NAN; n * n];
-        match &self.jac {
-            Jac::None => {}
-            Jac::Constant(m) => buf.copy_from_slice(m),
-            Jac::Callable(f) => {
-                if !self.failed() {
-                    if let Err(e) = self.eval_jac(f, self.dir * s, y, &mut buf) {
-                        self.store(e);
-                        buf.fill(f64::NAN);
-                    }
+        let copy = |jac: &mut MatMut<'_, f64>, m: &[f64]| {
+            for i in 0..n {
+                for j in 0..n {
+                    jac[(i, j)] = self.dir * m[i * n + j];
                 }
             }
-        }
-        for i in 0..n {
-            for j in 0..n {
-                jac[(i, j)] = self.dir * buf[i * n + j];
+        };
+        let f = match &self.jac {
+            Jac::None | Jac::Callable(_) if self.failed() => None,
+            Jac::None => None,
+            Jac::Constant(m) => return copy(&mut jac, m),
+            Jac::Callable(f) => Some(f),
+        };
+        let Some(f) = f else {
+            return jac.fill(f64::NAN);
+        };
+        // The callback's n² values, in a buffer allocated once and fallibly (its size comes
+        // from the input: a refusal is lash.OutOfMemoryError, not an abort).
+        let mut buf = self.jac_buf.borrow_mut();
+        if buf.len() != n * n {
+            let bytes = (n as u64).saturating_mul(n as u64).saturating_mul(8);
+            if buf.try_reserve_exact(n * n).is_err() {
+                let e = MemoryError {
+                    what: format!("the {n} × {n} Jacobian that jac returns"),
+                    needed: bytes,
+                    budget: 0,
+                    basis: "the allocator".into(),
+                };
+                self.store(crate::errors::memory_error(f.py(), &e));
+                return jac.fill(f64::NAN);
             }
+            buf.resize(n * n, f64::NAN);
         }
+        if let Err(e) = self.eval_jac(f, self.dir * s, y, &mut buf) {
+            self.store(e);
+            return jac.fill(f64::NAN);
+        }
+        copy(&mut jac, &buf);
     }
 
     fn n_events(&self) -> usize {
@@ -240,7 +263,8 @@ impl OdeSystem for PySystem<'_> {
 
     fn events(&self, s: f64, y: &[f64], g: &mut [f64]) {
         if self.failed() {
-            // NaN has no sign: no event is reported, and the stored error ends the run.
+            // NaN has no sign: the solver stops (SolveError::EventNan) and the stored
+            // exception is raised in its place (drive.rs).
             g.fill(f64::NAN);
             return;
         }

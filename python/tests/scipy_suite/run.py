@@ -16,7 +16,7 @@ What it does, in a temporary folder (nothing is written beside this script):
    registers scipy's markers (``slow``, ``fail_slow``, ``thread_unsafe``);
 4. runs pytest on it and counts the outcomes.
 
-It exits 0 when at least ``--min-pass`` tests pass (default 51, what passes today; issue 25 agreed 52), else
+It exits 0 when at least ``--min-pass`` tests pass (default 54, what passes today; issue 25 agreed 52), else
 1, after printing every test that failed. python/README.md ("scipy's own tests") lists the
 tests that still differ and why.
 """
@@ -31,8 +31,8 @@ import sys
 import tempfile
 import xml.etree.ElementTree as ET
 
-#: The floor: what passes today (51 of 58). Issue 25 agreed 52; not reached yet (python/README.md).
-MIN_PASS = 51
+#: The floor: what passes today (54 of 58; issue 25 agreed 52). python/README.md lists the rest.
+MIN_PASS = 54
 
 #: scipy's method names -> lash's (scipy's names of methods lash also has; Radau and LSODA,
 #: which lash lacks, run lash's nearest stiff method).

@@ -163,6 +163,11 @@ pub struct SolverOptions {
     /// Wall-clock budget in seconds, counted from the construction of the integrator; None for
     /// no budget. When it runs out the solve fails with `BudgetExhausted`.
     pub max_wall_time: Option<f64>,
+    /// Memory budget in bytes of the n² allocations (the implicit methods' dense Jacobian and
+    /// LU): more is refused with `OutOfMemory` before anything is allocated. Default None:
+    /// half of the memory available to the process ([`crate::memory`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_memory: Option<u64>,
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
@@ -193,6 +198,7 @@ impl Default for SolverOptions {
             event_rtol: 1e-13,
             event_samples: 4,
             max_wall_time: None,
+            max_memory: None,
             divergence_bound: 1e100,
             rk4_instability_steps: 0,
         }

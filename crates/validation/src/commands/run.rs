@@ -4,8 +4,9 @@
 //! Source: docs/outputs.md ("`lash run CASE`", "Files each command writes").
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
+use lash_solver::stepper::deadline_after;
 use lash_solver::{SolveError, SolverOptions};
 
 use crate::commands::default_out;
@@ -78,7 +79,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
     let deadline = o
         .solver
         .max_wall_time
-        .map(|w| start + Duration::from_secs_f64(w));
+        .and_then(|w| deadline_after(start, w));
     let case = Case::load(&o.case, None)?;
     let (prepared, mut req, settled) = run_request(case, o, deadline)?;
     let out = o
@@ -215,7 +216,7 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<RunResult, Error> {
     let deadline = o
         .solver
         .max_wall_time
-        .map(|w| Instant::now() + Duration::from_secs_f64(w));
+        .and_then(|w| deadline_after(Instant::now(), w));
     let (prepared, req, settled) = run_request(case, o, deadline)?;
     let mut r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
     r.summary.until_periodic = settled;

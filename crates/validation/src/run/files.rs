@@ -82,7 +82,7 @@ pub(crate) struct RunOutput<'a> {
 /// ```text
 /// { kind, message, t, h, h_limit, steps, reason }   (fields a kind lacks are null)
 /// kind: step_size_too_small | too_many_steps | non_finite_state | rk4_unstable
-///       | newton_failure | budget_exhausted | invalid_options
+///       | newton_failure | budget_exhausted | invalid_options | event_nan | out_of_memory
 /// ```
 ///
 /// Source: docs/outputs.md ("`failure.json`").
@@ -98,7 +98,7 @@ pub(crate) struct FailureError {
     pub h_limit: Option<f64>,
     /// Steps taken (too_many_steps) or flagged in a row (rk4_unstable).
     pub steps: Option<usize>,
-    /// Why (newton_failure, budget_exhausted, invalid_options).
+    /// Why (newton_failure, budget_exhausted, invalid_options, out_of_memory).
     pub reason: Option<String>,
 }
 
@@ -142,6 +142,11 @@ impl FailureError {
             SolveError::InvalidOptions(m) => {
                 f.reason = Some(m.to_string());
                 "invalid_options"
+            }
+            SolveError::EventNan { .. } => "event_nan",
+            SolveError::OutOfMemory(m) => {
+                f.reason = Some(m.to_string());
+                "out_of_memory"
             }
             // `lash run` exits 130 on a stop request and writes nothing; a library caller
             // that records one anyway gets its own kind.

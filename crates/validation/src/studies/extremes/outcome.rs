@@ -60,7 +60,10 @@ impl FailureKind {
             SolveError::Rk4Unstable { .. } => FailureKind::Rk4Unstable,
             SolveError::NewtonFailure { .. } => FailureKind::NewtonFailure,
             SolveError::BudgetExhausted { .. } => FailureKind::BudgetExhausted,
-            SolveError::InvalidOptions(_) | SolveError::Interrupted { .. } => return None,
+            SolveError::InvalidOptions(_)
+            | SolveError::Interrupted { .. }
+            | SolveError::EventNan { .. }
+            | SolveError::OutOfMemory(_) => return None,
         })
     }
 }

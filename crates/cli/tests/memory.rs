@@ -1,0 +1,103 @@
+//! End-to-end: an implicit method whose dense n × n matrices do not fit the memory budget is a
+//! solver failure (exit 3, "not enough memory") before anything is allocated, never a process
+//! killed by the allocator (issue 23: `lash run` on 3000 free bodies under `ulimit -v`
+//! printed "memory allocation of 2592000000 bytes failed" and aborted).
+
+mod common;
+use common::{json, lash};
+
+use std::process::Command;
+
+/// n free bodies under gravity, no joints: 6n state components.
+fn free_bodies(n: usize) -> String {
+    let bodies: Vec<String> = (0..n)
+        .map(|i| {
+            format!(
+                "{{\"name\": \"b{i}\", \"mass\": 1.0, \"inertia\": 0.1, \
+                 \"position\": [{i}.0, 0.0], \"velocity\": [0.0, 1.0]}}"
+            )
+        })
+        .collect();
+    format!(
+        "{{\"bodies\": [{}], \"gravity\": [0.0, -9.81], \"t_end\": 0.01}}",
+        bodies.join(", ")
+    )
+}
+
+#[test]
+fn max_memory_refuses_the_dense_matrices_with_exit_3() {
+    let d = tempfile::tempdir().unwrap();
+    let cwd = d.path();
+    std::fs::write(cwd.join("free.json"), free_bodies(10)).unwrap();
+    // bdf at n = 60: 4 · 60² · 8 = 115 200 bytes.
+    let o = lash(
+        &["run", "free.json", "--max-memory", "115199", "--out", "r"],
+        cwd,
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("not enough memory: bdf's dense Jacobian and LU (4 matrices of 60 × 60 f64)")
+            && err.contains("115200 bytes")
+            && err.contains("max_memory"),
+        "{err}"
+    );
+    let f = json(&cwd.join("r/failure.json"));
+    assert_eq!(f["error"]["kind"], "out_of_memory", "{f}");
+    // At the budget the run goes through, and an explicit method needs none of it.
+    let ok = lash(
+        &["run", "free.json", "--max-memory", "115200", "--out", "a"],
+        cwd,
+    );
+    assert_eq!(
+        ok.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let ok = lash(
+        &[
+            "run",
+            "free.json",
+            "--max-memory",
+            "1",
+            "--method",
+            "dopri54",
+            "--out",
+            "b",
+        ],
+        cwd,
+    );
+    assert_eq!(
+        ok.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let o = lash(&["run", "free.json", "--max-memory", "0"], cwd);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn three_thousand_bodies_under_a_6_gib_address_space_exit_3_not_abort() {
+    let d = tempfile::tempdir().unwrap();
+    let cwd = d.path();
+    std::fs::write(cwd.join("free3000.json"), free_bodies(3000)).unwrap();
+    // The limit through the shell, as a user would set it (ulimit -v counts KiB).
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 6291456 && exec '{}' run free3000.json --out r",
+            env!("CARGO_BIN_EXE_lash")
+        ))
+        .current_dir(cwd)
+        .output()
+        .expect("run sh");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    // 4 matrices of 18000 × 18000 f64.
+    assert!(
+        err.contains("10368000000 bytes") && err.contains("RLIMIT_AS"),
+        "{err}"
+    );
+}
