@@ -205,7 +205,9 @@ fn solver_failure_exits_3_and_keeps_what_it_can() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("holds files that are not a run's (keep.txt)"),
+        err.contains(
+            "is not a lash run directory (no .lash-run marker) and holds files (keep.txt)"
+        ),
         "{err}"
     );
     let names: Vec<_> = std::fs::read_dir(&out)
@@ -236,7 +238,7 @@ fn solver_failure_exits_3_and_keeps_what_it_can() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["failure.json", "partial_trajectory.csv"]);
+    assert_eq!(names, [".lash-run", "failure.json", "partial_trajectory.csv"]);
     let j = json(&f.join("failure.json"));
     assert_eq!(j["error"]["kind"], "rk4_unstable");
     let h_limit = j["error"]["h_limit"].as_f64().unwrap();
