@@ -238,7 +238,10 @@ fn solver_failure_exits_3_and_keeps_what_it_can() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, [".lash-run", "failure.json", "partial_trajectory.csv"]);
+    assert_eq!(
+        names,
+        [".lash-run", "failure.json", "partial_trajectory.csv"]
+    );
     let j = json(&f.join("failure.json"));
     assert_eq!(j["error"]["kind"], "rk4_unstable");
     let h_limit = j["error"]["h_limit"].as_f64().unwrap();
