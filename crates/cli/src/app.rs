@@ -48,7 +48,10 @@ where
                 out(&s);
                 Ok(())
             }
-            Parsed::Cli(c) => execute(c.command),
+            Parsed::Cli(c) => match c.command {
+                None => default_command(c.out).map(|_| ()),
+                command => execute(command),
+            },
         })
     });
     match stdout_error() {
@@ -77,7 +80,7 @@ pub fn guard<F: FnOnce() -> Result<(), Error>>(f: F) -> u8 {
 /// press, ideal vs dry vs lubricated, RK4 against the best adaptive method).
 pub fn execute(command: Option<Command>) -> Result<(), Error> {
     let Some(command) = command else {
-        return default_command().map(|_| ());
+        return default_command(None).map(|_| ());
     };
     match command {
         Command::Run(a) => run_command(&a).map(|_| ()),
@@ -132,9 +135,9 @@ pub fn execute(command: Option<Command>) -> Result<(), Error> {
 }
 
 /// The default run: notes each case on standard error, prints the table and the files
-/// written (into `validation/reports/default`).
-pub fn default_command() -> Result<Written<Headline>, Error> {
-    let w = engine::default_run(None, &StderrProgress::new())?;
+/// written (into `out`, default `./lash-default/`).
+pub fn default_command(dir: Option<PathBuf>) -> Result<Written<Headline>, Error> {
+    let w = engine::default_run(dir, &StderrProgress::new())?;
     out(&w.result.to_markdown());
     outln(&format!(
         "\nwrote {} files to {}",
@@ -353,6 +356,7 @@ mod tests {
                 jobs: Some(2),
                 shard: Some(Shard { index: i, count: 2 }),
                 out: Some(out.clone()),
+                max_wall_time: None,
             };
             let r = sweep_command(&a, runner).unwrap();
             assert_eq!((r.selected, r.ok), (3, 3));

@@ -7,10 +7,10 @@
 //!              [--max-steps N] [--max-wall-time S] [--t-end S]
 //!              [--samples-per-revolution N | --output-every DT] [--out DIR]
 //! lash study paper [--out DIR]
-//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
+//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
-//!                          [--controllers C,..] [--t-end S] [--out DIR]
-//! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--out DIR]
+//!                          [--controllers C,..] [--t-end S] [--max-wall-time S] [--out DIR]
+//! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--max-wall-time S] [--out DIR]
 //! lash merge DIR... [--out DIR] [--allow-partial]
 //! lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
@@ -57,13 +57,21 @@ use crate::exit::flagged;
     name = "lash",
     version,
     long_about = None,
-    about = "Planar mechanisms with revolute clearance joints: runs, studies, comparisons, work-precision, sweeps"
+    about = "Planar mechanisms with revolute clearance joints: runs, studies, comparisons, work-precision, sweeps",
+    after_help = "Without a command, `lash` runs the default job: the paper's press at 150 rpm with \
+a 0.1 mm clearance (ideal, dry and lubricated joint), the paper's RK4 at its largest stable step \
+against the best adaptive method at matched accuracy, each against a converged reference. It \
+prints the table and writes it, the figures and each case's reference run to ./lash-default/ \
+(or --out DIR), replacing that directory as a whole.",
+    args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
-    /// What to do; without one, the default run: the 150 rpm press, ideal vs dry vs
-    /// lubricated, the paper's RK4 against the best adaptive method.
+    /// What to do; without one, the default run (see below).
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Output directory of the default run (no command). Default `./lash-default/`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
 /// The subcommands.
@@ -353,6 +361,11 @@ pub struct CompareArgs {
     /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
+    /// Wall-clock budget of each integration, s; finite and > 0. An integration that runs
+    /// out fails with "budget exhausted" (the reference, or that row of compare.md). Default: none
+    #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
+          allow_hyphen_values = true)]
+    pub max_wall_time: Option<f64>,
     /// Output directory. Default `out/compare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -366,6 +379,7 @@ impl CompareArgs {
             tolerances: self.tolerances.clone(),
             steps: self.steps.clone(),
             t_end: self.t_end,
+            max_wall_time: self.max_wall_time,
             out: self.out.clone(),
         }
     }
@@ -404,6 +418,11 @@ pub struct WorkPrecisionArgs {
     /// End time override, s (scene cases only). Default: the scene's t_end or revolutions.
     #[arg(long = "t-end", value_name = "S", value_parser = parse_t_end, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
+    /// Wall-clock budget of each integration, s; finite and > 0. An integration that runs
+    /// out fails with "budget exhausted" (the reference, or that run of the table). Default: none
+    #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
+          allow_hyphen_values = true)]
+    pub max_wall_time: Option<f64>,
     /// Output directory. Default `out/work-precision/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -419,6 +438,7 @@ impl WorkPrecisionArgs {
             steps: self.steps.clone(),
             controllers: self.controllers.clone(),
             t_end: self.t_end,
+            max_wall_time: self.max_wall_time,
             out: self.out.clone(),
         }
     }
@@ -449,6 +469,11 @@ pub struct SweepArgs {
     /// every point.
     #[arg(long, value_name = "I/N", value_parser = parse_shard)]
     pub shard: Option<Shard>,
+    /// Wall-clock budget of each integration, s; finite and > 0. An integration that runs
+    /// out fails with "budget exhausted" (that point, recorded as a solver failure). Default: none
+    #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
+          allow_hyphen_values = true)]
+    pub max_wall_time: Option<f64>,
     /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -462,6 +487,7 @@ impl SweepArgs {
             jobs: self.jobs,
             shard: self.shard,
             out: self.out.clone(),
+            max_wall_time: self.max_wall_time,
         }
     }
 }
@@ -859,7 +885,39 @@ mod tests {
 
     #[test]
     fn no_subcommand_is_the_default_run() {
-        assert!(cli(&[]).unwrap().command.is_none());
+        let c = cli(&[]).unwrap();
+        assert!(c.command.is_none() && c.out.is_none());
+        let c = cli(&["--out", "here"]).unwrap();
+        assert_eq!(c.out, Some(PathBuf::from("here")));
+        // The default run's --out is not a subcommand's.
+        assert!(cli(&["--out", "here", "run", "c.json"]).is_err());
+    }
+
+    #[test]
+    fn long_commands_take_a_wall_time_budget() {
+        let c = cli(&["compare", "c.json", "--max-wall-time", "5"]).unwrap();
+        let Some(Command::Compare(a)) = c.command else {
+            panic!()
+        };
+        assert_eq!(a.options().max_wall_time, Some(5.0));
+        let c = cli(&["work-precision", "c.json", "--max-wall-time", "6"]).unwrap();
+        let Some(Command::WorkPrecision(a)) = c.command else {
+            panic!()
+        };
+        assert_eq!(a.options().max_wall_time, Some(6.0));
+        let c = cli(&["sweep", "s.json", "--max-wall-time", "7"]).unwrap();
+        let Some(Command::Sweep(a)) = c.command else {
+            panic!()
+        };
+        assert_eq!(a.options().max_wall_time, Some(7.0));
+        for cmd in [
+            ["compare", "c.json"],
+            ["work-precision", "c.json"],
+            ["sweep", "s.json"],
+        ] {
+            let m = usage(&[cmd[0], cmd[1], "--max-wall-time", "0"]);
+            assert!(m.contains("max-wall-time must be > 0, got 0"), "{m}");
+        }
     }
 
     #[test]

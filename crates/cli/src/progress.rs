@@ -74,15 +74,26 @@ impl StderrProgress {
         }
     }
 
-    /// Counts a finished item; the log line for it when no bar is drawn.
-    fn count(&self, what: &str, secs: f64) -> Option<String> {
+    /// Counts a finished item and, when no bar is drawn, hands its log line to `emit` while
+    /// the count is still held: the lines of items that finish together on several threads
+    /// come out in the order of their numbers ("[2/4]" before "[3/4]").
+    fn count_then(&self, what: &str, secs: f64, emit: impl FnOnce(String)) {
         let mut g = self.batch.lock().unwrap_or_else(|e| e.into_inner());
-        let b = g.as_mut()?;
+        let Some(b) = g.as_mut() else {
+            return;
+        };
         b.done += 1;
-        if self.draw {
-            return None;
+        if !self.draw {
+            emit(log_line(b, what, secs));
         }
-        Some(log_line(b, what, secs))
+    }
+
+    /// Counts a finished item; the log line for it when no bar is drawn.
+    #[cfg(test)]
+    fn count(&self, what: &str, secs: f64) -> Option<String> {
+        let mut line = None;
+        self.count_then(what, secs, |l| line = Some(l));
+        line
     }
 }
 
@@ -152,9 +163,7 @@ impl Progress for StderrProgress {
     }
 
     fn finished(&self, what: &str, secs: f64) {
-        if let Some(line) = self.count(what, secs) {
-            eprintln!("{line}");
-        }
+        self.count_then(what, secs, |line| eprintln!("{line}"));
         if let Some(b) = self.bar.get() {
             b.inc(1);
             b.set_message(what.to_string());
@@ -173,6 +182,31 @@ impl Progress for StderrProgress {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Items finishing together on several threads: each line is numbered and emitted in one
+    /// step, so the lines come out numbered 1, 2, …, n (the flake of long_work.rs, "[3/4]"
+    /// printed before "[2/4]", came from counting and printing in two steps).
+    #[test]
+    fn lines_of_items_finishing_together_come_out_in_order() {
+        let p = StderrProgress::with_bar(false);
+        let n = 8 * 200;
+        p.started("points", n);
+        let out = Mutex::new(Vec::new());
+        std::thread::scope(|s| {
+            for _ in 0..8 {
+                s.spawn(|| {
+                    for _ in 0..200 {
+                        p.count_then("p", 0.0, |l| out.lock().unwrap().push(l));
+                    }
+                });
+            }
+        });
+        let out = out.into_inner().unwrap();
+        assert_eq!(out.len(), n);
+        for (k, l) in out.iter().enumerate() {
+            assert!(l.starts_with(&format!("[{}/{n}] p ", k + 1)), "{k}: {l}");
+        }
+    }
 
     #[test]
     fn without_a_terminal_each_item_is_a_line_with_what_is_left() {

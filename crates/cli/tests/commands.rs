@@ -209,7 +209,9 @@ fn solver_failure_exits_3_and_keeps_what_it_can() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("holds files that are not a run's (keep.txt)"),
+        err.contains(
+            "is not a lash run directory (no .lash-run marker) and holds files (keep.txt)"
+        ),
         "{err}"
     );
     let names: Vec<_> = std::fs::read_dir(&out)
@@ -240,7 +242,10 @@ fn solver_failure_exits_3_and_keeps_what_it_can() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["failure.json", "partial_trajectory.csv"]);
+    assert_eq!(
+        names,
+        [".lash-run", "failure.json", "partial_trajectory.csv"]
+    );
     let j = json(&f.join("failure.json"));
     assert_eq!(j["error"]["kind"], "rk4_unstable");
     let h_limit = j["error"]["h_limit"].as_f64().unwrap();
@@ -463,4 +468,208 @@ fn sweep_runs_real_points_resumes_and_merges() {
     // Each point wrote its summary with the point's speed.
     let s = json(&first[0].join("summary.json"));
     assert_eq!(s["case"], "lub_short");
+}
+
+/// `--max-wall-time` bounds every integration of the long commands (issue 22): a budget far
+/// below one step's cost ends each sweep point as a recorded solver failure ("budget
+/// exhausted"), and compare's reference as a solver failure (exit 3); a generous one changes
+/// nothing.
+#[test]
+fn long_commands_stop_each_integration_at_the_wall_time_budget() {
+    let d = tempfile::tempdir().unwrap();
+    short_press(d.path(), "lub", PressJoint::Lubricated, 1e-4, 0.02);
+    std::fs::write(
+        d.path().join("grid.json"),
+        r#"{"case": "lub.json", "method": ["bdf", "dopri54"]}"#,
+    )
+    .unwrap();
+    let o = lash(
+        &[
+            "sweep",
+            "grid.json",
+            "--out",
+            "s",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("2 solver failures"), "{err}");
+    for e in std::fs::read_dir(d.path().join("s")).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            let r = json(&p.join("result.json"));
+            assert_eq!(r["status"], "solver_failed", "{r}");
+            assert!(
+                r["error"].as_str().unwrap().contains("budget exhausted"),
+                "{r}"
+            );
+        }
+    }
+    ok(
+        &["sweep", "grid.json", "--out", "t", "--max-wall-time", "600"],
+        d.path(),
+    );
+    let o = lash(
+        &[
+            "compare",
+            "lub.json",
+            "--out",
+            "c",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("budget exhausted"), "{err}");
+    let o = lash(
+        &[
+            "work-precision",
+            "lub.json",
+            "--out",
+            "w",
+            "--max-wall-time",
+            "1e-9",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("budget exhausted"), "{err}");
+}
+
+/// Sweeps of any scene field (issue 22): `set` by index and by element name; every path a
+/// column of merged.csv named as written and a key of the point's params; the values reach the
+/// scene (the heavier rocker and the larger friction change the run).
+#[test]
+fn sweep_sets_any_scene_field_by_path() {
+    let d = tempfile::tempdir().unwrap();
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/examples/fourbar_clearance.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(case).unwrap()).unwrap();
+    j.as_object_mut().unwrap().remove("revolutions");
+    j["t_end"] = serde_json::json!(0.3);
+    std::fs::write(d.path().join("fourbar.json"), j.to_string()).unwrap();
+    std::fs::write(
+        d.path().join("grid.json"),
+        r#"{"case": "fourbar.json", "method": ["bdf"], "rtol": [1e-6],
+            "set": {"joints[coupler_rocker].friction.mu": [0.05, 0.3],
+                    "bodies[2].mass": [0.8, 2.0]}}"#,
+    )
+    .unwrap();
+    let o = lash(&["sweep", "grid.json", "--out", "s"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("4 points to run"), "{err}");
+    ok(&["merge", "s"], d.path());
+    let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| head.iter().position(|c| *c == n).expect(n);
+    let (mu, mass) = (
+        col("joints[coupler_rocker].friction.mu"),
+        col("bodies[2].mass"),
+    );
+    let fric = col("metrics.energy.dissipated_friction");
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    let mut seen: Vec<(String, String)> = rows
+        .iter()
+        .map(|r| (r[mu].to_string(), r[mass].to_string()))
+        .collect();
+    seen.sort();
+    assert_eq!(
+        seen,
+        [
+            ("0.05", "0.8"),
+            ("0.05", "2.0"),
+            ("0.3", "0.8"),
+            ("0.3", "2.0")
+        ]
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+    );
+    // Distinct values give distinct runs: friction dissipation differs between the rows.
+    let mut f: Vec<&str> = rows.iter().map(|r| r[fric]).collect();
+    f.sort();
+    f.dedup();
+    assert_eq!(f.len(), 4, "{csv}");
+    // The point's params name the path as written.
+    let dirs: Vec<_> = std::fs::read_dir(d.path().join("s"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    let r = json(&dirs[0].join("result.json"));
+    assert!(
+        r["params"]["joints[coupler_rocker].friction.mu"].is_number(),
+        "{r}"
+    );
+    assert!(r["params"]["bodies[2].mass"].is_number(), "{r}");
+}
+
+/// Bad sweep files end in one line naming the key, with nothing run (no output directory):
+/// an unknown path, a value of the wrong type, a value the scene rejects, an empty list, and
+/// speed_rpm on a scene a motor turns.
+#[test]
+fn bad_set_sweeps_fail_before_any_point_runs() {
+    let d = tempfile::tempdir().unwrap();
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/examples/fourbar_clearance.json");
+    std::fs::copy(&case, d.path().join("fourbar.json")).unwrap();
+    let punch = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/press/punch_motor_150rpm_c0.1.json");
+    std::fs::copy(&punch, d.path().join("punch.json")).unwrap();
+    for (i, (body, expect)) in [
+        (
+            r#""set": {"joints[coupler_rocker].friction.nu": [0.1]}"#,
+            "set['joints[coupler_rocker].friction.nu'] (point 0 (",
+        ),
+        (
+            r#""set": {"joints[nope].friction.mu": [0.1]}"#,
+            "joints has no element named 'nope'",
+        ),
+        (r#""set": {"bodies[2].mass": ["heavy"]}"#, "bodies[2].mass"),
+        (r#""set": {"bodies[2].mass": [-1.0]}"#, "bodies[2].mass"),
+        (
+            r#""set": {"bodies[2].mass": []}"#,
+            "set['bodies[2].mass'] is an empty list",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let f = format!("bad{i}.json");
+        std::fs::write(
+            d.path().join(&f),
+            format!(r#"{{"case": "fourbar.json", {body}}}"#),
+        )
+        .unwrap();
+        let out = format!("o{i}");
+        let o = lash(&["sweep", &f, "--out", &out], d.path());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{body}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{body}: {err}");
+        assert!(err.contains(expect), "{body}: {err}");
+        assert!(!d.path().join(&out).exists(), "{body}: ran something");
+    }
+    std::fs::write(
+        d.path().join("motor.json"),
+        r#"{"case": "punch.json", "speed_rpm": [120, 150]}"#,
+    )
+    .unwrap();
+    let o = lash(&["sweep", "motor.json", "--out", "m"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("speed_rpm needs the scene's crank_driver role") && err.contains("point 0"),
+        "{err}"
+    );
+    assert!(!d.path().join("m").exists());
 }

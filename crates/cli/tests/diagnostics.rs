@@ -353,3 +353,56 @@ fn diagnostics_solver_failures_exit_3() {
         assert!(!d.path().join("x").exists());
     }
 }
+
+/// `lash stiffness` and `lash run --method rk4` apply one RK4 stability criterion (issue 22):
+/// on the four-bar with a dry clearance, the run accepts the step stiffness measured stable and
+/// stops at the step it measured unstable with the run's own "beyond its stability limit".
+/// (Before, the measurement left the run's check out and called 4.87e-4 s stable, while the
+/// run failed from 3.25e-4 s.)
+#[test]
+fn stiffness_and_run_give_one_rk4_limit() {
+    let d = tempfile::tempdir().unwrap();
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/examples/fourbar_clearance.json");
+    let case = case.to_str().unwrap();
+    ok(
+        &["stiffness", case, "--out", "st", "--samples", "50"],
+        d.path(),
+    );
+    let m = &json(&d.path().join("st/stiffness.json"))["rk4_limit_measured"];
+    let (stable, unstable) = (
+        m["h_stable"].as_f64().unwrap(),
+        m["h_unstable"].as_f64().unwrap(),
+    );
+    assert!(unstable / stable <= 1.0 + 1.1e-4, "{m}");
+    let step = |h: f64| format!("{h:e}");
+    ok(
+        &[
+            "run",
+            case,
+            "--method",
+            "rk4",
+            "--step",
+            &step(stable),
+            "--out",
+            "a",
+        ],
+        d.path(),
+    );
+    let o = lash(
+        &[
+            "run",
+            case,
+            "--method",
+            "rk4",
+            "--step",
+            &step(unstable),
+            "--out",
+            "b",
+        ],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("beyond its stability limit"), "{err}");
+}

@@ -413,7 +413,8 @@ pub fn verdict(
 /// Settings of the measured RK4 stability limit.
 ///
 /// ```text
-/// stable(h)  ⇔  fixed-step RK4 over the span does not fail with NonFiniteState
+/// stable(h)  ⇔  fixed-step RK4 over the span does not fail with NonFiniteState (nor with
+///               Rk4Unstable, when `base` turns RK4's own stability check on)
 ///               and max_k ‖y_k‖∞ ≤ growth_bound · M_ref
 /// M_ref = max_k ‖y_k‖∞ of the run at the lower end h_lo of the bracket (the reference run);
 ///         h_lo is trusted when the run at h_lo/2 reaches the same size within growth_bound
@@ -482,8 +483,8 @@ impl MeasuredLimit {
 pub type StateCheck<'a> = &'a dyn Fn(f64, &[f64]) -> bool;
 
 /// Result of one probe run: Some(max ‖y‖∞) when the run stayed finite, within `bound` and
-/// `valid` at every accepted state (None when it failed with NonFiniteState, exceeded the
-/// bound or left the valid set), and the RHS evaluations.
+/// `valid` at every accepted state (None when it failed with NonFiniteState or Rk4Unstable,
+/// exceeded the bound or left the valid set), and the RHS evaluations.
 fn rk4_probe<S: OdeSystem + ?Sized>(
     sys: &S,
     t_span: (f64, f64),
@@ -518,7 +519,9 @@ fn rk4_probe<S: OdeSystem + ?Sized>(
                     return Ok((Some(size), it.stats().rhs_evals));
                 }
             }
-            Err(SolveError::NonFiniteState { .. }) => return Ok((None, it.stats().rhs_evals)),
+            Err(SolveError::NonFiniteState { .. } | SolveError::Rk4Unstable { .. }) => {
+                return Ok((None, it.stats().rhs_evals))
+            }
             Err(e) => return Err(e.into()),
         }
     }

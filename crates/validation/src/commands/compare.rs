@@ -63,6 +63,9 @@ pub struct CompareOptions {
     pub steps: Option<Vec<f64>>,
     /// End time override, s (scene cases only).
     pub t_end: Option<f64>,
+    /// Wall-clock budget of each integration (the reference and every row), s; a row over it
+    /// fails with "budget exhausted". None = no budget.
+    pub max_wall_time: Option<f64>,
     /// Output directory; None = `out/compare/CASE`.
     pub out: Option<PathBuf>,
 }
@@ -71,7 +74,8 @@ pub struct CompareOptions {
 /// method at each tolerance, against the case's reference; writes compare.md and
 /// compare.json. Notes the reference and a derived RK4 step.
 pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Comparison>, Error> {
-    let p = Prepared::load_spec(&o.case, None)?;
+    let mut p = Prepared::load_spec(&o.case, None)?;
+    p.max_wall_time = o.max_wall_time;
     let out = o
         .out
         .clone()
@@ -120,6 +124,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         reference_agreement: reference.agreement.clone(),
         window: reference.window.clone(),
         t_end: reference.t_end,
+        error_measure: reference.measure(),
         runs,
     };
     let files = c.write(&out)?;
@@ -152,6 +157,9 @@ pub struct WorkPrecisionOptions {
     pub controllers: Option<Vec<ControllerKind>>,
     /// End time override, s (scene cases only).
     pub t_end: Option<f64>,
+    /// Wall-clock budget of each integration (the reference and every run), s; a run over it
+    /// fails with "budget exhausted". None = no budget.
+    pub max_wall_time: Option<f64>,
     /// Output directory; None = `out/work-precision/CASE`.
     pub out: Option<PathBuf>,
 }
@@ -190,7 +198,8 @@ pub fn work_precision(
 ) -> Result<Written<WorkPrecisionResult>, Error> {
     let case = Case::load(&o.case, None)?;
     let plan = o.plan()?;
-    let p = Prepared::load(case)?;
+    let mut p = Prepared::load(case)?;
+    p.max_wall_time = o.max_wall_time;
     let out = o
         .out
         .clone()

@@ -303,11 +303,30 @@ pub fn describe_run(r: &RunResult) -> String {
         parts.push(format!("max ‖Φ‖ {:.1e}", m.constraint_violation_max));
         out.push_str(&format!("  metrics: {}\n", parts.join(", ")));
         if let Some(e) = &m.energy {
-            out.push_str(&format!(
-                "  energy: driver work {:.6} J, balance error {:.3e} J (quadrature error {:.1e} J)\n",
-                e.driver_work, e.balance_error, e.quadrature_error
-            ));
+            out.push_str(&format!("  energy: {}\n", energy_line(e)));
         }
     }
     out
+}
+
+/// The printed energy line: the driver's work, every other term that is not zero, and the
+/// balance (docs/outputs.md, `energy`).
+fn energy_line(e: &crate::report::metrics::Energy) -> String {
+    let mut parts = vec![format!("driver work {:.6} J", e.driver_work)];
+    for (name, v) in [
+        ("motor work", e.motor_work),
+        ("load work", e.load_work),
+        ("damper dissipation", e.dissipated_damper),
+        ("spring potential change", e.element_potential_change),
+    ] {
+        if v != 0.0 {
+            parts.push(format!("{name} {v:.6} J"));
+        }
+    }
+    format!(
+        "{}, balance error {:.3e} J (quadrature error {:.1e} J)",
+        parts.join(", "),
+        e.balance_error,
+        e.quadrature_error
+    )
 }

@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
+use lash_model::Scene;
+
 use crate::commands::default_out;
 use crate::error::{Error, OptionError};
 use crate::options::SolverChoice;
@@ -33,6 +35,9 @@ pub struct SweepRunOptions {
     pub shard: Option<Shard>,
     /// Output directory (one subdirectory per point); None = `out/sweep/STEM` of the file.
     pub out: Option<PathBuf>,
+    /// Wall-clock budget of each point's integration, s; a point over it is a solver failure
+    /// ("budget exhausted", recorded like any other). None = no budget.
+    pub max_wall_time: Option<f64>,
 }
 
 /// What a sweep did.
@@ -54,8 +59,14 @@ pub struct SweepOutcome {
 /// case, then [`sweep_with`].
 pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
     let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
-    spec.points()?;
-    let base = Prepared::load(spec.case.clone())?;
+    let points = spec.points()?;
+    let mut base = Prepared::load(spec.case.clone())?;
+    base.max_wall_time = o.max_wall_time;
+    // Every point's scene is built and checked before any point runs: a path that does not
+    // exist or a value the scene rejects is an input error naming the path and the point.
+    for p in &points {
+        point_scene(&base, p)?;
+    }
     sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
 }
 
@@ -95,6 +106,37 @@ where
     })
 }
 
+/// The scene of a point: the base scene with the point's shorthands
+/// ([`crate::sweep::spec::apply_params`]) and its `set` paths ([`crate::sweep::set::apply_set`])
+/// laid over it, checked as a scene file is; None when the point changes no scene field.
+fn point_scene(base: &Prepared, point: &SweepPoint) -> Result<Option<Scene>, Error> {
+    let pp = &point.params;
+    let physical = pp.speed_rpm.is_some()
+        || pp.clearance.is_some()
+        || pp.viscosity.is_some()
+        || pp.stiffness.is_some();
+    if !physical && pp.set.is_empty() {
+        return Ok(None);
+    }
+    let which = format!("point {} ({})", point.index, point.id);
+    let Some(scene) = base.scene() else {
+        return Err(Error::Input(format!(
+            "sweep: speed_rpm, clearance, viscosity, stiffness and set need a scene case, not {}",
+            base.case.name
+        )));
+    };
+    let mut s = scene.clone();
+    crate::sweep::spec::apply_params(&mut s, pp)
+        .map_err(|e| Error::Input(format!("{e} ({which})")))?;
+    let s = crate::sweep::set::apply_set(&s, &pp.set, &which)?;
+    s.validate().map_err(|e| {
+        Error::Input(format!(
+            "sweep: {which}: the scene rejects its parameters: {e}"
+        ))
+    })?;
+    Ok(Some(s))
+}
+
 /// The point runner of a sweep: the base case with the point's physical parameters laid over
 /// its scene ([`crate::sweep::spec::apply_params`]) and its solver choice over the case's defaults;
 /// writes DIR/summary.json and returns the summary, flattened, for the merged table. A
@@ -105,23 +147,13 @@ pub(crate) fn sweep_point(
     dir: &Path,
 ) -> Result<PointResult, Error> {
     let pp = &point.params;
-    let physical = pp.speed_rpm.is_some()
-        || pp.clearance.is_some()
-        || pp.viscosity.is_some()
-        || pp.stiffness.is_some();
-    let prepared = match base.scene() {
-        Some(scene) if physical => {
-            let mut s = scene.clone();
-            crate::sweep::spec::apply_params(&mut s, pp)?;
-            Prepared::with_scene(base.case.clone(), s)?
+    let prepared = match point_scene(base, point)? {
+        Some(s) => {
+            let mut p = Prepared::with_scene(base.case.clone(), s)?;
+            p.max_wall_time = base.max_wall_time;
+            p
         }
-        None if physical => {
-            return Err(Error::Input(format!(
-                "sweep: speed_rpm, clearance, viscosity and stiffness need a scene case, not {}",
-                base.case.name
-            )))
-        }
-        _ => base.clone(),
+        None => base.clone(),
     };
     let choice = SolverChoice {
         method: pp.method,

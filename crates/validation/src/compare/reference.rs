@@ -554,6 +554,11 @@ pub struct Comparison {
     pub window: ErrorWindow,
     /// End time of every run, s.
     pub t_end: f64,
+    /// What `error` measures for this case, in words (the slider acceleration's relative RMS
+    /// error, the journal centre's largest error in clearances, the state's relative RMS
+    /// error, or a test problem's largest relative error at t_end).
+    #[serde(default)]
+    pub error_measure: String,
     /// The runs, in order.
     pub runs: Vec<Compared>,
 }
@@ -568,13 +573,14 @@ impl Comparison {
         let mut s = format!("# Method comparison: {}\n\n", self.case);
         s.push_str(&format!(
             "Reference: {}.\n\nErrors over the {} [{}, {}] s, t_end = {} s. `error` is the \
-             relative RMS error of the slider acceleration (test problems: the largest \
-             relative error at t_end); `acc max` in m/s², `orbit` the largest error of e/c.\n\n",
+             {} for this case; `acc max` (m/s², the slider acceleration's largest error) and \
+             `orbit` (the largest error of e/c) where the scene has those roles.\n\n",
             self.reference,
             self.window.label,
             fmt_num(self.window.start),
             fmt_num(self.window.end),
-            fmt_num(self.t_end)
+            fmt_num(self.t_end),
+            self.error_measure
         ));
         s.push_str("| method | setting | error | acc max, m/s² | orbit | wall time, s | RHS evals | steps | events | contact onsets |\n");
         s.push_str("|---|---|---|---|---|---|---|---|---|---|\n");
@@ -657,6 +663,7 @@ mod tests {
                 label: "first half revolution".into(),
             },
             t_end: 0.4,
+            error_measure: "largest error of the journal centre, in clearances".into(),
             runs: vec![Compared {
                 method: Method::Rk4,
                 controller: None,
@@ -675,6 +682,17 @@ mod tests {
         let md = c.to_markdown();
         assert!(md.contains("Reference: dop853 at rtol 1e-12."));
         assert!(md.contains("first half revolution [0, 0.2] s"));
+        // It names the error of the scene at hand, not the slider's.
+        assert!(
+            md.contains(
+                "`error` is the largest error of the journal centre, in clearances for this case"
+            ),
+            "{md}"
+        );
+        assert!(
+            !md.contains("relative RMS error of the slider acceleration"),
+            "{md}"
+        );
         assert!(
             md.contains("| rk4 | h 2e-4 | failed: non-finite \\| state |"),
             "{md}"

@@ -16,8 +16,9 @@
 //! slider_x_end                x at t_end
 //! constraint_violation_max    max ‖Φ(q, t)‖ over S (no refinement)
 //! clearance_joints.NAME       eps_max … film_thickness_min of every clearance joint
-//! energy.balance_error        W_driver − (ΔT + ΔV + D_damping + D_friction + D_film)
-//! energy.quadrature_error     estimated error of the integrals W_driver, D_* (Richardson)
+//! energy.balance_error        W_driver + W_load + W_motor
+//!                             − (ΔT + ΔV + D_damping + D_friction + D_film + D_damper)
+//! energy.quadrature_error     estimated error of the integrals W_*, D_* (Richardson)
 //! ```
 //!
 //! Extrema over the dense output ([`Peaks`]): every accepted step [a, b] that reaches into
@@ -183,18 +184,19 @@ pub struct EventRecord {
 /// Energy totals over the whole run, J, as the model accumulates them.
 ///
 /// ```text
-/// W_driver = ∫ τ_driver θ̇ dt;  ΔT, ΔV (gravity and contact elastic energy);
-/// D_* = ∫ (dissipated power) dt ≥ 0
+/// W_driver = ∫ τ_driver θ̇ dt;  W_load = ∫ (Σ F·ṙ^P + Σ τ φ̇) dt;  W_motor = ∫ Σ τ ω dt;
+/// ΔT, ΔV (gravity, contact elastic energy and the springs' potential);
+/// D_* = ∫ (dissipated power) dt ≥ 0   (contact damping, friction, film, dampers)
 /// ```
 ///
-/// Source: docs/outputs.md (`energy`).
+/// Source: docs/outputs.md (`energy`); docs/model.md §1.8, §10.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct EnergyTotals {
     /// Work done by the crank driver, J.
     pub driver_work: f64,
     /// Change of kinetic energy, J.
     pub kinetic_change: f64,
-    /// Change of potential energy (gravity and contact elastic energy), J.
+    /// Change of potential energy (gravity, contact elastic energy, springs), J.
     pub potential_change: f64,
     /// Dissipated by contact damping, J.
     pub dissipated_damping: f64,
@@ -202,7 +204,15 @@ pub(crate) struct EnergyTotals {
     pub dissipated_friction: f64,
     /// Dissipated by the oil film, J.
     pub dissipated_film: f64,
-    /// Estimated absolute error of the time integrals above (driver work and the three
+    /// Work done by the applied forces and torques, J.
+    pub load_work: f64,
+    /// Work done by the motors, J.
+    pub motor_work: f64,
+    /// Dissipated by the dampers of the spring-dampers and bushings, J.
+    pub dissipated_damper: f64,
+    /// The force elements' share of `potential_change` (springs), J.
+    pub element_potential_change: f64,
+    /// Estimated absolute error of the time integrals above (the three works and the four
     /// dissipations together), J: the sum over quadrature panels of |S₂ − S₁|/15, S₁ and S₂
     /// Simpson's rule on one and two subintervals (Richardson; the value used is Boole's rule
     /// S₂ + (S₂ − S₁)/15, one order higher).
@@ -212,8 +222,9 @@ pub(crate) struct EnergyTotals {
 /// The `energy` object of summary.json.
 ///
 /// ```text
-/// balance_error = driver_work − (kinetic_change + potential_change
-///                 + dissipated_damping + dissipated_friction + dissipated_film)
+/// balance_error = driver_work + load_work + motor_work
+///                 − (kinetic_change + potential_change + dissipated_damping
+///                    + dissipated_friction + dissipated_film + dissipated_damper)
 /// ```
 ///
 /// Source: docs/outputs.md (`energy`).
@@ -221,17 +232,29 @@ pub(crate) struct EnergyTotals {
 pub struct Energy {
     /// Work done by the crank driver, J.
     pub driver_work: f64,
+    /// Work done by the applied forces and torques (`force`, `torque` elements), J.
+    #[serde(default)]
+    pub load_work: f64,
+    /// Work done by the motors, J.
+    #[serde(default)]
+    pub motor_work: f64,
     /// Change of kinetic energy, J.
     pub kinetic_change: f64,
-    /// Change of potential energy, J.
+    /// Change of potential energy (gravity, contact elastic energy, springs), J.
     pub potential_change: f64,
+    /// The force elements' share of `potential_change` (the springs' potential), J.
+    #[serde(default)]
+    pub element_potential_change: f64,
     /// Dissipated by contact damping, J.
     pub dissipated_damping: f64,
     /// Dissipated by friction, J.
     pub dissipated_friction: f64,
     /// Dissipated by the film, J.
     pub dissipated_film: f64,
-    /// Estimated error of the time integrals (driver work and dissipations), J.
+    /// Dissipated by the dampers of the force elements (spring-dampers, bushings), J.
+    #[serde(default)]
+    pub dissipated_damper: f64,
+    /// Estimated error of the time integrals (works and dissipations), J.
     pub quadrature_error: f64,
     /// The balance error, J: integration error plus the work of the Baumgarte terms; it is
     /// meaningful where it exceeds `quadrature_error`.
@@ -243,18 +266,23 @@ impl Energy {
     pub(crate) fn from_totals(e: &EnergyTotals) -> Energy {
         Energy {
             driver_work: e.driver_work,
+            load_work: e.load_work,
+            motor_work: e.motor_work,
             kinetic_change: e.kinetic_change,
             potential_change: e.potential_change,
+            element_potential_change: e.element_potential_change,
             dissipated_damping: e.dissipated_damping,
             dissipated_friction: e.dissipated_friction,
             dissipated_film: e.dissipated_film,
+            dissipated_damper: e.dissipated_damper,
             quadrature_error: e.quadrature_error,
-            balance_error: e.driver_work
+            balance_error: e.driver_work + e.load_work + e.motor_work
                 - (e.kinetic_change
                     + e.potential_change
                     + e.dissipated_damping
                     + e.dissipated_friction
-                    + e.dissipated_film),
+                    + e.dissipated_film
+                    + e.dissipated_damper),
         }
     }
 }
@@ -992,10 +1020,24 @@ mod tests {
             dissipated_damping: 40.0,
             dissipated_friction: 15.0,
             dissipated_film: 9.5,
+            load_work: 0.0,
+            motor_work: 0.0,
+            dissipated_damper: 0.0,
+            element_potential_change: 0.0,
             quadrature_error: 1e-9,
         };
         let m = compute(&samples(Sample::at), W, None, &[], Some(e), None).unwrap();
         assert_eq!(m.energy.unwrap().balance_error, 0.5);
+        // Every element term counts: a motor's and a load's work in, a damper's out (a
+        // balance that left one out would be off by exactly that term).
+        let el = EnergyTotals {
+            load_work: -20.0,
+            motor_work: 32.0,
+            dissipated_damper: 11.5,
+            ..e
+        };
+        let m = compute(&samples(Sample::at), W, None, &[], Some(el), None).unwrap();
+        assert_eq!(m.energy.unwrap().balance_error, 1.0);
         let bad = EnergyTotals {
             driver_work: f64::NAN,
             ..e

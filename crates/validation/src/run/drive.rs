@@ -32,6 +32,7 @@ use lash_solver::{EventHit, OdeSystem, Problem, Solution, SolverOptions, Stats, 
 use crate::error::Error;
 use crate::report::summary::Summary;
 use crate::run::prepare::Prepared;
+use crate::run::quadrature::Powers;
 
 /// Receives what a run produces, as `drive` integrates (module doc).
 pub(crate) trait Observer {
@@ -158,7 +159,7 @@ pub(crate) fn drive<S: OdeSystem + ?Sized>(
     })
 }
 
-pub(crate) fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 4], Error> {
+pub(crate) fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<Powers, Error> {
     let v = pw(t, y);
     if v.iter().all(|x| x.is_finite()) {
         Ok(v)
@@ -169,7 +170,7 @@ pub(crate) fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<[f64; 
     }
 }
 
-pub(crate) type PowerFn<'a> = &'a dyn Fn(f64, &[f64]) -> [f64; 4];
+pub(crate) type PowerFn<'a> = &'a dyn Fn(f64, &[f64]) -> Powers;
 
 pub(crate) fn empty_solution(dim: usize) -> Solution {
     Solution {

@@ -27,7 +27,7 @@ use crate::run::plan::RunRequest;
 use crate::run::prepare::scene_error;
 use crate::run::prepare::Prepared;
 use crate::run::prepare::QUADRATURE_PANEL_PER_PERIOD;
-use crate::run::quadrature::Quadrature;
+use crate::run::quadrature::{Powers, Quadrature};
 use crate::run::result::RunResult;
 use crate::run::sample::fixed_values;
 use crate::run::sample::Sampler;
@@ -196,7 +196,7 @@ impl Observer for MechanismRun<'_> {
     ) -> Result<(), Error> {
         if let (Some(q), Some(pw)) = (self.quad.as_mut(), self.power) {
             let buf = &mut self.ybuf;
-            let mut node = |t: f64| -> Result<[f64; 4], Error> {
+            let mut node = |t: f64| -> Result<Powers, Error> {
                 dense(t, buf);
                 checked_power(pw, t, buf)
             };
@@ -271,7 +271,15 @@ pub(crate) fn simulate_mechanism(
         .collect();
     let power = |t: f64, y: &[f64]| {
         let p = mech.power(t, y);
-        [p.driver, p.contact_damping, p.friction, p.film]
+        [
+            p.driver,
+            p.contact_damping,
+            p.friction,
+            p.film,
+            p.load,
+            p.motor,
+            p.damper,
+        ]
     };
     let power_ref: PowerFn<'_> = &power;
     let max_panel = info
@@ -344,6 +352,11 @@ pub(crate) fn simulate_mechanism(
                 dissipated_damping: q.total[1],
                 dissipated_friction: q.total[2],
                 dissipated_film: q.total[3],
+                load_work: q.total[4],
+                motor_work: q.total[5],
+                dissipated_damper: q.total[6],
+                element_potential_change: o1.elements.iter().map(|e| e.potential).sum::<f64>()
+                    - o0.elements.iter().map(|e| e.potential).sum::<f64>(),
                 quadrature_error: q.err.iter().sum(),
             })
         }

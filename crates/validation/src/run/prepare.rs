@@ -157,6 +157,9 @@ pub(crate) struct Prepared {
     pub model: Model,
     /// Mechanism facts (None for test problems).
     pub info: Option<MechanismInfo>,
+    /// Wall-clock budget of each integration of this case, s (`--max-wall-time` of compare,
+    /// work-precision and sweep); None: none. Laid into [`Prepared::default_options`].
+    pub max_wall_time: Option<f64>,
 }
 
 /// How an error names the case: the scene file's path, else the case's name.
@@ -201,6 +204,7 @@ impl Prepared {
                     case,
                     model: Model::TestSet(name),
                     info: None,
+                    max_wall_time: None,
                 })
             }
             CaseSource::File { bytes, .. } => {
@@ -224,6 +228,7 @@ impl Prepared {
             case,
             model: Model::Mechanism(Box::new(scene)),
             info: Some(info),
+            max_wall_time: None,
         })
     }
 
@@ -347,12 +352,14 @@ impl Prepared {
                 o.max_steps = DEFAULT_MAX_STEPS;
                 o.divergence_bound = MECHANISM_DIVERGENCE_BOUND;
                 o.rk4_instability_steps = MECHANISM_RK4_INSTABILITY_STEPS;
+                o.max_wall_time = self.max_wall_time;
                 o
             }
             None => {
                 let mut o = SolverOptions::with_method(TESTSET_METHOD);
                 o.rtol = TESTSET_RTOL;
                 o.atol = self.default_atol(TESTSET_RTOL);
+                o.max_wall_time = self.max_wall_time;
                 o
             }
         }

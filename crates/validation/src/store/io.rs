@@ -6,8 +6,11 @@
 //!                      write bytes → fsync(tmp) → rename(tmp, path) → fsync(dir)
 //! OutDir (a run's whole directory DIR):
 //!   create   clean stale temporaries of dead processes beside DIR; DIR must be absent, empty
-//!            or hold only the files a run writes (else exit 2: nothing of the user's is ever
-//!            deleted); work = PARENT/.NAME.tmp-PID-N, a fresh directory
+//!            or an earlier run's: its marker RUN_MARKER (.lash-run, lash's own) present and
+//!            every other entry a file a run writes (else exit 2: nothing of the user's is
+//!            ever deleted, and a directory of someone's files that happen to be named like a
+//!            run's is not taken for one); work = PARENT/.NAME.tmp-PID-N, a fresh directory
+//!            holding the marker
 //!   write    every file into work
 //!   commit   fsync(work); rename(DIR, PARENT/.NAME.old-PID-N); rename(work, DIR);
 //!            remove the old one; fsync(PARENT)
@@ -49,6 +52,10 @@ pub struct Written<T> {
     /// The files written.
     pub files: Vec<PathBuf>,
 }
+
+/// The marker of a run directory written by lash ([`OutDir`]): only a directory holding it is
+/// replaced as an earlier run.
+pub(crate) const RUN_MARKER: &str = ".lash-run";
 
 /// Counter that makes temporary names unique within the process (threads write in parallel).
 static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -177,12 +184,16 @@ impl OutDir {
         clean_stale(&parent);
         match fs::symlink_metadata(target) {
             Ok(m) if m.is_dir() => {
+                let marked = target.join(RUN_MARKER).is_file();
                 let mut foreign = Vec::new();
                 for e in fs::read_dir(target).map_err(|e| Error::io(target, e))? {
                     let e = e.map_err(|e| Error::io(target, e))?;
                     let n = e.file_name().to_string_lossy().into_owned();
                     let is_dir = e.file_type().map(|t| t.is_dir()).unwrap_or(false);
-                    if !owns(&n, is_dir) && temp_owner(&n).is_none() {
+                    if n == RUN_MARKER && !is_dir {
+                        continue;
+                    }
+                    if !(marked && owns(&n, is_dir)) && temp_owner(&n).is_none() {
                         foreign.push(n);
                     }
                 }
@@ -194,9 +205,14 @@ impl OutDir {
                         String::new()
                     };
                     foreign.truncate(3);
+                    let why = if marked {
+                        "holds files that are not a run's"
+                    } else {
+                        "is not a lash run directory (no .lash-run marker) and holds files"
+                    };
                     return Err(Error::Input(format!(
-                        "output directory {} holds files that are not a run's ({}{more}): a \
-                         run replaces its directory as a whole, so give a new or empty one",
+                        "output directory {} {why} ({}{more}): a run replaces its directory as \
+                         a whole, so give a new or empty one",
                         target.display(),
                         foreign.join(", ")
                     )));
@@ -213,11 +229,18 @@ impl OutDir {
         let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
         let work = parent.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
         fs::create_dir(&work).map_err(|e| Error::io(&work, e))?;
-        Ok(OutDir {
+        let out = OutDir {
             target: target.to_path_buf(),
-            work,
+            work: work.clone(),
             committed: false,
-        })
+        };
+        // Dropped on error: the work directory goes with it.
+        fs::write(
+            work.join(RUN_MARKER),
+            concat!("lash ", env!("CARGO_PKG_VERSION"), "\n"),
+        )
+        .map_err(|e| Error::io(&work, e))?;
+        Ok(out)
     }
 
     /// Where the files go until [`OutDir::commit`].
@@ -456,6 +479,34 @@ mod tests {
         assert_eq!(fs::read(d.path().join("r/summary.json")).unwrap(), b"{}");
     }
 
+    /// Issue 23(b): a directory holding only someone's file named like a run's (summary.json)
+    /// is not an earlier run: it is refused and kept, not replaced. An empty one is taken.
+    #[test]
+    fn out_dir_recognises_a_run_by_its_marker_not_by_file_names() {
+        let d = tempfile::tempdir().unwrap();
+        let target = d.path().join("theirs");
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("summary.json"), b"their notes").unwrap();
+        let owns = |n: &str, dir: bool| !dir && n == "summary.json";
+        let e = OutDir::create(&target, &owns).unwrap_err();
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput);
+        assert!(e.to_string().contains("no .lash-run marker"), "{e}");
+        assert_eq!(
+            fs::read(target.join("summary.json")).unwrap(),
+            b"their notes"
+        );
+        let empty = d.path().join("empty");
+        fs::create_dir(&empty).unwrap();
+        let o = OutDir::create(&empty, &owns).unwrap();
+        fs::write(o.path().join("summary.json"), b"ours").unwrap();
+        o.commit().unwrap();
+        assert_eq!(entries(&empty), vec![RUN_MARKER, "summary.json"]);
+        // Now it is a run of lash's: the next one replaces it.
+        let o = OutDir::create(&empty, &owns).unwrap();
+        o.commit().unwrap();
+        assert_eq!(entries(&empty), vec![RUN_MARKER]);
+    }
+
     #[test]
     fn out_dir_replaces_a_run_whole_or_not_at_all() {
         let d = tempfile::tempdir().unwrap();
@@ -472,13 +523,13 @@ mod tests {
         let o = OutDir::create(&target, &owns).unwrap();
         fs::write(o.path().join("b.csv"), b"second").unwrap();
         drop(o);
-        assert_eq!(entries(&target), vec!["a.csv", "summary.json"]);
+        assert_eq!(entries(&target), vec![RUN_MARKER, "a.csv", "summary.json"]);
         assert_eq!(entries(d.path()), vec!["run"]);
         // A third run replaces it: nothing of the first remains.
         let o = OutDir::create(&target, &owns).unwrap();
         fs::write(o.path().join("summary.json"), b"third").unwrap();
         o.commit().unwrap();
-        assert_eq!(entries(&target), vec!["summary.json"]);
+        assert_eq!(entries(&target), vec![RUN_MARKER, "summary.json"]);
         assert_eq!(fs::read(target.join("summary.json")).unwrap(), b"third");
         assert_eq!(entries(d.path()), vec!["run"]);
         // A directory with the user's files is refused, and kept.

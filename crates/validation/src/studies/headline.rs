@@ -15,7 +15,7 @@
 //!   error      compare::ErrorNorms::headline: relative RMS error of the slider acceleration
 //!                over the first half revolution (dry: chaotic, docs/model.md §9) or the last
 //!                revolution (ideal, lubricated)
-//! returns the table (`lash` prints it); writes validation/reports/default/ (git-ignored):
+//! returns the table (`lash` prints it); writes ./lash-default/ (or the directory given):
 //! README.md (the tables), default.json, slider_acceleration.{svg,png} (last revolution, the
 //! three cases and the closed form), orbits.{svg,png} (dry and lubricated journal orbits), and
 //! per case the reference run's summary.json, trajectory.csv and figures
@@ -77,6 +77,10 @@ pub(crate) const CASES: [HeadlineCase; 3] = [
         method: Method::Bdf,
     },
 ];
+
+/// Where the default run writes without `--out`: relative to the working directory, never into
+/// the source tree the binary was built from.
+pub const DEFAULT_RUN_DIR: &str = "lash-default";
 
 /// Tolerances tried, loosest first, to match RK4's accuracy.
 pub(crate) const MATCH_TOLERANCES: [f64; 9] =
@@ -383,7 +387,7 @@ fn figures(dir: &Path, runs: &[(HeadlineCase, RunResult)]) -> Result<Vec<PathBuf
 }
 
 /// Runs the default comparison, noting each case as it starts (`running STEM …`), and writes
-/// `out` (default `validation/reports/default` under the workspace root): README.md (the
+/// `out` (default [`DEFAULT_RUN_DIR`] in the working directory): README.md (the
 /// table, [`Headline::to_markdown`]), default.json, the figures and per case the reference
 /// run's files. Returns the table, the directory and the files written.
 pub(crate) fn run_with_progress(
@@ -392,7 +396,7 @@ pub(crate) fn run_with_progress(
 ) -> Result<Written<Headline>, Error> {
     let clock = Instant::now();
     let root = workspace_root();
-    let target = out.unwrap_or_else(|| root.join("validation/reports/default"));
+    let target = out.unwrap_or_else(|| PathBuf::from(DEFAULT_RUN_DIR));
     let mut cases = Vec::new();
     let mut runs = Vec::new();
     for c in &CASES {

@@ -163,10 +163,17 @@ pub(crate) fn merge(dirs: &[PathBuf]) -> Result<MergedTable, Error> {
             _ => serde_json::Map::new(),
         })
         .collect();
-    let params: Vec<&str> = PARAM_COLUMNS
+    let mut params: Vec<&str> = PARAM_COLUMNS
         .into_iter()
         .filter(|c| param_maps.iter().any(|m| m.contains_key(*c)))
         .collect();
+    // The paths of `set`, after the named parameters, in sorted order.
+    let set_paths: BTreeSet<&str> = param_maps
+        .iter()
+        .flat_map(|m| m.keys().map(String::as_str))
+        .filter(|k| !PARAM_COLUMNS.contains(k))
+        .collect();
+    params.extend(set_paths);
     let value_names: BTreeSet<&String> = recs.iter().flat_map(|r| r.values.keys()).collect();
     let mut columns: Vec<String> = vec!["id".into(), "index".into()];
     columns.extend(params.iter().map(|s| s.to_string()));
@@ -206,9 +213,9 @@ impl MergedTable {
     pub(crate) fn with_missing(mut self) -> MergedTable {
         let col = |n: &str| self.columns.iter().position(|c| c == n);
         let (st, er) = (col("status"), col("error"));
-        let params: Vec<(usize, &str)> = PARAM_COLUMNS
-            .iter()
-            .filter_map(|c| col(c).map(|i| (i, *c)))
+        // The parameter columns lie between `index` and `status`.
+        let params: Vec<(usize, String)> = (2..st.unwrap_or(2).max(2))
+            .map(|i| (i, self.columns[i].clone()))
             .collect();
         let mut extra = Vec::new();
         for (m, status) in self
@@ -221,8 +228,8 @@ impl MergedTable {
             row[0] = m.id.clone();
             row[1] = m.index.map_or(String::new(), |i| i.to_string());
             if let Some(p) = m.params.as_ref().and_then(|p| serde_json::to_value(p).ok()) {
-                for &(i, c) in &params {
-                    row[i] = cell(p.get(c));
+                for (i, c) in &params {
+                    row[*i] = cell(p.get(c.as_str()));
                 }
             }
             if let (Some(s), Some(e)) = (st, er) {

@@ -5,8 +5,11 @@
 //! SWEEP.json = { "case": PATH | "testset:NAME",            (PATH relative to the sweep file)
 //!                "speed_rpm": [..], "clearance": [..], "viscosity": [..], "stiffness": [..],
 //!                "method": [..], "rtol": [..] (alias "tolerance"), "step": [..],
-//!                "controller": [..] }                      (every list optional, none empty)
-//! grid   = speed × clearance × viscosity × stiffness × solver choices, in that order, where
+//!                "controller": [..],
+//!                "set": {PATH: [..], …} }                  (every list optional, none empty;
+//!                                                           PATH any scene field, module set)
+//! grid   = speed × clearance × viscosity × stiffness × set (paths in sorted order)
+//!          × solver choices, in that order, where
 //!          solver choices = for each method: fixed-step → step list;
 //!                                             diffsol   → rtol list;
 //!                                             ours      → rtol × controller
@@ -28,6 +31,7 @@
 
 pub(crate) mod merge;
 pub(crate) mod runner;
+pub(crate) mod set;
 pub(crate) mod spec;
 
 #[cfg(test)]

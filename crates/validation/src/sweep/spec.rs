@@ -3,7 +3,7 @@
 //!
 //! Source: docs/outputs.md ("Sweeps").
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
@@ -101,6 +101,10 @@ pub(crate) struct SweepFile {
     /// names").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub controller: Option<Vec<ControllerKind>>,
+    /// Any scene field by its path (`joints[3].friction.mu`, `forces[motor].stall_torque`):
+    /// the values of each (module `sweep::set`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub set: Option<BTreeMap<String, Vec<Value>>>,
 }
 
 /// The parameters of one grid point; `None` means "as in the base case".
@@ -141,6 +145,11 @@ pub struct PointParams {
     /// Controller.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub controller: Option<ControllerKind>,
+    /// The scene fields the point sets, by path, each a key of its own in `params` (and a
+    /// column of merged.csv named by the path as written); empty for points without `set`,
+    /// so their ids are those of a sweep without it.
+    #[serde(flatten)]
+    pub set: BTreeMap<String, Value>,
 }
 
 /// Parameter columns of the merged table, in order.
@@ -236,12 +245,15 @@ impl SweepSpec {
             }
         };
         let solver = solver_choices(f);
+        let sets = set_combinations(f.set.as_ref());
         let mut points = Vec::new();
         for &speed_rpm in &opt(&f.speed_rpm) {
             for &clearance in &opt(&f.clearance) {
                 for &viscosity in &opt(&f.viscosity) {
                     for &stiffness in &opt(&f.stiffness) {
-                        for &(method, rtol, step, controller) in &solver {
+                        for (set, &(method, rtol, step, controller)) in
+                            sets.iter().flat_map(|s| solver.iter().map(move |c| (s, c)))
+                        {
                             let params = PointParams {
                                 case: self.case.name.clone(),
                                 scene_sha256: self.case.sha256().map(str::to_string),
@@ -253,6 +265,7 @@ impl SweepSpec {
                                 rtol,
                                 step,
                                 controller,
+                                set: set.clone(),
                             };
                             points.push(SweepPoint {
                                 index: points.len(),
@@ -270,6 +283,25 @@ impl SweepSpec {
         }
         Ok(points)
     }
+}
+
+/// Every combination of the `set` lists, paths in sorted order, the last varying fastest (one
+/// empty combination without `set`).
+fn set_combinations(set: Option<&BTreeMap<String, Vec<Value>>>) -> Vec<BTreeMap<String, Value>> {
+    let mut out = vec![BTreeMap::new()];
+    for (path, values) in set.into_iter().flatten() {
+        out = out
+            .iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.insert(path.clone(), v.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    out
 }
 
 type SolverChoice = (
@@ -329,6 +361,9 @@ fn solver_choices(f: &SweepFile) -> Vec<SolverChoice> {
 
 fn check_file(f: &SweepFile) -> Result<(), Error> {
     let bad = |m: String| Err(Error::Input(format!("sweep: {m}")));
+    if let Some(set) = &f.set {
+        crate::sweep::set::check_set(set)?;
+    }
     let lists: [(&str, &Option<Vec<f64>>); 6] = [
         ("speed_rpm", &f.speed_rpm),
         ("clearance", &f.clearance),

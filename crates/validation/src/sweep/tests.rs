@@ -95,9 +95,19 @@ fn id_is_sha256_of_sorted_canonical_json() {
         rtol: None,
         step: None,
         controller: Some(ControllerKind::H211),
+        set: Default::default(),
     };
     let canon = r#"{"case":"c","clearance":0.0001,"controller":"h211","method":"dopri54","speed_rpm":150.0}"#;
     assert_eq!(p.canonical_json(), canon);
+    // A scene field set by path is a key of its own, sorted with the others.
+    let mut q = p.clone();
+    q.set
+        .insert("joints[1].friction.mu".into(), serde_json::json!(0.2));
+    let canon_q = r#"{"case":"c","clearance":0.0001,"controller":"h211","joints[1].friction.mu":0.2,"method":"dopri54","speed_rpm":150.0}"#;
+    assert_eq!(q.canonical_json(), canon_q);
+    assert_eq!(q.id(), &sha256_hex(canon_q.as_bytes())[..16]);
+    let back: PointParams = serde_json::from_str(canon_q).unwrap();
+    assert_eq!(back, q);
     assert_eq!(p.id(), &sha256_hex(canon.as_bytes())[..16]);
     // The same numbers written differently give the same id; another value another id.
     let q: PointParams = serde_json::from_str(
@@ -319,6 +329,7 @@ fn params() -> PointParams {
         rtol: None,
         step: None,
         controller: None,
+        set: Default::default(),
     }
 }
 

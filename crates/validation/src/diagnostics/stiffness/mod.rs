@@ -13,8 +13,9 @@
 //!                   5th percentile of h_k (the limit on 95 % of the run: a single deep impact
 //!                   between flights sets the minimum but not the percentile)
 //! measured limit    fixed-step RK4 over the whole run, without event location, bisection on
-//!                   ln h until h_unstable/h_stable ≤ 1 + 1e-4; stable(h) ⇔ no non-finite state
-//!                   and max_k ‖y_k‖∞ ≤ 10 · M_ref (M_ref: the run at the bracket's lower end,
+//!                   ln h until h_unstable/h_stable ≤ 1 + 1e-4; stable(h) ⇔ no non-finite state,
+//!                   RK4's own stability check (the case's `rk4_instability_steps`, the one
+//!                   `lash run` applies) does not stop the run, and max_k ‖y_k‖∞ ≤ 10 · M_ref (M_ref: the run at the bracket's lower end,
 //!                   checked against h/2), and for a mechanism ‖Φ(q_k, t_k)‖₂ ≤ c/100 at every
 //!                   accepted step ([`PHI_MAX_PER_LENGTH`]); bracket [h_pred/2, 2 h_pred]
 //!                   widened by ×4 until it brackets

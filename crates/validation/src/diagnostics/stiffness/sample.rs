@@ -362,7 +362,8 @@ pub(crate) fn phi_max(p: &Prepared) -> f64 {
 pub(crate) fn criterion_text(probe: &Rk4ProbeOptions, phi_max: Option<f64>) -> String {
     format!(
         "fixed-step RK4 over the whole run without event location is stable at h when no state \
-         is non-finite{} and max ‖y‖∞ ≤ {} × that of the run at the bracket's lower end (itself \
+         is non-finite, RK4's own stability check (the one `lash run` applies) does not stop \
+         it{} and max ‖y‖∞ ≤ {} × that of the run at the bracket's lower end (itself \
          checked against h/2); bisection on ln h until h_unstable/h_stable ≤ 1 + {:e}",
         match phi_max {
             Some(m) => format!(", ‖Φ(q, t)‖₂ ≤ {m:.3e} m (L/100, L the smallest clearance, else 1 mm) at every accepted step"),

@@ -543,3 +543,66 @@ fn press_path(stem: &str) -> PathBuf {
         .join("../../cases/press")
         .join(format!("{stem}.json"))
 }
+
+/// The four-bar (cases/examples/fourbar_clearance.json) with its crank driver replaced
+/// by a motor, a torsional spring-damper on the rocker and a constant torque on the coupler:
+/// every element term enters the balance (docs/model.md §1.8, §10). Leaving out any one of
+/// them would shift the balance by that term, each orders of magnitude above the tolerance.
+#[test]
+fn every_force_element_enters_the_energy_balance() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/examples/fourbar_clearance.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let joints = j["joints"].as_array_mut().unwrap();
+    joints.retain(|x| x["type"] != "driver");
+    let o = j.as_object_mut().unwrap();
+    o.remove("revolutions");
+    o.insert("t_end".into(), serde_json::json!(1.5));
+    o["roles"].as_object_mut().unwrap().remove("crank_driver");
+    o.insert(
+        "forces".into(),
+        serde_json::json!([
+            {"type": "motor", "name": "motor", "rotor": "crank",
+             "stall_torque": 2.0, "no_load_rpm": 90.0},
+            {"type": "rotational_spring_damper", "name": "rocker_spring", "a": "rocker",
+             "stiffness": 5.0, "damping": 0.05},
+            {"type": "torque", "name": "coupler_torque", "body": "coupler", "value": -0.3}
+        ]),
+    );
+    let scene = lash_model::Scene::from_json_str(&j.to_string()).unwrap();
+    let p = Prepared::with_scene(Case::load(path.to_str().unwrap(), None).unwrap(), scene).unwrap();
+    let r = run(&p, Method::Bdf, 1e-8, None);
+    let e = r.summary.metrics.as_ref().unwrap().energy.unwrap();
+    assert_eq!(e.driver_work, 0.0, "{e:?}");
+    // Each element term is far above the balance's tolerance.
+    assert!(e.motor_work > 0.1, "{e:?}");
+    assert!(e.load_work.abs() > 1e-3, "{e:?}");
+    assert!(e.dissipated_damper > 0.01, "{e:?}");
+    assert!(e.element_potential_change.abs() > 1e-3, "{e:?}");
+    assert!(e.dissipated_damping + e.dissipated_friction > 0.0, "{e:?}");
+    assert!(
+        e.balance_error.abs() < 1e-6 + 10.0 * e.quadrature_error,
+        "{e:?}"
+    );
+    let smallest = [
+        e.motor_work,
+        e.load_work,
+        e.dissipated_damper,
+        e.element_potential_change,
+    ]
+    .iter()
+    .fold(f64::INFINITY, |m, x| m.min(x.abs()));
+    assert!(smallest > 10.0 * e.balance_error.abs(), "{e:?}");
+}
+
+/// cases/press/punch_motor_150rpm_c0.1.json: a motor turns the crank against a punch; the
+/// balance closes with the motor's work in and the punch's out (5.7 J off without them).
+#[test]
+fn motor_press_energy_balance_closes() {
+    let p = case("punch_motor_150rpm_c0.1");
+    let r = run(&p, Method::Bdf, 1e-8, None);
+    let e = r.summary.metrics.as_ref().unwrap().energy.unwrap();
+    assert!(e.motor_work > 100.0 && e.load_work < -100.0, "{e:?}");
+    assert!(e.balance_error.abs() < 1e-4, "{e:?}");
+}
