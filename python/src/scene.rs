@@ -256,7 +256,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
     let formulation = match a.formulation.as_deref() {
         None => None,
         Some(f) => Some(
-            f.parse::<lash_validation::FormulationName>()
+            f.parse::<lash_model::FormulationName>()
                 .map_err(|e| usage_error(py, &e))?,
         ),
     };

@@ -74,7 +74,7 @@ pub use run::{
     steady::{UntilPeriodic, DEFAULT_MAX_REVOLUTIONS, MIN_REVOLUTIONS},
 };
 pub use studies::{
-    headline::{CaseReport, Headline, DEFAULT_RUN_DIR},
+    headline::{CaseReport, Headline},
     robustness::RobustnessResult,
 };
 pub use sweep::{

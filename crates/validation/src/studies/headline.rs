@@ -80,7 +80,7 @@ pub(crate) const CASES: [HeadlineCase; 3] = [
 
 /// Where the default run writes without `--out`: relative to the working directory, never into
 /// the source tree the binary was built from.
-pub const DEFAULT_RUN_DIR: &str = "lash-default";
+pub(crate) const DEFAULT_RUN_DIR: &str = "lash-default";
 
 /// Tolerances tried, loosest first, to match RK4's accuracy.
 pub(crate) const MATCH_TOLERANCES: [f64; 9] =
