@@ -392,6 +392,22 @@ fn runs_that_cannot_be_done_right_exit_2_naming_the_field() {
         d.path(),
         "case far: t_start = 1.000000e15 s is too far from 0 for f64 time",
     );
+    // A driver's θ₀ of 1e17 rad, where f64 angles are 16 rad apart (issue 23: the crank froze
+    // and the run exited 0).
+    let mut scene: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(press("ideal_150rpm")).unwrap()).unwrap();
+    for j in scene["joints"].as_array_mut().unwrap() {
+        if j["type"] == "driver" {
+            j["theta0"] = serde_json::json!(1e17);
+        }
+    }
+    std::fs::write(d.path().join("frozen.json"), scene.to_string()).unwrap();
+    refused(
+        &["run", "frozen.json", "--out", "o"],
+        d.path(),
+        ".theta0 = 1.000000e17 rad: the driver's angle reaches 1.000e17 rad, where f64 angles \
+         are at least 3.55e2 rad apart",
+    );
     let ideal = press("ideal_150rpm");
     refused(
         &["run", &ideal, "--t-end", "1e6", "--out", "o"],

@@ -11,6 +11,8 @@
 //!               TIME_RESOLUTION × the shortest time the run must resolve: the trajectory's
 //!               and the metrics grid's spacing, h_max, the RK4 step, span/100 → t_start,
 //!               t_end or revolutions (t_start = 1e15 s: steps ≥ 3.6 s)
+//! driver angle  16 ε max|θ₀ + ω t| over the run above TIME_RESOLUTION × |ω| × that shortest
+//!               time → joints[i].theta0 (θ₀ = 1e17 rad: angles 16 rad apart)
 //! deadline      RunRequest::deadline (a command's budget from its start) already past
 //!               → BudgetExhausted (exit 3); otherwise the integration gets what is left
 //! ```
@@ -319,6 +321,31 @@ pub(crate) fn plan_run(p: &Prepared, req: &RunRequest, t0: f64, t_end: f64) -> R
         } else {
             scene_field("t_end")
         };
+    }
+    // The angle axis of each driver: θ(t) = θ₀ + ω t must resolve the angle the crank turns in
+    // the shortest time the run must resolve, as the time axis does (issue 23: θ₀ = 1e17 rad,
+    // where f64's spacing is 16 rad, froze the crank and still exited 0).
+    if let Some(scene) = p.scene() {
+        for (i, j) in scene.joints.iter().enumerate() {
+            let lash_model::scene::JointSpec::Driver(d) = j else {
+                continue;
+            };
+            let w = d.omega_rad_s();
+            if w == 0.0 || !w.is_finite() {
+                continue;
+            }
+            let theta_max = (d.theta0 + w * t0).abs().max((d.theta0 + w * t_end).abs());
+            let floor = floor_at(theta_max);
+            let turn = w.abs() * need;
+            if floor > TIME_RESOLUTION * turn {
+                return Err(Error::Input(format!(
+                    "case {}: joints[{i}].theta0 = {:.6e} rad: the driver's angle reaches \
+                     {:.3e} rad, where f64 angles are at least {:.2e} rad apart (16 ε |θ|), but \
+                     the run must resolve {:.2e} rad (ω × {what}); give theta0 modulo 2π",
+                    p.case.name, d.theta0, theta_max, floor, turn
+                )));
+            }
+        }
     }
     Ok(grid)
 }

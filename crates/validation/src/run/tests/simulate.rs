@@ -492,6 +492,31 @@ fn runs_that_cannot_be_done_right_are_refused_by_name() {
         ErrorKind::BadInput,
         "step 1 s is longer than the run (0.8 s",
     );
+    // A driver's angle far from 0 (issue 23: θ₀ = 1e17 rad froze the crank at exit 0): the
+    // 0.2 ms output spacing turns the 150 rpm crank 3.1e-3 rad, which f64 angles resolve to
+    // TIME_RESOLUTION up to |θ| ≈ 3.1e-6 / (16 ε) ≈ 8.8e8 rad: 1e8 runs, 1e10 is refused.
+    let mut turned: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(press_path("ideal_150rpm")).unwrap()).unwrap();
+    let driver = turned["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|j| j["type"] == "driver")
+        .unwrap();
+    turned["joints"][driver]["theta0"] = serde_json::json!(1e8);
+    let pt = prepared("turned", &turned.to_string());
+    let mut r = RunRequest::new(pt.options_for(Method::Bdf, Some(1e-8), None, None).unwrap());
+    r.t_end = Some(0.05);
+    simulate(&pt, &r).unwrap();
+    turned["joints"][driver]["theta0"] = serde_json::json!(1e10);
+    let pt = prepared("turned", &turned.to_string());
+    let r = RunRequest::new(pt.options_for(Method::Bdf, Some(1e-8), None, None).unwrap());
+    expect_error(
+        &pt,
+        &r,
+        ErrorKind::BadInput,
+        &format!("joints[{driver}].theta0 = 1.000000e10 rad: the driver's angle reaches"),
+    );
     // A trajectory of 5e9 rows.
     let mut r = req(Method::Bdf, None);
     r.t_end = Some(1e6);
