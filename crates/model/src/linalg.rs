@@ -114,3 +114,21 @@ pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] 
     v.resize(len, T::default());
     v
 }
+
+/// Starts ∂f/∂y of a first-order system y = (q, q̇), f = (q̇, q̈) with n_q = `nq`: `jac`
+/// (2 n_q × 2 n_q) zeroed with the identity in its upper right block; when the evaluation at
+/// (t, y) failed (`ok` false) its lower rows are NaN. The formulations fill the lower rows.
+pub(crate) fn first_order_jacobian_frame(jac: &mut faer::MatMut<'_, f64>, nq: usize, ok: bool) {
+    let n = 2 * nq;
+    jac.fill(0.0);
+    for i in 0..nq {
+        jac[(i, nq + i)] = 1.0;
+    }
+    if !ok {
+        for j in 0..n {
+            for i in nq..n {
+                jac[(i, j)] = f64::NAN;
+            }
+        }
+    }
+}

@@ -77,6 +77,33 @@ pub(crate) struct Constraints {
 }
 
 impl Constraints {
+    /// Every point term on integrated body `body` and the row it belongs to, with what the
+    /// closed-form Jacobians of both formulations need of it: `f(a, w · A s, w · b, φ̇)` for
+    /// row a (b = ∂(A s)/∂φ = perp(A s), φ̇ the body's angular velocity in `sc`). A point term
+    /// contributes ∂Φ_q[a, φ]/∂φ = −w · A s, and its rates to γ and Φ̇ follow from the same
+    /// three numbers (lagrange_baumgarte/jacobian.rs, augmented_lagrangian/jacobian.rs).
+    pub(crate) fn for_point_terms_on(
+        &self,
+        sc: &Scratch,
+        body: usize,
+        mut f: impl FnMut(usize, f64, f64, f64),
+    ) {
+        for (a, (row, ints)) in self.rows.iter().zip(&self.row_int).enumerate() {
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                if ints[ti] != Some(body) {
+                    continue;
+                }
+                if let TermKind::Point { s, w: wv } = term.kind {
+                    let av = rot(sc.cs[term.body], s);
+                    let bv = perp(av);
+                    let wa = wv[0] * av[0] + wv[1] * av[1];
+                    let wb = wv[0] * bv[0] + wv[1] * bv[1];
+                    f(a, wa, wb, sc.vel[term.body][2]);
+                }
+            }
+        }
+    }
+
     /// Build phase 2: the equations of every joint the prescriptions did not consume, in joint
     /// order. A joint acting only on the ground and prescribed bodies is an error.
     pub(crate) fn build(scene: &Scene, bodies: &Bodies) -> Result<Constraints, SceneError> {

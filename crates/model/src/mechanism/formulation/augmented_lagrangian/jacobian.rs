@@ -22,10 +22,10 @@
 
 use faer::MatMut;
 
-use crate::mechanism::constraints::{Constraints, TermKind};
+use crate::linalg::first_order_jacobian_frame;
+use crate::mechanism::constraints::Constraints;
 use crate::mechanism::formulation::augmented_lagrangian::{AugmentedLagrangian, Work};
 use crate::mechanism::scratch::Scratch;
-use crate::planar::{perp, rot};
 
 impl AugmentedLagrangian {
     /// ∂f/∂y (module doc) into `jac` (n × n) after an evaluation at (t, y); `dg` = None: the
@@ -40,16 +40,8 @@ impl AugmentedLagrangian {
         let nq = self.nq;
         let n = 2 * nq;
         let m = cons.len();
-        jac.fill(0.0);
-        for i in 0..nq {
-            jac[(i, nq + i)] = 1.0;
-        }
+        first_order_jacobian_frame(&mut jac, nq, dg.is_some());
         let Some(dg) = dg else {
-            for j in 0..n {
-                for i in nq..n {
-                    jac[(i, j)] = f64::NAN;
-                }
-            }
             return;
         };
         let mut guard = self.work.borrow_mut();
@@ -80,23 +72,11 @@ impl AugmentedLagrangian {
             dcdq.iter_mut().for_each(|v| *v = 0.0);
             dcdv.iter_mut().for_each(|v| *v = 0.0);
             if comp == 2 {
-                for (a, (row, ints)) in cons.rows.iter().zip(&cons.row_int).enumerate() {
-                    for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-                        if ints[ti] != Some(body_i) {
-                            continue;
-                        }
-                        if let TermKind::Point { s, w: wv } = term.kind {
-                            let av = rot(sc.cs[term.body], s);
-                            let bv = perp(av);
-                            let wa = wv[0] * av[0] + wv[1] * av[1];
-                            let wb = wv[0] * bv[0] + wv[1] * bv[1];
-                            let om = sc.vel[term.body][2];
-                            dphiq[a] -= wa;
-                            dcdq[a] += om * om * wb + self.a2 * wa * om;
-                            dcdv[a] += 2.0 * om * wa;
-                        }
-                    }
-                }
+                cons.for_point_terms_on(sc, body_i, |a, wa, wb, om| {
+                    dphiq[a] -= wa;
+                    dcdq[a] += om * om * wb + self.a2 * wa * om;
+                    dcdv[a] += 2.0 * om * wa;
+                });
             }
             let col = &phiq[qj * m..(qj + 1) * m];
             f.copy_from_slice(&dg[j * nq..(j + 1) * nq]);

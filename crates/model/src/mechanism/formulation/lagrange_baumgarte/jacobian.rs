@@ -17,7 +17,7 @@
 
 use faer::MatMut;
 
-use crate::linalg::{cholesky_solve, zeroed};
+use crate::linalg::{cholesky_solve, first_order_jacobian_frame, zeroed};
 use crate::mechanism::constraints::{Constraints, TermKind};
 use crate::mechanism::formulation::lagrange_baumgarte::{JacWork, LagrangeBaumgarte, Work};
 use crate::mechanism::scratch::Scratch;
@@ -46,16 +46,8 @@ impl LagrangeBaumgarte {
         let nq = self.nq;
         let n = 2 * nq;
         let m = cons.len();
-        jac.fill(0.0);
-        for i in 0..nq {
-            jac[(i, nq + i)] = 1.0;
-        }
+        first_order_jacobian_frame(&mut jac, nq, dg.is_some());
         let Some(dg) = dg else {
-            for j in 0..n {
-                for i in nq..n {
-                    jac[(i, j)] = f64::NAN;
-                }
-            }
             return;
         };
         let mut w0 = self.work.borrow_mut();
@@ -195,23 +187,11 @@ impl LagrangeBaumgarte {
                 rhs[a] = b2 * w0.jac[a * nq + j];
             }
             if comp == 2 {
-                for (a, (row, ints)) in cons.rows.iter().zip(&cons.row_int).enumerate() {
-                    for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-                        if ints[ti] != Some(body_i) {
-                            continue;
-                        }
-                        if let TermKind::Point { s, w: wv } = term.kind {
-                            let av = rot(sc.cs[term.body], s);
-                            let bv = perp(av);
-                            let wa = wv[0] * av[0] + wv[1] * av[1];
-                            let wb = wv[0] * bv[0] + wv[1] * bv[1];
-                            let om = sc.vel[term.body][2];
-                            dphiq[a] -= wa;
-                            // −∂γ/∂φ + 2α ∂Φ̇/∂φ = −φ̇² (w · b) − 2α (w · A s) φ̇.
-                            rhs[a] -= om * om * wb + a2 * wa * om;
-                        }
-                    }
-                }
+                cons.for_point_terms_on(sc, body_i, |a, wa, wb, om| {
+                    dphiq[a] -= wa;
+                    // −∂γ/∂φ + 2α ∂Φ̇/∂φ = −φ̇² (w · b) − 2α (w · A s) φ̇.
+                    rhs[a] -= om * om * wb + a2 * wa * om;
+                });
             }
             // u = (∂Φ_q/∂q_j)ᵀ λ has the single entry u_j.
             let u: f64 = (0..m).map(|a| dphiq[a] * w0.lam[a]).sum();
