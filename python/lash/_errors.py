@@ -77,8 +77,10 @@ class SolveError(LashError, RuntimeError):
     kind : str
         ``"step_size_too_small"``, ``"too_many_steps"``, ``"non_finite_state"``,
         ``"rk4_unstable"`` (fixed-step RK4 beyond its stability limit, only where a scene
-        asks for the check), ``"newton_failure"``, ``"budget_exhausted"`` or
-        ``"event_nan"`` (an event function returned NaN: the message names it).
+        asks for the check), ``"newton_failure"``, ``"budget_exhausted"``,
+        ``"event_nan"`` (an event function returned NaN: the message names it),
+        ``"law_out_of_range"`` (a mechanism left the range its contact laws hold in) or
+        ``"singular_configuration"`` (a mechanism reached a singular configuration).
     result : OdeResult or None
         What :func:`lash.solve_ivp` had computed up to the failure, with ``status = -1``,
         ``success = False`` and ``message`` (scipy's failed result).

@@ -159,5 +159,7 @@ pub fn failure_kind(e: &SolveError) -> &'static str {
         SolveError::Interrupted { .. } => "interrupted",
         SolveError::EventNan { .. } => "event_nan",
         SolveError::OutOfMemory(_) => "out_of_memory",
+        SolveError::LawOutOfRange { .. } => "law_out_of_range",
+        SolveError::SingularConfiguration { .. } => "singular_configuration",
     }
 }

@@ -16,6 +16,7 @@
 //! - [`elements`]: force elements, one file per kind behind one interface.
 //! - [`mechanism`]: the ODE ([`Mechanism`]): bodies, constraint equations, forces, the
 //!   formulation (the state layout and the acceleration solve), events.
+//! - [`law_range`]: the ranges the clearance joints' laws hold in, checked along a run.
 //! - [`outputs`]: named outputs, energy terms, the closed-form ideal slider-crank.
 //! - [`cases`]: generators of the paper's press scenes (`cases/press/`).
 //! - [`iftomm`]: generators of the benchmark scenes of `cases/iftomm/` (IFToMM A01, A02,
@@ -36,7 +37,8 @@
 //! 6  scene::{format, validate, parse}; scene (the public facade)
 //! 7  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
 //! 8  mechanism (the struct, its views and its evaluation)
-//! 9  outputs, jacobian, assembly, initial_check; mechanism::{ode, build}; cases, iftomm
+//! 9  outputs, jacobian, assembly, initial_check, law_range; mechanism::{ode, build}; cases,
+//!    iftomm
 //! ```
 //! Inside the crate, parts name the scene's submodules (`scene::format`, `scene::refs`, …),
 //! never the facade `scene`, which re-exports them for users.
@@ -90,6 +92,7 @@ pub mod iftomm;
 mod initial_check;
 mod jacobian;
 mod labels;
+pub mod law_range;
 mod linalg;
 pub mod mechanism;
 pub mod outputs;
@@ -100,6 +103,7 @@ pub mod scene;
 
 pub use clearance::{geometry, laws};
 pub use labels::{Column, EventLabels};
+pub use law_range::{LawRangeMonitor, LawRangeRecord, LawRangeViolation};
 pub use mechanism::events::event_label;
 pub use mechanism::formulation::augmented_lagrangian::FormulationStats;
 pub use mechanism::Mechanism;

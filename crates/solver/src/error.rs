@@ -107,6 +107,33 @@ pub enum SolveError {
     /// integrated.
     #[error("{0}")]
     OutOfMemory(crate::memory::MemoryError),
+    /// The state left the range in which the model's laws hold (for a mechanism: a journal
+    /// as deep in its bearing as its own radius, a block's corner half its width into a guide
+    /// face; docs/model.md §3.5). The state is finite; the model's
+    /// numbers are not a solution of the problem it describes any more.
+    #[error("model outside the range of its laws at t = {t:e}: {reason}")]
+    LawOutOfRange {
+        /// Time of the accepted state that left the range.
+        t: f64,
+        /// That state.
+        y: Vec<f64>,
+        /// Which law, which part of the model, the value and the limit.
+        reason: String,
+    },
+    /// The model could not be evaluated at a state the integration reached: a singular
+    /// configuration (for a mechanism: the constraint Jacobian Φ_q lost rank, so the
+    /// accelerations and the Lagrange multipliers have no unique value; docs/model.md §1).
+    /// The same kind whether the right-hand side or an evaluation between step ends met it.
+    #[error("singular configuration at t = {t:e}: {reason}")]
+    SingularConfiguration {
+        /// Where it was met: a step's end, or a time inside an accepted step (the dense
+        /// output there).
+        t: f64,
+        /// The state there.
+        y: Vec<f64>,
+        /// Where it was met, and what is singular.
+        reason: String,
+    },
 }
 
 impl SolveError {
@@ -120,7 +147,9 @@ impl SolveError {
             | SolveError::NewtonFailure { t, .. }
             | SolveError::BudgetExhausted { t, .. }
             | SolveError::Interrupted { t, .. }
-            | SolveError::EventNan { t, .. } => Some(*t),
+            | SolveError::EventNan { t, .. }
+            | SolveError::LawOutOfRange { t, .. }
+            | SolveError::SingularConfiguration { t, .. } => Some(*t),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }
@@ -135,7 +164,9 @@ impl SolveError {
             | SolveError::NewtonFailure { y, .. }
             | SolveError::BudgetExhausted { y, .. }
             | SolveError::Interrupted { y, .. }
-            | SolveError::EventNan { y, .. } => Some(y),
+            | SolveError::EventNan { y, .. }
+            | SolveError::LawOutOfRange { y, .. }
+            | SolveError::SingularConfiguration { y, .. } => Some(y),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }

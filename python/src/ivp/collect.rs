@@ -156,5 +156,11 @@ fn failure_message(e: &SolveError, t: f64, dir: f64, name: &dyn Fn(usize) -> Str
             dir * at
         ),
         SolveError::OutOfMemory(m) => m.to_string(),
+        SolveError::LawOutOfRange { reason, .. } => {
+            format!("model outside the range of its laws at t = {t:e}: {reason}")
+        }
+        SolveError::SingularConfiguration { reason, .. } => {
+            format!("singular configuration at t = {t:e}: {reason}")
+        }
     }
 }

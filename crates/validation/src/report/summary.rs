@@ -132,6 +132,11 @@ pub struct Summary {
     /// iterate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub formulation_stats: Option<lash_model::FormulationStats>,
+    /// What each clearance joint did against the ranges of its laws over the whole run
+    /// (deepest penetration, excursions beyond the clearance, films beyond their law's range;
+    /// docs/model.md §3.5); absent for a case without clearance joints.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law_range: Option<Vec<lash_model::LawRangeRecord>>,
 }
 
 impl Summary {
@@ -165,6 +170,7 @@ impl Summary {
             until_periodic: None,
             formulation: None,
             formulation_stats: None,
+            law_range: None,
         }
     }
 
@@ -205,6 +211,9 @@ impl Summary {
                 nums.push(("metrics.energy", e.balance_error));
                 nums.push(("metrics.energy", e.quadrature_error));
             }
+        }
+        for r in self.law_range.iter().flatten() {
+            nums.push(("law_range.depth_max", r.depth_max));
         }
         match nums.iter().find(|(_, v)| !v.is_finite()) {
             Some((name, v)) => Err(Error::Internal(format!("summary: {name} is {v}"))),

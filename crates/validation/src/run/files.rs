@@ -87,6 +87,7 @@ pub(crate) struct RunOutput<'a> {
 /// { kind, message, t, h, h_limit, steps, reason }   (fields a kind lacks are null)
 /// kind: step_size_too_small | too_many_steps | non_finite_state | rk4_unstable
 ///       | newton_failure | budget_exhausted | invalid_options | event_nan | out_of_memory
+///       | law_out_of_range | singular_configuration
 /// ```
 ///
 /// Source: docs/outputs.md ("`failure.json`").
@@ -102,7 +103,8 @@ pub(crate) struct FailureError {
     pub h_limit: Option<f64>,
     /// Steps taken (too_many_steps) or flagged in a row (rk4_unstable).
     pub steps: Option<usize>,
-    /// Why (newton_failure, budget_exhausted, invalid_options, out_of_memory).
+    /// Why (newton_failure, budget_exhausted, invalid_options, out_of_memory,
+    /// law_out_of_range, singular_configuration).
     pub reason: Option<String>,
 }
 
@@ -148,6 +150,14 @@ impl FailureError {
                 "invalid_options"
             }
             SolveError::EventNan { .. } => "event_nan",
+            SolveError::LawOutOfRange { reason, .. } => {
+                f.reason = Some(reason.clone());
+                "law_out_of_range"
+            }
+            SolveError::SingularConfiguration { reason, .. } => {
+                f.reason = Some(reason.clone());
+                "singular_configuration"
+            }
             SolveError::OutOfMemory(m) => {
                 f.reason = Some(m.to_string());
                 "out_of_memory"

@@ -5,8 +5,8 @@
 //! Source: docs/outputs.md (`metrics`, the energy balance); docs/model.md §1.8.
 
 use lash_model::scene::JointSpec;
-use lash_model::{Mechanism, Outputs, Scene};
-use lash_solver::{EventHit, OdeSystem, Solution};
+use lash_model::{LawRangeMonitor, Mechanism, Outputs, Scene};
+use lash_solver::{EventHit, OdeSystem, Solution, SolveError};
 
 use crate::error::Error;
 use crate::report::metrics::{
@@ -73,6 +73,8 @@ struct MechanismRun<'a> {
     keep_events: bool,
     events: Vec<EventRecord>,
     ybuf: Vec<f64>,
+    // The ranges of the clearance joints' laws, at every accepted step's end.
+    laws: LawRangeMonitor,
 }
 
 impl MechanismRun<'_> {
@@ -191,14 +193,18 @@ impl Observer for MechanismRun<'_> {
         ta: f64,
         tb: f64,
         cut: bool,
-        _y: &[f64],
+        y: &[f64],
         dense: &dyn Fn(f64, &mut [f64]),
     ) -> Result<(), Error> {
+        self.laws
+            .observe(self.mech, tb, y)
+            .map_err(|v| law_out_of_range(tb, y, &v))?;
         if let (Some(q), Some(pw)) = (self.quad.as_mut(), self.power) {
             let buf = &mut self.ybuf;
+            let mech = self.mech;
             let mut node = |t: f64| -> Result<Powers, Error> {
                 dense(t, buf);
-                checked_power(pw, t, buf)
+                checked_power(pw, t, buf).map_err(|e| singular_or(mech, e, t, buf, (ta, tb)))
             };
             q.step(ta, tb, cut, &mut node)?;
         }
@@ -210,6 +216,7 @@ impl Observer for MechanismRun<'_> {
                 dense(t, &mut buf);
                 let o = self.mech.outputs(t, &buf);
                 self.quantities(&o)
+                    .map_err(|e| singular_or(self.mech, e, t, &buf, (ta, tb)))
             });
             self.ybuf = buf;
             self.peaks = peaks;
@@ -236,6 +243,34 @@ impl Observer for MechanismRun<'_> {
             index: h.index,
         });
     }
+}
+
+/// A non-finite output at a finite state inside an accepted step [ta, tb] (the dense output
+/// at t): a singular configuration the step jumped over when the acceleration solve fails
+/// there (exit 3), else `e` (a bug).
+fn singular_or(mech: &Mechanism, e: Error, t: f64, y: &[f64], (ta, tb): (f64, f64)) -> Error {
+    if y.iter().all(|v| v.is_finite()) && !mech.acceleration_solvable(t, y) {
+        Error::Solver(SolveError::SingularConfiguration {
+            t,
+            y: y.to_vec(),
+            reason: format!(
+                "the constraint Jacobian lost rank at t = {t:e} inside the accepted step \
+                 [{ta:e}, {tb:e}] s (the accelerations and the constraint forces have no \
+                 unique value there; the step jumped over the configuration)"
+            ),
+        })
+    } else {
+        e
+    }
+}
+
+/// The solver failure of a state outside the range of a clearance joint's law (exit 3).
+fn law_out_of_range(t: f64, y: &[f64], v: &lash_model::LawRangeViolation) -> Error {
+    Error::Solver(SolveError::LawOutOfRange {
+        t,
+        y: y.to_vec(),
+        reason: v.to_string(),
+    })
 }
 
 pub(crate) fn simulate_mechanism(
@@ -326,7 +361,11 @@ pub(crate) fn simulate_mechanism(
         keep_events: req.keep_events,
         events: Vec::new(),
         ybuf: vec![0.0; n],
+        laws: LawRangeMonitor::new(&mech),
     };
+    obs.laws
+        .observe(&mech, t0, &y0)
+        .map_err(|v| law_out_of_range(t0, &y0, &v))?;
     let d = drive(&mech, t0, t_end, &y0, opts, &mut obs)?;
     // The window's grid samples are samples of the extrema too.
     let mut dense = obs.dense_extremes(scene);
@@ -374,6 +413,7 @@ pub(crate) fn simulate_mechanism(
     summary.metrics = Some(metrics);
     summary.formulation = Some(mech.formulation_name().to_string());
     summary.formulation_stats = mech.formulation_stats();
+    summary.law_range = (!obs.laws.is_empty()).then(|| obs.laws.records().to_vec());
     Ok(RunResult {
         summary,
         window: std::mem::take(&mut obs.window),

@@ -63,6 +63,8 @@ impl FailureKind {
             SolveError::InvalidOptions(_)
             | SolveError::Interrupted { .. }
             | SolveError::EventNan { .. }
+            | SolveError::LawOutOfRange { .. }
+            | SolveError::SingularConfiguration { .. }
             | SolveError::OutOfMemory(_) => return None,
         })
     }

@@ -1,0 +1,182 @@
+//! Runs at the edges of the model (issue 23): states outside the range of the clearance
+//! joints' laws end in a typed solver error naming the joint, the time and the depth;
+//! milder excursions are counted in summary.json (docs/model.md §3.5).
+
+use std::path::PathBuf;
+
+use serde_json::{json, Value};
+
+use crate::error::Error;
+use crate::report::trajectory::Columns;
+use crate::run::case::Case;
+use crate::run::plan::RunRequest;
+use crate::run::prepare::Prepared;
+use crate::run::simulate::{simulate, simulate_into};
+use lash_model::Mechanism;
+use lash_solver::{Method, SolveError};
+
+fn prepared(name: &str, scene: &Value) -> Prepared {
+    Prepared::load(Case::from_json_bytes(name, scene.to_string().into_bytes()).unwrap()).unwrap()
+}
+
+fn press(stem: &str) -> Value {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/press")
+        .join(format!("{stem}.json"));
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+/// rtol 1e-8, or a step of 0.1 ms for a fixed-step method.
+fn request(p: &Prepared, method: Method, t_end: f64) -> RunRequest {
+    let (rtol, step) = if method.is_fixed_step() {
+        (None, Some(1e-4))
+    } else {
+        (Some(1e-8), None)
+    };
+    let mut r = RunRequest::new(p.options_for(method, rtol, step, None).unwrap());
+    r.t_end = Some(t_end);
+    r
+}
+
+/// The failure of a run that must leave the range of a law: its time, state and reason.
+fn law_failure(p: &Prepared, r: &RunRequest) -> (f64, Vec<f64>, String) {
+    let mut rows = Columns::new();
+    match simulate_into(p, r, &mut rows) {
+        Err(Error::Solver(SolveError::LawOutOfRange { t, y, reason })) => (t, y, reason),
+        Err(e) => panic!("expected LawOutOfRange, got {e}"),
+        Ok(r) => panic!(
+            "expected LawOutOfRange, the run ended: {:?}",
+            r.summary.law_range
+        ),
+    }
+}
+
+/// The depth of the first clearance joint in `reason` ("penetration X m reached").
+fn depth_in(reason: &str) -> f64 {
+    let tail = reason.split("penetration ").nth(1).unwrap();
+    tail.split(' ').next().unwrap().parse().unwrap()
+}
+
+/// A free body whose point J sits in a bearing on the ground (no gravity): the journal starts
+/// centred and moves at `v` along x, so δ(t) = v t − c, less what the contact force
+/// K δ^{3/2} (K = 1 N/m^{1.5}, 1.4e-3 N at 1.3 cm on 1 kg) takes: to first order in K,
+/// n K v^{3/2} τ^{7/2} / (m · 5/2 · 7/2) with τ = t − c/v (n = 1 contact; 2 for the block,
+/// whose two leading corners touch), 3e-8 m by τ = 0.013 s.
+fn free_journal(v: f64) -> Value {
+    json!({
+        "bodies": [{"name": "body", "mass": 1.0, "inertia": 0.01, "points": {"J": [0.0, 0.0]}}],
+        "joints": [{"type": "clearance", "name": "loose",
+                    "bearing": {"body": "ground", "at": [0.0, 0.0], "radius": 0.0101},
+                    "journal": {"body": "body", "point": "J", "radius": 0.01},
+                    "normal": {"law": "impact", "k": 1.0, "c_max": 0.0, "d_max": 1e-5},
+                    "friction": {"law": "none"},
+                    "initial_eccentricity_rate": [v, 0.0]}],
+        "gravity": [0.0, 0.0],
+        "t_end": 0.1
+    })
+}
+
+/// The same motion across a prismatic guide: a block 2 cm wide, 0.1 mm of clearance on each
+/// side, crossing at `v`: its leading corners' gap is v t − c, and the limit half its width.
+fn free_block(v: f64) -> Value {
+    json!({
+        "bodies": [{"name": "block", "mass": 1.0, "inertia": 0.01, "points": {"C": [0.0, 0.0]}}],
+        "joints": [{"type": "prismatic_clearance", "name": "guide",
+                    "guide": {"body": "ground", "at": [0.0, 0.0], "direction": [1.0, 0.0],
+                              "width": 0.0202},
+                    "block": {"body": "block", "point": "C", "length": 0.1, "width": 0.02},
+                    "normal": {"law": "impact", "k": 1.0, "c_max": 0.0, "d_max": 1e-5},
+                    "friction": {"law": "none"}, "initial_offset_rate": v}],
+        "gravity": [0.0, 0.0],
+        "t_end": 0.1
+    })
+}
+
+#[test]
+fn a_journal_through_its_bearing_ends_the_run_at_the_journal_radius() {
+    // Free flight: the first accepted step end with δ = v t − c ≥ R_J (t ≥ 0.0101 s at
+    // 1 m/s) ends the run, naming the joint; the depth is the free-flight one.
+    let (v, c, rj) = (1.0, 1e-4, 0.01);
+    for (name, scene) in [("journal", free_journal(v)), ("block", free_block(v))] {
+        let p = prepared(name, &scene);
+        for method in [Method::Dopri54, Method::Bdf, Method::Rk4] {
+            let (t, y, reason) = law_failure(&p, &request(&p, method, 0.1));
+            let depth = depth_in(&reason);
+            assert!(reason.contains(if name == "journal" {
+                "'loose'"
+            } else {
+                "'guide'"
+            }));
+            assert!(t >= (rj + c) / v, "{name} {method:?}: t = {t}");
+            assert!(depth >= rj, "{name} {method:?}: {depth}");
+            let (n, tau) = (if name == "journal" { 1.0 } else { 2.0 }, t - c / v);
+            let free = v * t - c - n * v.powf(1.5) * tau.powf(3.5) / (2.5 * 3.5);
+            assert!(
+                (depth - free).abs() < 1e-9,
+                "{name}: {depth} at {t}, {free}"
+            );
+            // The state is the one at t: its own depth.
+            if name == "journal" {
+                let m = Mechanism::from_scene(p.scene().unwrap()).unwrap();
+                let o = m.outputs(t, &y);
+                assert_eq!(o.clearance[0].delta, depth);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_dry_press_with_a_soft_contact_ends_in_a_typed_error() {
+    // Issue 23: K = 1 N/m^1.5 let the journal run 0.72 m deep (14.5 R_J) and exit 0.
+    let mut s = press("dry_150rpm_c0.1");
+    let j = s["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|j| j["type"] == "clearance")
+        .unwrap();
+    s["joints"][j]["normal"]["k"] = json!(1.0);
+    let p = prepared("soft", &s);
+    let (t, _, reason) = law_failure(&p, &request(&p, Method::Bdf, 0.8));
+    assert!(reason.contains("'rod_slider'"), "{reason}");
+    assert!(depth_in(&reason) >= 0.0499, "{reason}");
+    assert!(t > 0.0 && t < 0.8, "{t}");
+}
+
+#[test]
+fn excursions_beyond_the_clearance_and_the_film_are_counted() {
+    // The paper's dry press at c = 0.1 mm: its Hertz deflection under the contact forces of
+    // the impacts, (F/K)^{2/3} with F ≈ 3e4–6e4 N and K = 2.34e10, is 0.1–0.2 mm: deeper
+    // than 0.1 mm of clearance (the excursions are counted), within 0.5 mm.
+    for (stem, beyond) in [("dry_150rpm_c0.1", true), ("dry_150rpm_c0.5", false)] {
+        let p = prepared(stem, &press(stem));
+        let r = simulate(&p, &request(&p, Method::Bdf, 0.8)).unwrap();
+        let lr = r.summary.law_range.clone().unwrap();
+        assert_eq!(lr.len(), 1);
+        let l = &lr[0];
+        assert_eq!(
+            (l.joint.as_str(), l.film_beyond_range),
+            ("rod_slider", None)
+        );
+        assert_eq!(l.depth_limit, 0.05 - l.clearance);
+        assert_eq!(l.depth_max > l.clearance, beyond, "{l:?}");
+        assert_eq!(l.beyond_clearance > 0, beyond, "{l:?}");
+    }
+    // A lubricated joint counts its film's excursions (ε ≥ 1 − η: the journal on the wall);
+    // at c = 0.1 mm the film carries the load (ε < 1 throughout), at 0.5 mm it does not.
+    for (stem, crushed) in [
+        ("lubricated_150rpm_c0.1", false),
+        ("lubricated_150rpm_c0.5", true),
+    ] {
+        let p = prepared(stem, &press(stem));
+        let r = simulate(&p, &request(&p, Method::Bdf, 0.8)).unwrap();
+        let l = &r.summary.law_range.as_ref().unwrap()[0];
+        let n = l.film_beyond_range.unwrap();
+        assert_eq!(n > 0, crushed, "{l:?}");
+        assert_eq!(l.depth_max >= -1e-12 * 0.05, crushed, "{l:?}");
+    }
+    // No clearance joint, no record.
+    let p = prepared("ideal", &press("ideal_150rpm"));
+    let r = simulate(&p, &request(&p, Method::Bdf, 0.1)).unwrap();
+    assert!(r.summary.law_range.is_none());
+}
