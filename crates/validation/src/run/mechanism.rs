@@ -248,7 +248,13 @@ impl Observer for MechanismRun<'_> {
 /// A non-finite output at a finite state inside an accepted step [ta, tb] (the dense output
 /// at t): a singular configuration the step jumped over when the acceleration solve fails
 /// there (exit 3), else `e` (a bug).
-fn singular_or(mech: &Mechanism, e: Error, t: f64, y: &[f64], (ta, tb): (f64, f64)) -> Error {
+pub(crate) fn singular_or(
+    mech: &Mechanism,
+    e: Error,
+    t: f64,
+    y: &[f64],
+    (ta, tb): (f64, f64),
+) -> Error {
     if y.iter().all(|v| v.is_finite()) && !mech.acceleration_solvable(t, y) {
         Error::Solver(SolveError::SingularConfiguration {
             t,

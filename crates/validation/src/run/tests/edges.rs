@@ -180,3 +180,56 @@ fn excursions_beyond_the_clearance_and_the_film_are_counted() {
     let r = simulate(&p, &request(&p, Method::Bdf, 0.1)).unwrap();
     assert!(r.summary.law_range.is_none());
 }
+
+/// Two links of length 1 m between two ground pivots 1.41 m apart: a truss (no degree of
+/// freedom) that assembles bent, with its elbow at (0.6, 0.8).
+fn truss() -> Value {
+    let (a1, a2) = (0.8f64.atan2(0.6), (-0.6f64).atan2(0.8));
+    let link = |name: &str, at: [f64; 2], angle: f64| {
+        json!({"name": name, "mass": 1.0, "inertia": 0.125, "position": at, "angle": angle,
+               "points": {"L": [-0.5, 0.0], "R": [0.5, 0.0]}})
+    };
+    let pin =
+        |name: &str, a: Value, b: Value| json!({"type": "revolute", "name": name, "a": a, "b": b});
+    json!({
+        "bodies": [link("link1", [0.3, 0.4], a1), link("link2", [1.0, 0.5], a2)],
+        "joints": [
+            pin("O", json!({"body": "link1", "point": "L"}), json!({"body": "ground", "at": [0.0, 0.0]})),
+            pin("P", json!({"body": "link1", "point": "R"}), json!({"body": "link2", "point": "L"})),
+            pin("Q", json!({"body": "link2", "point": "R"}), json!({"body": "ground", "at": [1.4, 0.2]}))
+        ],
+        "gravity": [0.0, -9.81],
+        "t_end": 0.1
+    })
+}
+
+#[test]
+fn a_singular_configuration_inside_a_step_is_a_typed_error() {
+    // Issue 23: a non-finite power inside an accepted step that jumped over a singular
+    // configuration was "internal error" (exit 1). With both links stretched along x the
+    // three x-equations of the pins read x1 − 0.5 = 0, (x1 + 0.5) − (x2 − 0.5) = 0,
+    // x2 + 0.5 = 1.4: their rows e1, e1 − e4, e4 are dependent (row O − row P − row Q = 0,
+    // exactly in f64), so Φ_q has lost rank and S = Φ_q M⁻¹ Φ_qᵀ is singular.
+    let p = prepared("truss", &truss());
+    let mech = Mechanism::from_scene(p.scene().unwrap()).unwrap();
+    let y0 = mech.initial_state();
+    assert_eq!(y0.len(), 12);
+    assert!(mech.acceleration_solvable(0.0, &y0));
+    let mut y = vec![0.0; 12];
+    (y[0], y[3]) = (0.5, 1.5);
+    assert!(!mech.acceleration_solvable(0.0, &y));
+    let bug = || Error::Internal("energy: power terms [NaN, 0, 0, 0] not finite".into());
+    match crate::run::mechanism::singular_or(&mech, bug(), 0.25, &y, (0.0, 0.5)) {
+        Error::Solver(SolveError::SingularConfiguration { t, y: ys, reason }) => {
+            assert_eq!((t, ys), (0.25, y.clone()));
+            assert!(reason.contains("inside the accepted step"), "{reason}");
+        }
+        other => panic!("expected SingularConfiguration, got {other}"),
+    }
+    // At a state the model can evaluate, a non-finite output stays what it is: a bug.
+    let e = crate::run::mechanism::singular_or(&mech, bug(), 0.0, &y0, (0.0, 0.5));
+    assert_eq!(e.kind(), crate::error::ErrorKind::Bug);
+    // And the truss at rest runs (no degree of freedom: it stays where it is).
+    let r = simulate(&p, &request(&p, Method::Bdf, 0.1)).unwrap();
+    assert!(r.summary.law_range.is_none());
+}
