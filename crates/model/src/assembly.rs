@@ -39,6 +39,13 @@ const VEL_TOL: f64 = 1e-10;
 const MAX_ITER: usize = 50;
 /// Relative singular-value threshold of the rank check.
 const RANK_TOL: f64 = 1e-9;
+/// Largest condition number of the velocity projection that meets exact initial velocities
+/// (docs/model.md §1.6).
+const MAX_PROJECTION_CONDITION: f64 = 1e8;
+/// Largest ratio of the kinetic energy the projection adds to the energy the exact initial
+/// velocities carry (docs/model.md §1.6): a lever multiplies it by (1 + its arm ratio²), a
+/// pinned rod given its centre's speed by 4/3.
+const MAX_PROJECTION_ENERGY_RATIO: f64 = 100.0;
 
 /// The equations held during assembly: the mechanism's constraint equations, then each
 /// clearance joint's own (its initial eccentricity, or its initial offset and tilt), with
@@ -414,6 +421,7 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         return fail(mech, &phid, &jac, "velocities", 1);
     }
     y = yp;
+    let (condition, exact) = projection_conditioning(mech, &all, &vrows, t0, &y, &w);
     // Rank of the ideal equations at the assembled state, when the formulation needs it
     // (Lagrange multipliers: the KKT system).
     if mech.formulation().needs_full_rank() {
@@ -422,6 +430,76 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         let ideal = jac.subrows(0, rows.len()).to_owned();
         check_rank(mech, rows, &ideal)?;
     }
-    let rep = report(mech, &given, &y);
+    let mut rep = report(mech, &given, &y);
+    rep.kinetic_energy_exact = exact;
+    rep.condition = condition;
+    if !vrows.is_empty() {
+        let added = rep.kinetic_energy_assembled - rep.kinetic_energy_given;
+        let ill = mech.formulation().needs_full_rank() && !(condition <= MAX_PROJECTION_CONDITION);
+        if ill || added > MAX_PROJECTION_ENERGY_RATIO * exact {
+            let paths: Vec<&str> = vrows.iter().map(|v| v.1.as_str()).collect();
+            return Err(SceneError::Assembly {
+                path: paths[0].to_string(),
+                reason: format!(
+                    "velocities: meeting the exact initial velocities ({}) with the constraints \
+                     is ill-conditioned: the projection's condition number is {condition:.3e} \
+                     (at most {MAX_PROJECTION_CONDITION:e}) and it adds {added:.3e} J of kinetic \
+                     energy where the exact values carry {exact:.3e} J (at most \
+                     {MAX_PROJECTION_ENERGY_RATIO} times that); check them against the \
+                     clearance joints' initial_eccentricity and the bodies' positions",
+                    paths.join(", ")
+                ),
+            });
+        }
+    }
     Ok((y, rep))
+}
+
+/// The condition number of J M^{-1/2} over the rows `all` at y, and the kinetic energy the
+/// exact initial velocities `vrows` carry: ½ ‖(A M^{-1/2})⁺ r‖² for their rows A q̇ = r, the
+/// least kinetic energy of a motion that has them (docs/model.md §1.6).
+fn projection_conditioning(
+    mech: &Mechanism,
+    all: &[Row],
+    vrows: &[(Row, String, String)],
+    t0: f64,
+    y: &[f64],
+    w: &[f64],
+) -> (f64, f64) {
+    let nq = mech.nq();
+    let weighted = |rows: &[Row], y: &[f64]| {
+        let (_, phid, mut jac) = eval(mech, rows, t0, y);
+        for r in 0..jac.nrows() {
+            for c in 0..nq {
+                jac[(r, c)] *= w[c];
+            }
+        }
+        (phid, jac)
+    };
+    let condition = if all.is_empty() {
+        1.0
+    } else {
+        let (_, jw) = weighted(all, y);
+        let sv = jw.singular_values().unwrap_or_default();
+        let hi = sv.iter().fold(0.0f64, |a, &b| a.max(b));
+        let lo = sv.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        if all.len() > nq || !(lo > 0.0) {
+            f64::INFINITY
+        } else {
+            hi / lo
+        }
+    };
+    if vrows.is_empty() {
+        return (condition, 0.0);
+    }
+    // At q̇ = 0 the rows read −r.
+    let mut y0 = y.to_vec();
+    y0[nq..].fill(0.0);
+    let rows: Vec<Row> = vrows.iter().map(|v| v.0.clone()).collect();
+    let (phid, aw) = weighted(&rows, &y0);
+    let r: Vec<f64> = phid.iter().map(|v| -v).collect();
+    let exact = pinv_apply(&aw, &r).map_or(f64::INFINITY, |x| {
+        0.5 * x.iter().map(|v| v * v).sum::<f64>()
+    });
+    (condition, exact)
 }

@@ -47,6 +47,14 @@ pub struct ProjectionReport {
     pub kinetic_energy_given: f64,
     /// Kinetic energy of the assembled velocities (J, integrated bodies).
     pub kinetic_energy_assembled: f64,
+    /// The kinetic energy the scene's exact initial velocities carry: the least kinetic
+    /// energy of any motion that has them, the constraints aside (J; 0 without exact
+    /// velocities). docs/model.md §1.6.
+    pub kinetic_energy_exact: f64,
+    /// Condition number σ_max/σ_min of the velocity projection's matrix J M^{-1/2} (the
+    /// constraints' and the exact velocities' rows; ∞ when it lost rank, 0 for a scene
+    /// without equations to assemble).
+    pub condition: f64,
 }
 
 impl ProjectionReport {
@@ -64,8 +72,8 @@ impl fmt::Display for ProjectionReport {
         write!(
             f,
             "initial conditions moved onto the constraints (velocities by the mass-weighted \
-             projection; kinetic energy {:.6e} J → {:.6e} J):",
-            self.kinetic_energy_given, self.kinetic_energy_assembled
+             projection, condition number {:.3e}; kinetic energy {:.6e} J → {:.6e} J):",
+            self.condition, self.kinetic_energy_given, self.kinetic_energy_assembled
         )?;
         for c in &self.changes {
             write!(
