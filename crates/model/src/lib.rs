@@ -34,7 +34,7 @@
 //! 3  elements::{table, interface}; clearance::contact; mechanism::row
 //! 4  elements::<one file per kind>; clearance::{revolute, prismatic, revolute_jacobian}
 //! 5  elements (the registry)
-//! 6  scene::{format, validate, parse}; scene (the public facade)
+//! 6  scene::{format, resolution, validate, parse}; scene (the public facade)
 //! 7  roles; mechanism::{scratch, bodies, constraints, formulation, forces, events}
 //! 8  mechanism (the struct, its views and its evaluation)
 //! 9  outputs, jacobian, assembly, initial_check, law_range; mechanism::{ode, build}; cases,

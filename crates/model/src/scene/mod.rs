@@ -19,6 +19,7 @@ pub(crate) mod error;
 pub(crate) mod format;
 mod parse;
 pub(crate) mod refs;
+mod resolution;
 mod validate;
 
 pub use crate::clearance::contact::{

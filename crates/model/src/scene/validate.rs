@@ -24,6 +24,7 @@ impl Scene {
         crate::elements::validate_all(&self.forces, self)?;
         self.check_globals()?;
         self.check_roles()?;
+        crate::scene::resolution::check(self)?;
         self.check_time_span()
     }
 
