@@ -152,8 +152,20 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
     /// Validates `opts` for `sys` ([`SolverOptions::configure`]), checks the method's dense
     /// matrices against the memory budget ([`crate::memory`]: `OutOfMemory` before anything
     /// is allocated) and builds what the method needs besides the state.
+    ///
+    /// A system without state (n = 0: a mechanism whose every body is prescribed) has nothing
+    /// to integrate; diffsol's methods cannot be built for it (their LU panics on an empty
+    /// matrix), so dopri54's loop stands in for them: it goes to the end in steps that
+    /// change nothing.
     pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
-        let config = opts.configure(sys.dim())?;
+        let mut config = opts.configure(sys.dim())?;
+        let mut opts = opts.clone();
+        if sys.dim() == 0 && matches!(config, Config::Diffsol(_)) {
+            opts.method = Method::Dopri54;
+            opts.controller = None;
+            config = opts.configure(0)?;
+        }
+        let opts = &opts;
         crate::memory::check_method(opts.method, sys.dim(), opts.max_memory)
             .map_err(SolveError::OutOfMemory)?;
         let diffsol = match &config {

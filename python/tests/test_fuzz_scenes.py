@@ -1,0 +1,262 @@
+"""A seeded fuzzing pass over generated scenes, run through `lash run` (issue 23).
+
+Every scene is a random chain of bodies with every element type: revolute, translational and
+driver joints, dry and lubricated revolute clearance joints (every normal law and film model),
+prismatic clearance joints, and every force element (spring_damper, rotational_spring_damper,
+force, torque, motor, linear_bushing), with parameters drawn across many orders of magnitude.
+Each is run with a short end time by a random method; the pass counts
+
+    panic / abort / signal / exit 1     (a bug: must be 0)
+    exit 0 whose summary.json breaks a physical bound:
+        law_range: depth_max < depth_limit for every clearance joint
+        energy:    |balance_error| <= 0.05 * (the sum of |every energy term|) + 10 * quadrature_error
+                   + 1e-9 J (the Baumgarte terms' work and the integration error stay small)
+        constraint_violation_max <= 1e-3 m (Baumgarte keeps the drift small)
+
+Usage (the counts of BENCHMARKS.md, "Fuzzing"):
+
+    python3 python/tests/test_fuzz_scenes.py --lash target/release/lash --n 3000 --seed 23 --jobs 2
+
+Exit status 0 when every count that must be 0 is; the report goes to stdout (JSON with
+--json). `test_fuzz_subset` runs 50 scenes (seed 7) under pytest when LASH_BIN names the
+binary (default: the workspace's target/release/lash when it exists).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+METHODS = ["bdf", "dopri54", "rodas5p", "tsit54", "trbdf2", "esdirk34", "bs32", "dop853", "rk4"]
+NORMAL_LAWS = ["impact", "lankarani_nikravesh", "flores", "hunt_crossley"]
+FILM_MODELS = [
+    "long_gumbel",
+    "long_sommerfeld",
+    "short_ocvirk",
+    "long_gumbel_mirrored",
+    "short_ocvirk_mirrored",
+]
+
+
+def log_uniform(rng: random.Random, lo: float, hi: float) -> float:
+    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+def normal_law(rng: random.Random) -> dict:
+    law = rng.choice(NORMAL_LAWS)
+    k = log_uniform(rng, 1.0, 1e13)
+    if law == "impact":
+        return {"law": law, "k": k, "c_max": log_uniform(rng, 1e-3, 1e5), "d_max": log_uniform(rng, 1e-7, 1e-3)}
+    return {"law": law, "k": k, "restitution": rng.uniform(0.05, 1.0)}
+
+
+def friction(rng: random.Random) -> dict:
+    if rng.random() < 0.3:
+        return {"law": "none"}
+    v0 = log_uniform(rng, 1e-6, 1e-2)
+    return {"law": "coulomb", "mu": rng.uniform(0.0, 0.8), "v0": v0, "v1": v0 * rng.uniform(1.0, 10.0)}
+
+
+def scene(rng: random.Random) -> dict:
+    n = rng.randint(1, 4)
+    bodies, joints, forces = [], [], []
+    x = 0.0
+    for i in range(n):
+        length = log_uniform(rng, 0.01, 2.0)
+        m = log_uniform(rng, 1e-3, 1e3)
+        bodies.append(
+            {
+                "name": f"b{i}",
+                "mass": m,
+                "inertia": m * length * length / 12.0 * log_uniform(rng, 0.1, 10.0),
+                "position": [x + length / 2, 0.0],
+                "angle": 0.0,
+                "points": {"L": [-length / 2, 0.0], "R": [length / 2, 0.0], "C": [0.0, 0.0]},
+                "angular_velocity": rng.uniform(-5, 5),
+            }
+        )
+        x += length
+    # First body: a driven crank, a pendulum, or a slider on a line.
+    first = rng.choice(["driver", "pendulum", "slider"])
+    if first == "slider":
+        joints.append({"type": "translational", "name": "line", "body": "b0", "point": "C",
+                       "direction": [1.0, rng.uniform(-1, 1)], "origin": bodies[0]["position"]})
+    else:
+        joints.append({"type": "revolute", "name": "pivot", "a": {"body": "b0", "point": "L"},
+                       "b": {"body": "ground", "at": [0.0, 0.0]}})
+        if first == "driver":
+            joints.append({"type": "driver", "name": "drive", "body": "b0",
+                           "omega": rng.uniform(-100, 100), "theta0": rng.uniform(-3, 3)})
+    # Links: ideal or clearance joints.
+    for i in range(1, n):
+        name = f"j{i}"
+        a = {"body": f"b{i - 1}", "point": "R"}
+        b = {"body": f"b{i}", "point": "L"}
+        if rng.random() < 0.6:
+            rb = log_uniform(rng, 1e-3, 0.05)
+            c = rb * log_uniform(rng, 1e-6, 0.5)
+            j = {"type": "clearance", "name": name,
+                 "bearing": dict(a, radius=rb), "journal": dict(b, radius=rb - c),
+                 "normal": normal_law(rng), "friction": friction(rng)}
+            r = rng.uniform(0, 0.99)
+            phi = rng.uniform(0, 2 * math.pi)
+            j["initial_eccentricity"] = [r * c * math.cos(phi), r * c * math.sin(phi)]
+            if rng.random() < 0.4:
+                film = {"model": rng.choice(FILM_MODELS), "viscosity": log_uniform(rng, 1e-5, 10.0),
+                        "length": log_uniform(rng, 1e-3, 0.1)}
+                if rng.random() < 0.3:
+                    film["eps_cap"] = None
+                j["film"] = film
+            joints.append(j)
+        else:
+            joints.append({"type": "revolute", "name": name, "a": a, "b": b})
+    # Sometimes a free block in a guide.
+    if rng.random() < 0.3:
+        w = log_uniform(rng, 0.005, 0.1)
+        c = w * log_uniform(rng, 1e-5, 0.2)
+        bodies.append({"name": "block", "mass": log_uniform(rng, 0.01, 10), "inertia": 0.01,
+                       "position": [0.0, -1.0], "points": {"C": [0.0, 0.0]}})
+        joints.append({"type": "prismatic_clearance", "name": "guide",
+                       "guide": {"body": "ground", "at": [0.0, -1.0], "direction": [1.0, 0.0],
+                                 "width": w + 2 * c},
+                       "block": {"body": "block", "point": "C", "length": w * rng.uniform(1, 5), "width": w},
+                       "normal": {"law": "impact", "k": log_uniform(rng, 1.0, 1e12),
+                                  "c_max": log_uniform(rng, 1e-3, 1e4), "d_max": 1e-5},
+                       "friction": friction(rng),
+                       "initial_offset_rate": rng.uniform(-1, 1), "initial_tilt_rate": rng.uniform(-5, 5)})
+    names = [b["name"] for b in bodies]
+    for k in range(rng.randint(0, 4)):
+        kind = rng.choice(["spring_damper", "rotational_spring_damper", "force", "torque", "motor", "linear_bushing"])
+        body = rng.choice(names)
+        name = f"e{k}"
+        if kind == "spring_damper":
+            forces.append({"type": kind, "name": name, "a": {"body": body, "point": "C"},
+                           "b": {"body": "ground", "at": [rng.uniform(-1, 1), rng.uniform(-1, 1)]},
+                           "stiffness": log_uniform(rng, 1e-2, 1e6), "damping": log_uniform(rng, 1e-3, 1e3)})
+        elif kind == "rotational_spring_damper":
+            forces.append({"type": kind, "name": name, "a": body,
+                           "stiffness": log_uniform(rng, 1e-3, 1e4), "damping": log_uniform(rng, 1e-4, 10)})
+        elif kind == "force":
+            f = {"type": kind, "name": name, "body": body, "direction": [rng.uniform(-1, 1), 1.0],
+                 "frame": rng.choice(["global", "body"])}
+            if rng.random() < 0.5:
+                f["value"] = rng.uniform(-100, 100)
+            else:
+                f["table"] = {"input": {"of": "time"}, "points": [[0.0, 0.0], [0.01, rng.uniform(-100, 100)]]}
+                f["acts"] = rng.choice(["always", "opposing"])
+            forces.append(f)
+        elif kind == "torque":
+            forces.append({"type": kind, "name": name, "body": body, "value": rng.uniform(-10, 10)})
+        elif kind == "motor":
+            forces.append({"type": kind, "name": name, "rotor": body, "stall_torque": rng.uniform(0, 20),
+                           "no_load_rpm": rng.uniform(10, 3000)})
+        else:
+            forces.append({"type": kind, "name": name, "a": {"body": body, "point": "C"},
+                           "b": {"body": "ground", "at": [0.0, 0.0]},
+                           "stiffness": log_uniform(rng, 1e-2, 1e6), "damping": rng.uniform(0, 10)})
+    # Names of forces must differ from joints': they do (e*, j*, pivot, drive, line, guide).
+    return {"bodies": bodies, "joints": joints, "forces": forces,
+            "gravity": [0.0, rng.choice([0.0, -9.81])], "t_end": 0.01}
+
+
+def run_one(lash: str, index: int, seed: int, workdir: str) -> dict:
+    rng = random.Random(seed * 1_000_003 + index)
+    s = scene(rng)
+    method = rng.choice(METHODS)
+    path = os.path.join(workdir, f"s{index}.json")
+    out = os.path.join(workdir, f"o{index}")
+    with open(path, "w") as f:
+        json.dump(s, f)
+    cmd = [lash, "run", path, "--out", out, "--method", method, "--max-wall-time", "5"]
+    if method == "rk4":
+        cmd += ["--step", str(log_uniform(rng, 1e-6, 1e-4))]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        code = p.returncode
+        lines = [ln for ln in p.stderr.splitlines() if ln.startswith(("error", "thread", "memory"))]
+        err = lines[0][:300] if lines else p.stderr[-300:]
+    except subprocess.TimeoutExpired:
+        code, err = "timeout", ""
+    rec = {"index": index, "exit": code, "method": method, "broken": [], "err": err}
+    if code == 0:
+        try:
+            with open(os.path.join(out, "summary.json")) as f:
+                rec["broken"] = bounds(json.load(f))
+        except (OSError, ValueError) as e:
+            rec["broken"] = [f"summary unreadable: {e}"]
+    return rec
+
+
+def bounds(summary: dict) -> list[str]:
+    broken = []
+    for r in summary.get("law_range") or []:
+        if not r["depth_max"] < r["depth_limit"]:
+            broken.append(f"law_range {r['joint']}: depth {r['depth_max']} >= {r['depth_limit']}")
+    m = summary.get("metrics") or {}
+    if m.get("constraint_violation_max", 0.0) > 1e-3:
+        broken.append(f"constraint_violation_max {m['constraint_violation_max']}")
+    e = m.get("energy")
+    if e:
+        terms = [v for k, v in e.items() if k not in ("balance_error", "quadrature_error") and isinstance(v, (int, float))]
+        scale = sum(abs(v) for v in terms)
+        if abs(e["balance_error"]) > 0.05 * scale + 10 * abs(e["quadrature_error"]) + 1e-9:
+            broken.append(f"energy balance_error {e['balance_error']:.3e} of {scale:.3e} J")
+    return broken
+
+
+def fuzz(lash: str, n: int, seed: int, jobs: int) -> dict:
+    with tempfile.TemporaryDirectory() as d:
+        with ThreadPoolExecutor(max_workers=jobs) as ex:
+            recs = list(ex.map(lambda i: run_one(lash, i, seed, d), range(n)))
+    counts: dict[str, int] = {}
+    for r in recs:
+        counts[str(r["exit"])] = counts.get(str(r["exit"]), 0) + 1
+    bugs = [r for r in recs if r["exit"] not in (0, 2, 3)]
+    broken = [r for r in recs if r["broken"]]
+    return {"scenes": n, "seed": seed, "exit_codes": counts, "bugs": bugs, "broken_bounds": broken}
+
+
+def test_fuzz_subset():
+    here = os.path.dirname(os.path.abspath(__file__))
+    built = os.path.join(here, "..", "..", "target", "release", "lash")
+    lash = os.environ.get("LASH_BIN") or (built if os.path.exists(built) else None)
+    if not lash:
+        import pytest
+
+        pytest.skip("no lash binary: set LASH_BIN or build target/release/lash")
+    rep = fuzz(lash, 50, 7, 2)
+    assert rep["bugs"] == [], rep["bugs"]
+    assert rep["broken_bounds"] == [], rep["broken_bounds"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lash", default="target/release/lash")
+    ap.add_argument("--n", type=int, default=3000)
+    ap.add_argument("--seed", type=int, default=23)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+    rep = fuzz(a.lash, a.n, a.seed, a.jobs)
+    if a.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print(f"{rep['scenes']} scenes (seed {rep['seed']}): exit codes {rep['exit_codes']}")
+        print(f"bugs (exit 1, panic, abort, signal, timeout): {len(rep['bugs'])}")
+        for r in rep["bugs"][:20]:
+            print(f"  scene {r['index']} ({r['method']}): exit {r['exit']}: {r['err'].strip()[-200:]}")
+        print(f"exit 0 breaking a physical bound: {len(rep['broken_bounds'])}")
+        for r in rep["broken_bounds"][:20]:
+            print(f"  scene {r['index']} ({r['method']}): {r['broken']}")
+    return 0 if not rep["bugs"] and not rep["broken_bounds"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
