@@ -386,11 +386,8 @@ def run(
         formulation=formulation))
 
     summary = json.loads(raw["summary"])
-    rows = raw["rows"]
-    data = np.frombuffer(raw["columns"], dtype=np.float64)
-    columns = {}
-    for k, col in enumerate(raw["names"]):
-        columns[col] = data[k * rows:(k + 1) * rows]
+    # Each column is the engine's own vector, wrapped by numpy without a copy.
+    columns = {col: np.asarray(c) for col, c in zip(raw["names"], raw["columns"])}
     events = [Event(float(t), n, kind) for (t, n, kind) in raw["events"]]
     if text is not None:
         scene_text = text.decode("utf-8")

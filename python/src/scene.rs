@@ -10,8 +10,8 @@
 //!        │  the caller's thread looks for
 //!        │  Ctrl-C every 50 ms (run_watched)
 //!        ▼
-//! { summary: summary.json's text, names, present, rows, columns: column-major f64 bytes,
-//!   events: [(t, element, kind)] }
+//! { summary: summary.json's text, names, present, rows, columns: the engine's column
+//!   vectors as F64Column (numpy's array interface, no copy), events: [(t, element, kind)] }
 //! ```
 //!
 //! Errors: a scene the model rejects → `lash.SceneError(path, reason)`; a case that is not a
@@ -33,7 +33,7 @@ use lash_model::SceneError;
 use lash_solver::{interrupt, Atol, ControllerKind, Method, SolveError};
 use lash_validation::{Case, Error, EventRecord, RunOptions, RunResult, SolverChoice};
 
-use crate::convert::bytearray_from_f64s;
+use crate::convert::F64Column;
 use crate::errors::{
     failure_kind, guard, keyword, memory_error, panic_error, scene_error, solve_error, usage_error,
 };
@@ -242,8 +242,8 @@ pub fn run_watched<T: Send>(
 /// released, while this thread looks for Ctrl-C ([`run_watched`]).
 ///
 /// Returns a dict: `summary` (summary.json's text), `names` and `present` (the trajectory's
-/// columns and whether the run fills each), `rows`, `columns` (bytes of native-endian f64,
-/// column after column; NaN in absent columns), `events` (`(t, element, kind)` of every
+/// columns and whether the run fills each), `rows`, `columns` (one [`F64Column`] per column,
+/// the engine's own vector behind numpy's array interface; NaN in absent columns), `events` (`(t, element, kind)` of every
 /// event of the run), `engine_time_s` (wall time of reading the case and the engine's run,
 /// the GIL released: what the same run costs without Python).
 #[pyfunction]
@@ -310,7 +310,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
         let names = r.event_names.clone();
         Ok((r, names, start.elapsed().as_secs_f64()))
     })?;
-    let (r, event_names, engine_s) = outcome.map_err(|e| engine_error(py, e))?;
+    let (mut r, event_names, engine_s) = outcome.map_err(|e| engine_error(py, e))?;
 
     let out = PyDict::new(py);
     out.set_item("engine_time_s", engine_s)?;
@@ -322,17 +322,17 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
         Some(h) => (h.names().to_vec(), h.present().to_vec()),
         None => (Vec::new(), Vec::new()),
     };
-    let mut data = Vec::with_capacity(rows * names.len());
-    for name in &names {
-        match r.trajectory.column(name) {
-            Some(c) => data.extend_from_slice(c),
-            None => data.extend(std::iter::repeat_n(f64::NAN, rows)),
-        }
+    // The engine's columns themselves (NaN in absent ones), each behind numpy's array
+    // interface: no copy of the trajectory.
+    let data: Vec<Vec<f64>> = std::mem::take(&mut r.trajectory).into();
+    let columns = PyList::empty(py);
+    for c in data {
+        columns.append(Bound::new(py, F64Column::new(c))?)?;
     }
     out.set_item("names", names)?;
     out.set_item("present", present)?;
     out.set_item("rows", rows)?;
-    out.set_item("columns", bytearray_from_f64s(py, &data)?)?;
+    out.set_item("columns", columns)?;
     out.set_item("events", events(py, &r.events, &event_names)?)?;
     Ok(out)
 }

@@ -327,6 +327,14 @@ impl Columns {
     }
 }
 
+/// The values of every column, in the header's order (NaN in absent columns), handed over
+/// without a copy: what a front end wraps as arrays (lash.run's columns).
+impl From<Columns> for Vec<Vec<f64>> {
+    fn from(c: Columns) -> Vec<Vec<f64>> {
+        c.data
+    }
+}
+
 impl TrajectorySink for Columns {
     fn start(&mut self, header: &Header) -> Result<(), Error> {
         self.data = vec![Vec::new(); header.len()];
