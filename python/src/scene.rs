@@ -317,7 +317,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
     let summary = serde_json::to_string(&r.summary)
         .map_err(|e| PyRuntimeError::new_err(format!("summary: {e}")))?;
     out.set_item("summary", summary)?;
-    let rows = r.trajectory.len();
+    let rows = r.trajectory_rows;
     let (names, present): (Vec<String>, Vec<bool>) = match r.trajectory.header() {
         Some(h) => (h.names().to_vec(), h.present().to_vec()),
         None => (Vec::new(), Vec::new()),

@@ -286,13 +286,14 @@ impl Columns {
         self.header.as_ref()
     }
 
-    /// Number of rows.
-    pub fn len(&self) -> usize {
+    /// Number of rows (a run's `trajectory_rows`).
+    pub(crate) fn len(&self) -> usize {
         self.data.first().map_or(0, Vec::len)
     }
 
     /// Whether no row was collected.
-    pub fn is_empty(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
