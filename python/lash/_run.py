@@ -304,10 +304,13 @@ def run(
         :class:`MemoryError`); nothing was integrated.
     KeyboardInterrupt
         Ctrl-C (or any signal whose Python handler raises): the run stops at its next step,
-        within about 0.1 s, and its results are dropped. The scene is read and integrated on
-        a thread of lash's while the calling thread looks for signals every 50 ms (Python
-        runs signal handlers in its main thread only). The stop request is one for the
-        process: lash runs of other threads stop too.
+        within about 0.1 s, and its results are dropped. In the main thread the scene is
+        read and integrated on the calling thread, the GIL released, with Python's signal
+        wakeup fd pointed at a watcher of lash's for the time of the call (an event loop's
+        wakeup fd, if one is set, is left alone: then the run goes to a thread of lash's while
+        the calling thread looks for signals every 50 ms). Python runs signal handlers in its
+        main thread only: in other threads Ctrl-C is seen after the run. The stop request is
+        one for the process: lash runs of other threads stop too.
     FileNotFoundError
         ``scene`` names no file.
 

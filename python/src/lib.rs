@@ -10,9 +10,9 @@
 //!        │                                    Run (summary dict, numpy columns, events)
 //!        ▼
 //! _lash.run_core (scene.rs)                   RunArgs (the keyword arguments, one dict) →
-//!                                             lash_validation::run_in_memory on an engine
-//!                                             thread, the GIL released, while the
-//!                                             caller's thread looks for Ctrl-C every 50 ms
+//!                                             lash_validation::run_in_memory, the GIL
+//!                                             released, Ctrl-C watched through Python's
+//!                                             signal wakeup fd (scene::run_watched)
 //!
 //! lash.sweep (python/lash/_sweep.py)        expands a sweep (sweep_points_core) and runs
 //!        │                                    its points, in process or one per task of an

@@ -65,8 +65,9 @@ impl SweepArgs {
 pub fn sweep_points_core<'py>(py: Python<'py>, args: SweepArgs) -> PyResult<Bound<'py, PyList>> {
     guard(py, "lash.sweep", || {
         let o = args.options();
-        let points = run_watched(py, "lash.sweep", || {
-            lash_validation::sweep_points(&o, args.text.as_deref())
+        let text = args.text;
+        let points = run_watched(py, "lash.sweep", move || {
+            (lash_validation::sweep_points(&o, text.as_deref()), ())
         })?
         .map_err(|e| engine_error(py, e))?;
         let out = PyList::empty(py);
@@ -87,8 +88,12 @@ pub fn sweep_points_core<'py>(py: Python<'py>, args: SweepArgs) -> PyResult<Boun
 pub fn sweep_run_core(py: Python<'_>, args: SweepArgs) -> PyResult<usize> {
     guard(py, "lash.sweep", || {
         let o = args.options();
-        let outcome = run_watched(py, "lash.sweep", || {
-            lash_validation::sweep_run(&o, args.text.as_deref(), args.only, &NoProgress)
+        let (text, only) = (args.text, args.only);
+        let outcome = run_watched(py, "lash.sweep", move || {
+            (
+                lash_validation::sweep_run(&o, text.as_deref(), only, &NoProgress),
+                (),
+            )
         })?
         .map_err(|e| engine_error(py, e))?;
         Ok(outcome.points)
