@@ -222,7 +222,13 @@ impl SweepSpec {
             )));
         }
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let file: SweepFile = serde_json::from_slice(&bytes)
+        SweepSpec::from_json(path, &bytes)
+    }
+
+    /// Parses and checks a sweep file's JSON text as if read from `path` (the base case is
+    /// resolved relative to its directory): a sweep given as text (lash.sweep's dict).
+    pub(crate) fn from_json(path: &Path, bytes: &[u8]) -> Result<SweepSpec, Error> {
+        let file: SweepFile = serde_json::from_slice(bytes)
             .map_err(|e| Error::Input(format!("sweep file {}: {e}", path.display())))?;
         let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
         SweepSpec::new(file, dir)
