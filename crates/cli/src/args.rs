@@ -426,6 +426,11 @@ pub struct WorkPrecisionArgs {
     /// Output directory. Default `out/work-precision/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Formulations compared side by side, comma-separated (lagrange_baumgarte,
+    /// augmented_lagrangian; docs/model.md §12): every run with each, against one reference
+    /// (the case's own formulation's), each row naming its formulation. Default: the case's.
+    #[arg(long, value_name = "F,..", value_delimiter = ',', value_parser = parse_formulation)]
+    pub formulations: Option<Vec<lash_model::FormulationName>>,
 }
 
 impl WorkPrecisionArgs {
@@ -440,6 +445,7 @@ impl WorkPrecisionArgs {
             t_end: self.t_end,
             max_wall_time: self.max_wall_time,
             out: self.out.clone(),
+            formulations: self.formulations.clone(),
         }
     }
 
