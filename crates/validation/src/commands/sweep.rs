@@ -64,8 +64,20 @@ pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcom
     base.max_wall_time = o.max_wall_time;
     // Every point's scene is built and checked before any point runs: a path that does not
     // exist or a value the scene rejects is an input error naming the path and the point.
+    // A sampled path is named as the sweep file names it, not as a `set` key.
+    let sampled: Vec<&String> = spec
+        .file
+        .sample
+        .iter()
+        .flat_map(|s| s.vary.keys())
+        .collect();
     for p in &points {
-        point_scene(&base, p)?;
+        point_scene(&base, p).map_err(|e| match e {
+            Error::Input(m) => Error::Input(sampled.iter().fold(m, |m, k| {
+                m.replace(&format!("set['{k}']"), &format!("sample.vary['{k}']"))
+            })),
+            e => e,
+        })?;
     }
     sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
 }
