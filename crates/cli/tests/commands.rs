@@ -739,6 +739,53 @@ fn sampled_sweep_runs_merges_and_resumes() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(err.contains("4 of 4 points already done"), "{err}");
+    // merged.md: a readable table by default (no solver statistics beyond the step count),
+    // the quantiles of every metric; --columns chooses the table; an unknown column is exit 2.
+    let md = std::fs::read_to_string(d.path().join("s/merged.md")).unwrap();
+    let header = md.lines().find(|l| l.starts_with("| id |")).unwrap();
+    assert!(
+        header.contains("| joints[coupler_rocker].friction.mu |"),
+        "{header}"
+    );
+    assert!(header.contains("| metrics.eps_max |"), "{header}");
+    assert!(!header.contains("stats.h_min_used") && !header.contains("scene_sha256"));
+    let fr: Vec<f64> = rows.iter().map(|row| row[fric].parse().unwrap()).collect();
+    let mut sorted = fr.clone();
+    sorted.sort_by(f64::total_cmp);
+    // Type 7 over 4 numbers: Q(0.5) = (x1 + x2)/2, 6 significant digits in merged.md.
+    let q = md
+        .lines()
+        .find(|l| l.starts_with("| metrics.energy.dissipated_friction |"))
+        .expect(&md);
+    let cells: Vec<&str> = q.split('|').map(str::trim).collect();
+    assert_eq!(cells[2], "4");
+    let median: f64 = cells[4].parse().unwrap();
+    let want = 0.5 * (sorted[1] + sorted[2]);
+    assert!(
+        (median - want).abs() <= 1e-5 * want.abs(),
+        "{median} vs {want}"
+    );
+    ok(
+        &[
+            "merge",
+            "s",
+            "--columns",
+            "index,metrics.energy.dissipated_friction",
+        ],
+        d.path(),
+    );
+    let md = std::fs::read_to_string(d.path().join("s/merged.md")).unwrap();
+    assert!(
+        md.contains("| index | metrics.energy.dissipated_friction |\n|---|---|\n| 0 |"),
+        "{md}"
+    );
+    let o = lash(&["merge", "s", "--columns", "index,nope"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no column 'nope'") && err.contains("--columns"),
+        "{err}"
+    );
 }
 
 /// Bad sampled sweep files (issue 22): each ends in one line naming the key, exit 2, with

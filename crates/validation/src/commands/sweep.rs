@@ -217,6 +217,9 @@ pub struct MergeOptions {
     /// Merge what finished even if some points of the grid are unfinished or corrupt (they
     /// get rows with status `unfinished` / `corrupt`); else that is an error.
     pub allow_partial: bool,
+    /// The columns merged.md shows, in order; empty = the parameters, `status`, `error` and a
+    /// short default set of metrics. merged.csv has every column either way.
+    pub columns: Vec<String>,
 }
 
 /// What [`merge`] wrote.
@@ -256,6 +259,6 @@ pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
             .into());
     }
     let table = table.with_missing();
-    let (csv, md) = table.write(&out)?;
+    let (csv, md) = table.write(&out, &o.columns)?;
     Ok(Merged { table, csv, md })
 }
