@@ -162,5 +162,6 @@ fn failure_message(e: &SolveError, t: f64, dir: f64, name: &dyn Fn(usize) -> Str
         SolveError::SingularConfiguration { reason, .. } => {
             format!("singular configuration at t = {t:e}: {reason}")
         }
+        SolveError::StateRejected { reason, .. } => reason.clone(),
     }
 }

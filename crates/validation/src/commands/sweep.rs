@@ -146,8 +146,22 @@ fn checked_base(
 ) -> Result<Prepared, Error> {
     let mut base = Prepared::load(spec.case.clone())?;
     base.max_wall_time = max_wall_time;
+    // Every point's scene is built and checked before any point runs: a path that does not
+    // exist or a value the scene rejects is an input error naming the path and the point.
+    // A sampled path is named as the sweep file names it, not as a `set` key.
+    let sampled: Vec<&String> = spec
+        .file
+        .sample
+        .iter()
+        .flat_map(|s| s.vary.keys())
+        .collect();
     for p in points {
-        point_scene(&base, p)?;
+        point_scene(&base, p).map_err(|e| match e {
+            Error::Input(m) => Error::Input(sampled.iter().fold(m, |m, k| {
+                m.replace(&format!("set['{k}']"), &format!("sample.vary['{k}']"))
+            })),
+            e => e,
+        })?;
     }
     Ok(base)
 }
@@ -300,6 +314,9 @@ pub struct MergeOptions {
     /// Merge what finished even if some points of the grid are unfinished or corrupt (they
     /// get rows with status `unfinished` / `corrupt`); else that is an error.
     pub allow_partial: bool,
+    /// The columns merged.md shows, in order; empty = the parameters, `status`, `error` and a
+    /// short default set of metrics. merged.csv has every column either way.
+    pub columns: Vec<String>,
 }
 
 /// What [`merge`] wrote.
@@ -339,6 +356,6 @@ pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
             .into());
     }
     let table = table.with_missing();
-    let (csv, md) = table.write(&out)?;
+    let (csv, md) = table.write(&out, &o.columns)?;
     Ok(Merged { table, csv, md })
 }

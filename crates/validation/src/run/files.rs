@@ -158,6 +158,10 @@ impl FailureError {
                 f.reason = Some(reason.clone());
                 "singular_configuration"
             }
+            SolveError::StateRejected { kind, reason, .. } => {
+                f.reason = Some(reason.clone());
+                kind
+            }
             SolveError::OutOfMemory(m) => {
                 f.reason = Some(m.to_string());
                 "out_of_memory"
