@@ -252,6 +252,17 @@ pub struct RunArgs {
     /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
     pub formulation: Option<lash_model::FormulationName>,
+    /// The window the metrics of summary.json cover: last-revolution (of the crank:
+    /// roles.crank or roles.crank_driver; a crank a motor turns takes a first pass to find
+    /// where its last turn starts), all (the whole run), or T0:T1 in seconds. Default:
+    /// last-revolution with a crank, all without one.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
+}
+
+/// Parses --window (lash_model::MetricsWindow).
+fn parse_window(s: &str) -> Result<lash_model::MetricsWindow, String> {
+    s.parse()
 }
 
 /// Parses --formulation.
@@ -274,6 +285,7 @@ impl RunArgs {
                 max_revolutions: self.max_revolutions.unwrap_or(DEFAULT_MAX_REVOLUTIONS),
             }),
             formulation: self.formulation,
+            window: self.window,
         }
     }
 }
@@ -477,6 +489,12 @@ pub struct SweepArgs {
     /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// The window the metrics of summary.json cover: last-revolution (of the crank:
+    /// roles.crank or roles.crank_driver; a crank a motor turns takes a first pass to find
+    /// where its last turn starts), all (the whole run), or T0:T1 in seconds. Default:
+    /// last-revolution with a crank, all without one.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
 }
 
 impl SweepArgs {
@@ -488,6 +506,7 @@ impl SweepArgs {
             shard: self.shard,
             out: self.out.clone(),
             max_wall_time: self.max_wall_time,
+            window: self.window,
         }
     }
 }

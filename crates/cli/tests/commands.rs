@@ -22,16 +22,19 @@ fn short_press(dir: &Path, name: &str, joint: PressJoint, c: f64, t_end: f64) ->
     p
 }
 
-// A mechanism run's: `formulation` is absent for built-in test problems (docs/outputs.md).
-const SUMMARY_KEYS: [&str; 16] = [
+// A mechanism run's: `formulation`, `metrics_window` are absent for built-in test problems,
+// `crank_revolutions` without a crank (docs/outputs.md).
+const SUMMARY_KEYS: [&str; 18] = [
     "atol",
     "case",
     "controller",
+    "crank_revolutions",
     "events",
     "final_state",
     "formulation",
     "method",
     "metrics",
+    "metrics_window",
     "reference_error",
     "rtol",
     "scene_sha256",
@@ -65,6 +68,9 @@ fn run_writes_summary_trajectory_and_figures() {
     assert!(s["controller"].is_null() && s["step"].is_null());
     assert_eq!(s["atol"].as_array().unwrap().len(), 12);
     assert_eq!(s["t_end"], 0.1);
+    // A quarter turn at 150 rpm, shorter than the revolution: the window is the whole run.
+    assert!((s["crank_revolutions"].as_f64().unwrap() - 0.25).abs() < 1e-12, "{s}");
+    assert_eq!(s["metrics_window"], serde_json::json!([0.0, 0.1]));
     let m = &s["metrics"];
     // The ideal mechanism is its closed form; it has no clearance joint.
     assert!(

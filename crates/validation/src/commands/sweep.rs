@@ -38,6 +38,9 @@ pub struct SweepRunOptions {
     /// Wall-clock budget of each point's integration, s; a point over it is a solver failure
     /// ("budget exhausted", recorded like any other). None = no budget.
     pub max_wall_time: Option<f64>,
+    /// The metrics window of every point (`--window`); None: the crank's last revolution,
+    /// else the whole run (docs/outputs.md, "The metrics window").
+    pub window: Option<lash_model::MetricsWindow>,
 }
 
 /// What a sweep did.
@@ -65,9 +68,20 @@ pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcom
     // Every point's scene is built and checked before any point runs: a path that does not
     // exist or a value the scene rejects is an input error naming the path and the point.
     for p in &points {
-        point_scene(&base, p)?;
+        let scene = point_scene(&base, p)?;
+        if o.window.is_none() {
+            continue;
+        }
+        let checked = match scene {
+            Some(s) => Prepared::with_scene(base.case.clone(), s)?,
+            None => base.clone(),
+        };
+        if checked.info.is_some() {
+            let (t0, t_end) = checked.t_span(None)?;
+            checked.window_plan(o.window, t0, t_end)?;
+        }
     }
-    sweep_with(o, |p, dir| sweep_point(&base, p, dir), progress)
+    sweep_with(o, |p, dir| sweep_point(&base, p, dir, o.window), progress)
 }
 
 /// Runs a sweep with a point runner: loads and checks the sweep file, runs the shard's
@@ -145,6 +159,7 @@ pub(crate) fn sweep_point(
     base: &Prepared,
     point: &SweepPoint,
     dir: &Path,
+    window: Option<lash_model::MetricsWindow>,
 ) -> Result<PointResult, Error> {
     let pp = &point.params;
     let prepared = match point_scene(base, point)? {
@@ -164,6 +179,7 @@ pub(crate) fn sweep_point(
     };
     let mut req = RunRequest::new(prepared.options(&choice)?);
     req.trajectory_points = Some(0);
+    req.window = window;
     let r = simulate(&prepared, &req)?;
     r.summary.write(dir)?;
     let v = serde_json::to_value(&r.summary)

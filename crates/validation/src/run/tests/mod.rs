@@ -3,3 +3,4 @@
 
 mod simulate;
 mod steady;
+mod window;
