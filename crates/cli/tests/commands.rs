@@ -69,7 +69,10 @@ fn run_writes_summary_trajectory_and_figures() {
     assert_eq!(s["atol"].as_array().unwrap().len(), 12);
     assert_eq!(s["t_end"], 0.1);
     // A quarter turn at 150 rpm, shorter than the revolution: the window is the whole run.
-    assert!((s["crank_revolutions"].as_f64().unwrap() - 0.25).abs() < 1e-12, "{s}");
+    assert!(
+        (s["crank_revolutions"].as_f64().unwrap() - 0.25).abs() < 1e-12,
+        "{s}"
+    );
     assert_eq!(s["metrics_window"], serde_json::json!([0.0, 0.1]));
     let m = &s["metrics"];
     // The ideal mechanism is its closed form; it has no clearance joint.
