@@ -682,3 +682,83 @@ fn bad_set_sweeps_fail_before_any_point_runs() {
     );
     assert!(!d.path().join("m").exists());
 }
+
+/// `--window` on sweep and run: a window the scene cannot have (last-revolution without a
+/// crank, a span outside the run) is one line, exit 2, before any point runs; a span is every
+/// point's metrics window; the motor-driven punch press measures its last turn.
+#[test]
+fn the_metrics_window_is_chosen_on_run_and_sweep() {
+    let d = tempfile::tempdir().unwrap();
+    let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+    std::fs::copy(
+        cases.join("examples/pendulum.json"),
+        d.path().join("pendulum.json"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.path().join("sw.json"),
+        r#"{"case": "pendulum.json", "set": {"bodies[0].mass": [1.0, 2.0]}}"#,
+    )
+    .unwrap();
+    for (i, (w, expect)) in [
+        ("last-revolution", "last-revolution needs a crank"),
+        ("0.1:99", "is not inside the run"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = format!("bad{i}");
+        let o = lash(
+            &["sweep", "sw.json", "--window", w, "--out", &out],
+            d.path(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{w}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{w}: {err}");
+        assert!(
+            err.contains("--window") && err.contains(expect),
+            "{w}: {err}"
+        );
+        assert!(!d.path().join(&out).exists(), "{w}: ran something");
+    }
+    ok(
+        &["sweep", "sw.json", "--window", "0.1:0.5", "--out", "s"],
+        d.path(),
+    );
+    let mut n = 0;
+    for e in std::fs::read_dir(d.path().join("s")).unwrap() {
+        let p = e.unwrap().path().join("summary.json");
+        if p.exists() {
+            let w = json(&p)["metrics_window"].clone();
+            let (a, b) = (w[0].as_f64().unwrap(), w[1].as_f64().unwrap());
+            assert!((a - 0.1).abs() < 1e-12 && b == 0.5, "{w}");
+            n += 1;
+        }
+    }
+    assert_eq!(n, 2);
+    let o = lash(
+        &["run", "pendulum.json", "--window", "0.5:0.1", "--out", "r"],
+        d.path(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("T0 must be before T1"));
+    // The punch press: its crank pivot is the crank; the last turn ends at t_end and is about
+    // 60/152 s long (152 rpm mean, README), the crank turned about 2.03 times.
+    let punch = cases.join("press/punch_motor_150rpm_c0.1.json");
+    ok(&["run", punch.to_str().unwrap(), "--out", "p"], d.path());
+    let s = json(&d.path().join("p/summary.json"));
+    let (a, b) = (
+        s["metrics_window"][0].as_f64().unwrap(),
+        s["metrics_window"][1].as_f64().unwrap(),
+    );
+    assert_eq!(b, 0.8);
+    assert!((b - a - 60.0 / 152.0).abs() < 0.01, "{a}");
+    let turns = s["crank_revolutions"].as_f64().unwrap();
+    assert!((turns - 2.03).abs() < 0.01, "{turns}");
+    let csv = std::fs::read_to_string(d.path().join("p/trajectory.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let k = header.iter().position(|h| *h == "crank_angle").unwrap();
+    let last = csv.lines().last().unwrap().split(',').nth(k).unwrap();
+    let phi: f64 = last.parse().unwrap();
+    assert!((phi / std::f64::consts::TAU - turns).abs() < 1e-9, "{phi}");
+}
