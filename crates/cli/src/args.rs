@@ -234,7 +234,8 @@ pub struct RunArgs {
     pub out: Option<PathBuf>,
     /// Run until the clearance joint's once-per-revolution section e/c moves by less than TOL
     /// (units of the clearance c) between revolutions, at least 2 revolutions (scenes with a
-    /// crank driver and a clearance joint); replaces the scene's end time. The revolutions
+    /// crank, driven or turned by a motor, and a clearance joint; a motor-driven crank's
+    /// revolutions are its full turns); replaces the scene's end time. The revolutions
     /// used go to stdout and summary.json (`until_periodic`). Default: off (the scene's end
     /// time).
     #[arg(long = "until-periodic", value_name = "TOL", value_parser = parse_until_periodic,
@@ -643,7 +644,8 @@ impl StiffnessArgs {
 /// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PoincareArgs {
-    /// The case: a scene file (JSON) with a crank driver and a clearance joint role.
+    /// The case: a scene file (JSON) with a crank (driven, or turned by a motor: the section is
+    /// then taken at its full turns) and a clearance joint role.
     pub case: String,
     /// Crank revolutions (≥ 1). Default 20.
     #[arg(long, value_name = "N", value_parser = parse_count)]

@@ -195,15 +195,16 @@ fn run_request(
                     .text(", not both")
                     .into());
             }
-            Some(crate::run::steady::settle(&prepared, &opts, u)?)
+            Some(crate::run::steady::settle_until(&prepared, &opts, u)?)
         }
         None => None,
     };
     let mut req = RunRequest::new(opts);
-    req.t_end = match (&settled, &prepared.info) {
-        (Some(s), Some(i)) => i.period.map(|t| i.t_start + t * s.revolutions as f64),
-        _ => o.t_end,
+    req.t_end = match &settled {
+        Some((_, t_end)) => Some(*t_end),
+        None => o.t_end,
     };
+    let settled = settled.map(|(s, _)| s);
     req.samples_per_revolution = o.samples_per_revolution;
     req.output_every = o.output_every;
     req.deadline = deadline;
