@@ -7,7 +7,8 @@
 //!              [--max-steps N] [--max-wall-time S] [--t-end S]
 //!              [--samples-per-revolution N | --output-every DT] [--out DIR]
 //! lash study paper [--out DIR]
-//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S] [--out DIR]
+//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S]
+//!                   [--window W] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
 //!                          [--controllers C,..] [--t-end S] [--max-wall-time S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--max-wall-time S] [--out DIR]
@@ -354,7 +355,7 @@ impl StudyArgs {
 /// Arguments of `lash compare`.
 ///
 /// ```text
-/// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
+/// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--window W] [--out DIR]
 /// ```
 ///
 /// Source: docs/outputs.md ("`lash compare CASE`").
@@ -367,7 +368,7 @@ pub struct CompareArgs {
           allow_hyphen_values = true)]
     pub tolerances: Option<Vec<f64>>,
     /// RK4 steps, s, comma-separated. Default: the largest stable step h of the case and h/2,
-    /// h/4 (scene cases with a crank); none for test problems.
+    /// h/4 (every scene case); none for test problems.
     #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
           allow_hyphen_values = true)]
     pub steps: Option<Vec<f64>>,
@@ -379,6 +380,12 @@ pub struct CompareArgs {
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
+    /// Where the errors are measured: last-revolution (of the crank; a crank a motor turns:
+    /// its last turn, found by a run at the case's options), all (the whole run), or T0:T1 in
+    /// seconds. Default: the case's rule (the first half revolution with a dry clearance joint,
+    /// else the last revolution of a driven crank, else the whole run). Scene cases only.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
     /// Output directory. Default `out/compare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -393,6 +400,7 @@ impl CompareArgs {
             steps: self.steps.clone(),
             t_end: self.t_end,
             max_wall_time: self.max_wall_time,
+            window: self.window,
             out: self.out.clone(),
         }
     }

@@ -762,3 +762,54 @@ fn the_metrics_window_is_chosen_on_run_and_sweep() {
     let phi: f64 = last.parse().unwrap();
     assert!((phi / std::f64::consts::TAU - turns).abs() < 1e-9, "{phi}");
 }
+
+/// `lash compare --window`: a span is where the errors are measured (compare.json's window),
+/// `all` the whole run; a span outside the run and any window on a test problem (compared at
+/// its end point) are usage errors, exit 2, before the reference runs.
+#[test]
+fn compare_measures_errors_on_the_chosen_window() {
+    let d = tempfile::tempdir().unwrap();
+    let case = short_press(d.path(), "ideal_rev", PressJoint::Ideal, 0.0, 0.4);
+    let c = case.to_str().unwrap();
+    for (w, dir, start, end, label) in [
+        ("0.1:0.3", "s", 0.1, 0.3, "chosen span 0.1:0.3"),
+        ("all", "a", 0.0, 0.4, "whole run"),
+    ] {
+        ok(
+            &[
+                "compare",
+                c,
+                "--steps",
+                "1e-3",
+                "--tolerances",
+                "1e-6",
+                "--window",
+                w,
+                "--out",
+                dir,
+            ],
+            d.path(),
+        );
+        let j = json(&d.path().join(dir).join("compare.json"));
+        assert_eq!(j["window"]["start"].as_f64().unwrap(), start, "{w}");
+        assert_eq!(j["window"]["end"].as_f64().unwrap(), end, "{w}");
+        assert_eq!(j["window"]["label"], label);
+        let md = std::fs::read_to_string(d.path().join(dir).join("compare.md")).unwrap();
+        assert!(md.contains(&format!("[{start}, {end}]")), "{md}");
+    }
+    for (args, needle) in [
+        (
+            vec!["compare", c, "--window", "0.5:0.9"],
+            "is not inside the run",
+        ),
+        (
+            vec!["compare", "testset:hires", "--window", "all"],
+            "applies to scene cases",
+        ),
+    ] {
+        let o = lash(&args, d.path());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{err}");
+    }
+}

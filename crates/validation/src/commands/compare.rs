@@ -65,6 +65,8 @@ pub struct CompareOptions {
     /// Wall-clock budget of each integration (the reference and every row), s; a row over it
     /// fails with "budget exhausted". None = no budget.
     pub max_wall_time: Option<f64>,
+    /// Where errors are measured (`--window`); None = the case's own rule (docs/outputs.md).
+    pub window: Option<lash_model::MetricsWindow>,
     /// Output directory; None = `out/compare/CASE`.
     pub out: Option<PathBuf>,
 }
@@ -94,7 +96,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         1 + usize::from(derive) + n_steps + adaptive * tolerances.len(),
     );
     let clock = Instant::now();
-    let reference = Reference::compute(&p, o.t_end)?;
+    let reference = Reference::compute_in(&p, o.t_end, o.window)?;
     progress.finished(
         &format!("{}: reference {}", p.case.name, reference.how),
         clock.elapsed().as_secs_f64(),

@@ -25,6 +25,7 @@
 
 use std::path::{Path, PathBuf};
 
+use lash_model::MetricsWindow;
 use lash_solver::{ControllerKind, Method};
 
 use crate::compare::workprecision::fmt_num;
@@ -34,6 +35,7 @@ use crate::run::plan::{uniform_grid, RunRequest};
 use crate::run::prepare::Prepared;
 use crate::run::result::RunResult;
 use crate::run::simulate::simulate;
+use crate::run::window::WindowPlan;
 use crate::store::io;
 
 /// Relative tolerance of reference runs.
@@ -93,6 +95,51 @@ impl ErrorWindow {
                 label: "whole run".into(),
             },
         }
+    }
+
+    /// The window `--window` chooses for a scene case run to `t_end` (crate::run::window):
+    /// last-revolution (a driven crank's last period; for a crank a motor turns, its last
+    /// turn as a run at the case's own options finds it), all, or T0:T1. Option errors: a
+    /// test problem (compared at its end point), a window the run cannot have.
+    pub(crate) fn chosen(
+        p: &Prepared,
+        t_end: Option<f64>,
+        choice: MetricsWindow,
+    ) -> Result<ErrorWindow, Error> {
+        if p.info.is_none() {
+            return Err(OptionError::leading(
+                "window",
+                format!(
+                    " applies to scene cases; {} is a test problem, compared at its end point",
+                    p.case.name
+                ),
+            )
+            .into());
+        }
+        let (t0, te) = p.t_span(t_end)?;
+        let label = match choice {
+            MetricsWindow::LastRevolution => "last revolution".to_string(),
+            MetricsWindow::All => "whole run".to_string(),
+            MetricsWindow::Span { from, to } => {
+                format!("chosen span {}:{}", fmt_num(from), fmt_num(to))
+            }
+        };
+        let (start, end) = match p.window_plan(Some(choice), t0, te)? {
+            WindowPlan::Known(w) => (w.t_end - w.period, w.t_end),
+            WindowPlan::CrankTurn => {
+                let mut req = RunRequest::new(p.default_options());
+                req.t_end = t_end;
+                req.window = Some(choice);
+                req.trajectory_points = Some(0);
+                req.energy = false;
+                let r = simulate(p, &req)?;
+                let [a, b] = r.summary.metrics_window.ok_or_else(|| {
+                    Error::Internal("compare: the crank's last turn was not found".into())
+                })?;
+                (a, b)
+            }
+        };
+        Ok(ErrorWindow { start, end, label })
     }
 
     /// The 2001 sampling times (none for test problems, which compare end points).
@@ -264,8 +311,21 @@ impl Reference {
     /// Computes the reference of a case run to `t_end` (None: the scene's end time). A
     /// failure of the reference itself is the solver's error (exit 3).
     pub(crate) fn compute(p: &Prepared, t_end: Option<f64>) -> Result<Reference, Error> {
+        Reference::compute_in(p, t_end, None)
+    }
+
+    /// [`Reference::compute`] with the error window chosen (`--window`; None: the case's own
+    /// rule, [`ErrorWindow::of`]; [`ErrorWindow::chosen`]).
+    pub(crate) fn compute_in(
+        p: &Prepared,
+        t_end: Option<f64>,
+        choice: Option<MetricsWindow>,
+    ) -> Result<Reference, Error> {
         let (t0, te) = p.t_span(t_end)?;
-        let window = ErrorWindow::of(p, t0, te);
+        let window = match choice {
+            None => ErrorWindow::of(p, t0, te),
+            Some(c) => ErrorWindow::chosen(p, t_end, c)?,
+        };
         if p.info.is_none() {
             return Ok(Reference {
                 how: "the published reference solution at t_end (IVP Test Set 2.4, \
