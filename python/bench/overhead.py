@@ -7,7 +7,7 @@ Per repetition, interleaved: lash.run(SCENE) timed around the call (perf_counter
 engine's own time inside that call (Run.engine_time_s: reading the scene and the run with its
 outputs and metrics, without Python), the integration alone (summary wall_time_s), and
 `lash run SCENE` as a process (writes trajectory.csv, summary.json and the figures). Prints the
-medians and the ratios.
+medians and the ratios, and the quartiles of what each call added to its own engine time.
 """
 
 import argparse
@@ -48,6 +48,11 @@ def main():
     print(f"  integration (wall_time_s)      {m(integ) * 1e3:8.1f} ms")
     print(f"  lash run (process, files)      {m(cli) * 1e3:8.1f} ms")
     print(f"  Python's cost over the engine  {(m(py) / m(engine) - 1) * 100:8.2f} %")
+    # Per call, paired: what each lash.run added to its own engine time (quartiles, ms).
+    extra = sorted(p - e for p, e in zip(py, engine))
+    q = statistics.quantiles(extra, n=4) if len(extra) > 1 else extra * 3
+    print(f"  lash.run - engine, per call    {q[0] * 1e3:.2f} / {q[1] * 1e3:.2f} / "
+          f"{q[2] * 1e3:.2f} ms (quartiles; min {extra[0] * 1e3:.2f} ms)")
     print(f"  lash.run / lash run            {m(py) / m(cli):8.3f}")
 
 

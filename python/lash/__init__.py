@@ -8,6 +8,9 @@ interface:
   results in memory: :class:`Run` with ``summary`` (summary.json as a dict), ``columns``
   (trajectory.csv as numpy arrays), ``events`` (:class:`Event`), ``to_pandas()`` and
   ``animate()`` (:class:`Animation`: the mechanism moving, a page a notebook shows).
+- :func:`sweep` — a sweep (``lash sweep``'s file, or a dict) run in process or on any
+  executor (a process pool, a ``dask.distributed`` client, submitit's SLURM executor): one
+  row per point in a pandas DataFrame, the points in the command's directory layout.
 - :func:`solve_ivp` — scipy's ``solve_ivp`` with lash's methods (Rodas5P, BDF, TR-BDF2,
   ESDIRK3(4), the embedded pairs BS3(2), DP5(4), Tsit5(4), DOP853, fixed-step RK4), its
   Söderlind step-size controllers, and events with direction, terminal counts and hooks.
@@ -33,9 +36,11 @@ from ._errors import (InternalError, LashError, OutOfMemoryError, SceneError, So
 from ._ivp import CONTROLLERS, METHODS, OdeResult, OdeSolution, solve_ivp
 from ._lash import __version__
 from ._run import Animation, Event, Run, run
+from ._sweep import sweep
 
 __all__ = [
     "run",
+    "sweep",
     "Run",
     "Event",
     "Animation",

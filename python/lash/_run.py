@@ -304,10 +304,13 @@ def run(
         :class:`MemoryError`); nothing was integrated.
     KeyboardInterrupt
         Ctrl-C (or any signal whose Python handler raises): the run stops at its next step,
-        within about 0.1 s, and its results are dropped. The scene is read and integrated on
-        a thread of lash's while the calling thread looks for signals every 50 ms (Python
-        runs signal handlers in its main thread only). The stop request is one for the
-        process: lash runs of other threads stop too.
+        within about 0.1 s, and its results are dropped. In the main thread the scene is
+        read and integrated on the calling thread, the GIL released, with Python's signal
+        wakeup fd pointed at a watcher of lash's for the time of the call (an event loop's
+        wakeup fd, if one is set, is left alone: then the run goes to a thread of lash's while
+        the calling thread looks for signals every 50 ms). Python runs signal handlers in its
+        main thread only: in other threads Ctrl-C is seen after the run. The stop request is
+        one for the process: lash runs of other threads stop too.
     FileNotFoundError
         ``scene`` names no file.
 
@@ -386,11 +389,8 @@ def run(
         formulation=formulation))
 
     summary = json.loads(raw["summary"])
-    rows = raw["rows"]
-    data = np.frombuffer(raw["columns"], dtype=np.float64)
-    columns = {}
-    for k, col in enumerate(raw["names"]):
-        columns[col] = data[k * rows:(k + 1) * rows]
+    # Each column is the engine's own vector, wrapped by numpy without a copy.
+    columns = {col: np.asarray(c) for col, c in zip(raw["names"], raw["columns"])}
     events = [Event(float(t), n, kind) for (t, n, kind) in raw["events"]]
     if text is not None:
         scene_text = text.decode("utf-8")

@@ -9,6 +9,8 @@
 //!                                 .tobytes() copied out
 //! bulk results:                   bytearray of native-endian f64 (numpy.frombuffer on the
 //!                                 Python side)
+//! a run's trajectory columns:     F64Column, the engine's own Vec<f64> behind numpy's array
+//!                                 interface (numpy.asarray on the Python side, no copy)
 //! ```
 //!
 //! The extension is built for the stable ABI from Python 3.9 (abi3-py39), where the buffer
@@ -16,7 +18,7 @@
 
 use pyo3::intern;
 use pyo3::prelude::*;
-use pyo3::types::{PyByteArray, PyBytes, PyList, PyTuple};
+use pyo3::types::{PyByteArray, PyBytes, PyDict, PyList, PyTuple};
 
 use crate::errors;
 
@@ -45,6 +47,67 @@ pub fn bytearray_from_f64s<'py>(
         }
         Ok(())
     })
+}
+
+/// A vector of f64 that numpy uses in place: an object with numpy's array interface
+/// (version 3) over memory it owns, so that `numpy.asarray(column)` is a writable float64
+/// array of the values without a copy, whose base (this object) keeps the memory alive. A
+/// run's trajectory columns are handed over from the engine this way (python/lash/_run.py).
+#[pyclass(module = "lash._lash", frozen)]
+pub struct F64Column {
+    /// The vector's buffer, owned (a Vec's raw parts; freed on drop).
+    ptr: *mut f64,
+    len: usize,
+    cap: usize,
+}
+
+// SAFETY: the object owns its buffer as a Vec would (nothing else frees it, and Rust never
+// reads or writes through `ptr` after construction: only numpy does, under the GIL's rules
+// for any array's memory), so it may move to and be dropped on any thread.
+unsafe impl Send for F64Column {}
+// SAFETY: as above; shared references give out only the address.
+unsafe impl Sync for F64Column {}
+
+impl F64Column {
+    /// Takes `values` over without copying them.
+    pub fn new(values: Vec<f64>) -> F64Column {
+        let mut v = std::mem::ManuallyDrop::new(values);
+        F64Column {
+            ptr: v.as_mut_ptr(),
+            len: v.len(),
+            cap: v.capacity(),
+        }
+    }
+}
+
+impl Drop for F64Column {
+    fn drop(&mut self) {
+        // SAFETY: the parts came from a Vec<f64> (F64Column::new) and are freed only here.
+        drop(unsafe { Vec::from_raw_parts(self.ptr, self.len, self.cap) });
+    }
+}
+
+#[pymethods]
+impl F64Column {
+    /// numpy's array interface: shape `(len,)`, native-endian float64, writable.
+    #[getter]
+    fn __array_interface__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("version", 3)?;
+        d.set_item("shape", (self.len,))?;
+        let typestr = if cfg!(target_endian = "little") {
+            "<f8"
+        } else {
+            ">f8"
+        };
+        d.set_item("typestr", typestr)?;
+        d.set_item("data", (self.ptr as usize, false))?;
+        Ok(d)
+    }
+
+    fn __len__(&self) -> usize {
+        self.len
+    }
 }
 
 /// numpy's functions the conversions call, looked up once per solve.

@@ -158,6 +158,7 @@ pub fn failure_kind(e: &SolveError) -> &'static str {
         SolveError::BudgetExhausted { .. } => "budget_exhausted",
         SolveError::Interrupted { .. } => "interrupted",
         SolveError::EventNan { .. } => "event_nan",
+        SolveError::StateRejected { kind, .. } => kind,
         SolveError::OutOfMemory(_) => "out_of_memory",
     }
 }

@@ -10,9 +10,14 @@
 //!        │                                    Run (summary dict, numpy columns, events)
 //!        ▼
 //! _lash.run_core (scene.rs)                   RunArgs (the keyword arguments, one dict) →
-//!                                             lash_validation::run_in_memory on an engine
-//!                                             thread, the GIL released, while the
-//!                                             caller's thread looks for Ctrl-C every 50 ms
+//!                                             lash_validation::run_in_memory, the GIL
+//!                                             released, Ctrl-C watched through Python's
+//!                                             signal wakeup fd (scene::run_watched)
+//!
+//! lash.sweep (python/lash/_sweep.py)        expands a sweep (sweep_points_core) and runs
+//!        │                                    its points, in process or one per task of an
+//!        ▼                                    executor, reading each point's result.json
+//! _lash.sweep_*_core (sweep.rs)               lash_validation::sweep_points / sweep_run
 //!
 //! lash.solve_ivp (python/lash/_ivp.py)       checks and normalises the arguments (scipy's
 //!        │                                    meaning), builds OdeResult / OdeSolution
@@ -38,6 +43,7 @@ mod convert;
 mod errors;
 mod ivp;
 mod scene;
+mod sweep;
 
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -51,6 +57,8 @@ fn _lash(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ivp::solve_ivp_core, m)?)?;
     m.add_function(wrap_pyfunction!(scene::run_core, m)?)?;
     m.add_function(wrap_pyfunction!(animation::animation_html, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_points_core, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_run_core, m)?)?;
     m.add(
         "METHODS",
         PyTuple::new(py, Method::ALL.iter().map(|x| x.name()))?,

@@ -6,12 +6,12 @@
 //!        │                                 serialises a dict scene to JSON text
 //!        ▼
 //! run_core(RunArgs)                        Case::load(path) | Case::from_json_bytes(name,
-//!        │  engine thread, GIL released;    text); run_in_memory(case, options)
-//!        │  the caller's thread looks for
-//!        │  Ctrl-C every 50 ms (run_watched)
+//!        │  GIL released, on the caller's   text); run_in_memory(case, options)
+//!        │  thread with Python's wakeup fd
+//!        │  watched for Ctrl-C (run_watched)
 //!        ▼
-//! { summary: summary.json's text, names, present, rows, columns: column-major f64 bytes,
-//!   events: [(t, element, kind)] }
+//! { summary: summary.json's text, names, present, rows, columns: the engine's column
+//!   vectors as F64Column (numpy's array interface, no copy), events: [(t, element, kind)] }
 //! ```
 //!
 //! Errors: a scene the model rejects → `lash.SceneError(path, reason)`; a case that is not a
@@ -33,7 +33,7 @@ use lash_model::SceneError;
 use lash_solver::{interrupt, Atol, ControllerKind, Method, SolveError};
 use lash_validation::{Case, Error, EventRecord, RunOptions, RunResult, SolverChoice};
 
-use crate::convert::bytearray_from_f64s;
+use crate::convert::F64Column;
 use crate::errors::{
     failure_kind, guard, keyword, memory_error, panic_error, scene_error, solve_error, usage_error,
 };
@@ -104,8 +104,42 @@ pub(crate) fn engine_error(py: Python<'_>, e: Error) -> PyErr {
     }
 }
 
-/// What the engine returns: the result, the event functions' names, the engine's wall time.
-type Ran = (RunResult, Vec<(&'static str, String)>, f64);
+/// What `lash.run` keeps of the engine's result, taken before the GIL is back: summary.json's
+/// text, the trajectory's columns (moved, not copied), the events and their functions'
+/// names, the engine's wall time.
+struct Ran {
+    summary: String,
+    names: Vec<String>,
+    present: Vec<bool>,
+    rows: usize,
+    columns: Vec<Vec<f64>>,
+    events: Vec<EventRecord>,
+    event_names: Vec<(&'static str, String)>,
+    engine_s: f64,
+}
+
+impl Ran {
+    /// Takes what `lash.run` returns out of `r` (the trajectory and the events move).
+    fn take(r: &mut RunResult, engine_s: f64) -> Result<Ran, Error> {
+        let summary = serde_json::to_string(&r.summary)
+            .map_err(|e| Error::Internal(format!("summary: {e}")))?;
+        let (names, present) = match r.trajectory.header() {
+            Some(h) => (h.names().to_vec(), h.present().to_vec()),
+            None => (Vec::new(), Vec::new()),
+        };
+        Ok(Ran {
+            summary,
+            names,
+            present,
+            rows: r.trajectory_rows,
+            columns: std::mem::take(&mut r.trajectory).into(),
+            events: std::mem::take(&mut r.events),
+            // Built-in test problems have no events.
+            event_names: std::mem::take(&mut r.event_names),
+            engine_s,
+        })
+    }
+}
 
 /// The events of a run as `(t, element, kind)` tuples (element: the joint's name).
 fn events<'py>(
@@ -176,74 +210,232 @@ pub const SIGNAL_POLL: Duration = Duration::from_millis(50);
 /// caller's thread before it got its own).
 const ENGINE_STACK: usize = 8 << 20;
 
-/// Runs `work` on its own thread while the calling thread, the GIL released, looks for
-/// pending signals every [`SIGNAL_POLL`] (`Python::check_signals`, which runs Python's
-/// handlers: Ctrl-C raises `KeyboardInterrupt` there). On the first exception a handler
-/// raises, the solver's stop request is raised (`lash_solver::interrupt`): the integration
-/// ends at its next step, and that exception is returned once the work has ended, in place
-/// of its result (which is dropped: nothing is half-kept). A panic of the work is
-/// [`errors::panic_error`]'s exception.
+/// Runs `work` with the GIL released while Ctrl-C stays live: on the calling thread when it
+/// is Python's main thread (the common case: no hand-over between threads, issue 25), else on
+/// a thread of its own ([`run_on_thread`]). Either way, a signal whose Python handler raises
+/// (Ctrl-C: `KeyboardInterrupt`) raises the solver's stop request
+/// (`lash_solver::interrupt`): the integration ends at its next step, and the handler's
+/// exception is returned in place of the result (dropped: nothing is half-kept). A panic of
+/// the work is [`errors::panic_error`]'s exception. `work` returns its result and what is
+/// left to free (`D`).
+///
+/// ```text
+/// main thread:  signal.set_wakeup_fd(w) ── work() here, GIL released ── restore the old fd
+///                        │ Python's C handler writes the signal's number to w
+///               watcher thread (one per process): reads r → request_stop() while watched
+///               after: a signal seen → check_signals(): its handler raised → that error;
+///                      it did not → the result, or (the run was stopped for nothing) the
+///                      work again on a thread of its own
+/// elsewhere (another thread, or a wakeup fd already set, as asyncio's): run_on_thread
+/// ```
+///
+/// The stop request is process-wide: it also stops lash runs of other Python threads (they
+/// raise `KeyboardInterrupt` too), as Ctrl-C does in the `lash` command. Python runs signal
+/// handlers in the main thread only: from another thread nothing is seen, and the run goes
+/// on (as any blocking call there does).
+pub fn run_watched<T: Send + 'static, D: Send + 'static>(
+    py: Python<'_>,
+    what: &str,
+    work: impl Fn() -> (T, D) + Send + Sync + 'static,
+) -> PyResult<T> {
+    let work = std::sync::Arc::new(work);
+    let Some(watch) = Watch::start(py)? else {
+        let w = work.clone();
+        return run_on_thread(py, what, move || w());
+    };
+    let w = work.clone();
+    let outcome = py.detach(move || catch_unwind(AssertUnwindSafe(|| w().0)));
+    let signalled = watch.stop(py)?;
+    if !signalled {
+        return outcome.map_err(|payload| panic_error(py, what, payload.as_ref()));
+    }
+    // A signal came during the run: its Python handler runs now.
+    let stopped = interrupt::stop_requested();
+    interrupt::clear_stop();
+    py.check_signals()?;
+    // The handler did not raise: the run is good unless the stop request ended it.
+    match outcome {
+        Ok(r) if !stopped => Ok(r),
+        Ok(_) => run_on_thread(py, what, move || work()),
+        Err(payload) => Err(panic_error(py, what, payload.as_ref())),
+    }
+}
+
+/// What the watcher thread and the runs share: whether a run is watched, and whether a
+/// signal came during it.
+type WatchState = std::sync::Arc<std::sync::Mutex<(bool, bool)>>;
+
+/// The process's watcher (started by the first watched run, again after a fork): its pid, the
+/// socket end Python's signal handler writes to, the state it shares with the runs.
+static WATCHER: std::sync::Mutex<Option<(u32, std::os::unix::net::UnixStream, WatchState)>> =
+    std::sync::Mutex::new(None);
+
+/// The write end and the state of the process's watcher thread, started on first use: it
+/// reads the signal numbers Python's C handler writes to the socket and, while a run is
+/// watched, raises the stop request. One thread for the process's life, so that a watched run
+/// starts none and wakes none (each would be a scheduling delay on a loaded machine).
+fn watcher() -> Option<(std::os::unix::net::UnixStream, WatchState)> {
+    let mut slot = WATCHER.lock().unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    if let Some((p, w, state)) = slot.as_ref() {
+        if *p == pid {
+            return Some((w.try_clone().ok()?, state.clone()));
+        }
+    }
+    let (mut r, w) = std::os::unix::net::UnixStream::pair().ok()?;
+    w.set_nonblocking(true).ok()?;
+    let state: WatchState = std::sync::Arc::new(std::sync::Mutex::new((false, false)));
+    let seen = state.clone();
+    std::thread::Builder::new()
+        .name("lash-signals".into())
+        .spawn(move || {
+            use std::io::Read;
+            let mut b = [0u8; 64];
+            while let Ok(n) = r.read(&mut b) {
+                if n == 0 {
+                    break;
+                }
+                let mut s = seen.lock().unwrap_or_else(|e| e.into_inner());
+                if s.0 {
+                    s.1 = true;
+                    interrupt::request_stop();
+                }
+            }
+        })
+        .ok()?;
+    let out = (w.try_clone().ok()?, state.clone());
+    *slot = Some((pid, w, state));
+    Some(out)
+}
+
+/// The watch of [`run_watched`] on the main thread: Python's wakeup fd pointed at the
+/// process's watcher ([`watcher`]) for the time of one run.
+struct Watch {
+    /// The wakeup fd there was before (restored by [`Watch::stop`]).
+    old: i64,
+    /// The watcher's state (its lock makes sure no stop request is raised after
+    /// [`Watch::stop`]).
+    state: WatchState,
+    /// The socket end given to Python (kept open while Python may write to it).
+    _w: std::os::unix::net::UnixStream,
+}
+
+impl Watch {
+    /// Starts the watch, or None where it cannot be had: not Python's main thread
+    /// (`set_wakeup_fd` refuses), a wakeup fd already set (an event loop's, left alone), no
+    /// socket or thread.
+    fn start(py: Python<'_>) -> PyResult<Option<Watch>> {
+        use std::os::fd::AsRawFd;
+        let Some((w, state)) = watcher() else {
+            return Ok(None);
+        };
+        let signal = py.import("signal")?;
+        let kwargs = pyo3::types::PyDict::new(py);
+        kwargs.set_item("warn_on_full_buffer", false)?;
+        let old: i64 = match signal.call_method("set_wakeup_fd", (w.as_raw_fd(),), Some(&kwargs)) {
+            Ok(old) => old.extract()?,
+            Err(_) => return Ok(None), // not the main thread
+        };
+        if old != -1 {
+            signal.call_method1("set_wakeup_fd", (old,))?;
+            return Ok(None);
+        }
+        *state.lock().unwrap_or_else(|e| e.into_inner()) = (true, false);
+        Ok(Some(Watch { old, state, _w: w }))
+    }
+
+    /// Ends the watch: the old wakeup fd back; whether a signal was seen (then the stop
+    /// request may be raised).
+    fn stop(self, py: Python<'_>) -> PyResult<bool> {
+        py.import("signal")?
+            .call_method1("set_wakeup_fd", (self.old,))?;
+        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let seen = s.1;
+        *s = (false, false);
+        Ok(seen)
+    }
+}
+
+/// Runs `work` on its own thread (where [`run_watched`] cannot watch the calling one) while
+/// the calling thread, the GIL released, waits for its result and looks for pending signals every [`SIGNAL_POLL`] (`Python::check_signals`,
+/// which runs Python's handlers: Ctrl-C raises `KeyboardInterrupt` there). On the first
+/// exception a handler raises, the solver's stop request is raised (`lash_solver::interrupt`):
+/// the integration ends at its next step, and that exception is returned once the work has
+/// ended, in place of its result (which is dropped: nothing is half-kept). A panic of the work
+/// is [`errors::panic_error`]'s exception.
+///
+/// `work` returns its result and what is left to free (`D`). The result comes back through a
+/// channel the moment the work ends; the leftover is dropped on the work's thread after that,
+/// while the caller goes on, and the caller does not wait for the thread to exit (it ends on
+/// its own). That saves the caller a second hand-over between the threads and the freeing of
+/// the engine's buffers at the end of every call (issue 25: on a loaded machine each
+/// hand-over costs a scheduling delay).
 ///
 /// The stop request is process-wide: it also stops lash runs of other Python threads (they
 /// raise `KeyboardInterrupt` too), as Ctrl-C does in the `lash` command. Python runs signal
 /// handlers in the main thread only: from another thread the check finds nothing, and the
 /// run goes on (as any blocking call there does).
-pub fn run_watched<T: Send>(
+fn run_on_thread<T: Send + 'static, D: Send + 'static>(
     py: Python<'_>,
     what: &str,
-    work: impl FnOnce() -> T + Send,
+    work: impl FnOnce() -> (T, D) + Send + 'static,
 ) -> PyResult<T> {
-    let (done_tx, done_rx) = mpsc::channel::<()>();
-    std::thread::scope(|scope| {
-        let worker = std::thread::Builder::new()
-            .name("lash-engine".into())
-            .stack_size(ENGINE_STACK)
-            .spawn_scoped(scope, move || {
-                let r = catch_unwind(AssertUnwindSafe(work));
-                let _ = done_tx.send(());
-                r
-            })
-            .map_err(|e| PyOSError::new_err(format!("{what}: cannot start a thread: {e}")))?;
-        let mut raised: Option<PyErr> = None;
-        let mut rx = done_rx;
-        loop {
-            let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_POLL), rx));
-            rx = back;
-            match got {
-                Err(RecvTimeoutError::Timeout) => {}
-                Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
+    type Outcome<T> = std::thread::Result<T>;
+    let (done_tx, done_rx) = mpsc::channel::<Outcome<T>>();
+    std::thread::Builder::new()
+        .name("lash-engine".into())
+        .stack_size(ENGINE_STACK)
+        .spawn(move || match catch_unwind(AssertUnwindSafe(work)) {
+            Ok((r, rest)) => {
+                // The receiver waits for this message (below): it cannot be gone.
+                let _ = done_tx.send(Ok(r));
+                // Freed here, while the caller goes on with the result.
+                let _ = catch_unwind(AssertUnwindSafe(move || drop(rest)));
             }
-            if raised.is_none() {
-                if let Err(e) = py.check_signals() {
-                    interrupt::request_stop();
-                    raised = Some(e);
-                }
+            Err(payload) => {
+                let _ = done_tx.send(Err(payload));
+            }
+        })
+        .map_err(|e| PyOSError::new_err(format!("{what}: cannot start a thread: {e}")))?;
+    let mut raised: Option<PyErr> = None;
+    let mut rx = done_rx;
+    let outcome: Outcome<T> = loop {
+        let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_POLL), rx));
+        rx = back;
+        match got {
+            Ok(r) => break r,
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => {
+                let why = format!("{what}: the engine's thread ended without a result");
+                break Err(Box::new(why) as Box<dyn std::any::Any + Send>);
             }
         }
-        let joined = py.detach(|| worker.join());
-        if raised.is_some() {
-            interrupt::clear_stop();
+        if raised.is_none() {
+            if let Err(e) = py.check_signals() {
+                interrupt::request_stop();
+                raised = Some(e);
+            }
         }
-        let result = match joined {
-            Ok(Ok(r)) => Ok(r),
-            Ok(Err(payload)) | Err(payload) => Err(panic_error(py, what, payload.as_ref())),
-        };
-        match raised {
-            Some(e) => Err(e),
-            None => result,
-        }
-    })
+    };
+    if raised.is_some() {
+        interrupt::clear_stop();
+    }
+    let result = outcome.map_err(|payload| panic_error(py, what, payload.as_ref()));
+    match raised {
+        Some(e) => Err(e),
+        None => result,
+    }
 }
 
 /// Runs one scene (or `testset:NAME`) by the engine, as `lash run` does, without files; the
 /// engine of `lash.run` (python/lash/_run.py), which checks the options and documents them.
 /// `args` ([`RunArgs`]) names a scene file or a built-in case, or holds a scene's JSON text,
-/// recorded as case `name`. The case is read and integrated on an engine thread, the GIL
-/// released, while this thread looks for Ctrl-C ([`run_watched`]).
+/// recorded as case `name`. The case is read and integrated with the GIL released, Ctrl-C
+/// watched ([`run_watched`]).
 ///
 /// Returns a dict: `summary` (summary.json's text), `names` and `present` (the trajectory's
-/// columns and whether the run fills each), `rows`, `columns` (bytes of native-endian f64,
-/// column after column; NaN in absent columns), `events` (`(t, element, kind)` of every
+/// columns and whether the run fills each), `rows`, `columns` (one [`F64Column`] per column,
+/// the engine's own vector behind numpy's array interface; NaN in absent columns), `events` (`(t, element, kind)` of every
 /// event of the run), `engine_time_s` (wall time of reading the case and the engine's run,
 /// the GIL released: what the same run costs without Python).
 #[pyfunction]
@@ -301,39 +493,37 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
     let (path, text, name) = (a.path, a.text, a.name);
     let outcome: Result<Ran, Error> = run_watched(py, "lash.run", move || {
         let start = std::time::Instant::now();
-        let case = match (path, text) {
-            (Some(p), _) => Case::load(&p, None)?,
-            (None, Some(t)) => Case::from_json_bytes(&name, t)?,
-            (None, None) => return Err(Error::Internal("run_core: no scene".into())),
+        let case = match (&path, &text) {
+            (Some(p), _) => Case::load(p, None),
+            (None, Some(t)) => Case::from_json_bytes(&name, t.clone()),
+            (None, None) => Err(Error::Internal("run_core: no scene".into())),
         };
-        let r = lash_validation::run_in_memory(case, &o)?;
-        // Built-in test problems have no events.
-        let names = r.event_names.clone();
-        Ok((r, names, start.elapsed().as_secs_f64()))
+        match case.and_then(|case| lash_validation::run_in_memory(case, &o)) {
+            Ok(mut r) => {
+                let engine_s = start.elapsed().as_secs_f64();
+                let ran = Ran::take(&mut r, engine_s);
+                // The rest of the result (dense output, samples) is freed on this thread
+                // after the caller has what it needs.
+                (ran, Some(r))
+            }
+            Err(e) => (Err(e), None),
+        }
     })?;
-    let (r, event_names, engine_s) = outcome.map_err(|e| engine_error(py, e))?;
+    let ran = outcome.map_err(|e| engine_error(py, e))?;
 
     let out = PyDict::new(py);
-    out.set_item("engine_time_s", engine_s)?;
-    let summary = serde_json::to_string(&r.summary)
-        .map_err(|e| PyRuntimeError::new_err(format!("summary: {e}")))?;
-    out.set_item("summary", summary)?;
-    let rows = r.trajectory.len();
-    let (names, present): (Vec<String>, Vec<bool>) = match r.trajectory.header() {
-        Some(h) => (h.names().to_vec(), h.present().to_vec()),
-        None => (Vec::new(), Vec::new()),
-    };
-    let mut data = Vec::with_capacity(rows * names.len());
-    for name in &names {
-        match r.trajectory.column(name) {
-            Some(c) => data.extend_from_slice(c),
-            None => data.extend(std::iter::repeat_n(f64::NAN, rows)),
-        }
+    out.set_item("engine_time_s", ran.engine_s)?;
+    out.set_item("summary", ran.summary)?;
+    // The engine's columns themselves (NaN in absent ones), each behind numpy's array
+    // interface: no copy of the trajectory.
+    let columns = PyList::empty(py);
+    for c in ran.columns {
+        columns.append(Bound::new(py, F64Column::new(c))?)?;
     }
-    out.set_item("names", names)?;
-    out.set_item("present", present)?;
-    out.set_item("rows", rows)?;
-    out.set_item("columns", bytearray_from_f64s(py, &data)?)?;
-    out.set_item("events", events(py, &r.events, &event_names)?)?;
+    out.set_item("names", ran.names)?;
+    out.set_item("present", ran.present)?;
+    out.set_item("rows", ran.rows)?;
+    out.set_item("columns", columns)?;
+    out.set_item("events", events(py, &ran.events, &ran.event_names)?)?;
     Ok(out)
 }

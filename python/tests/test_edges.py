@@ -6,6 +6,7 @@ pyo3's PanicException (a BaseException); Ctrl-C raises KeyboardInterrupt within 
 The tests that need an address-space limit or a signal run their case in a subprocess.
 """
 
+import json
 import math
 import os
 import signal
@@ -172,6 +173,39 @@ def test_ctrl_c_during_run_raises_keyboard_interrupt_within_half_a_second():
     latency = float(lines["INTERRUPTED"]) - t_sig
     assert 0 <= latency < 0.5, latency
     assert float(lines["AFTER"]) == 0.01
+
+
+def test_ctrl_c_with_an_event_loops_wakeup_fd_raises_within_half_a_second():
+    # Python's signal wakeup fd already set (as asyncio sets it): lash leaves it alone and
+    # runs the scene on a thread of its own, the calling thread looking for signals.
+    call = ("import signal, socket; a, b = socket.socketpair(); b.setblocking(False); "
+            "signal.set_wakeup_fd(b.fileno()); "
+            f"lash.run({DRY_PRESS!r}, t_end=40.0)")
+    lines, t_sig = interrupt_child(call)
+    assert "INTERRUPTED" in lines, lines
+    assert 0 <= float(lines["INTERRUPTED"]) - t_sig < 0.5
+
+
+def test_a_signal_whose_handler_returns_leaves_the_run_whole():
+    # SIGUSR1 with a Python handler that returns, sent during a run: the handler runs, and the
+    # run's result is the same as without the signal (the run is redone if the stop request
+    # that every signal raises had cut it short).
+    code = textwrap.dedent(f"""
+        import os, signal, threading, json
+        import lash
+        seen = []
+        signal.signal(signal.SIGUSR1, lambda *a: seen.append(1))
+        threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGUSR1)).start()
+        r = lash.run({DRY_PRESS!r}, t_end=3.0)
+        q = lash.run({DRY_PRESS!r}, t_end=3.0)
+        print(json.dumps([len(seen), r.summary["stats"] == q.summary["stats"],
+                          r.summary["metrics"] == q.summary["metrics"],
+                          float(r.columns["t"][-1])]))
+    """)
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=ROOT, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert json.loads(p.stdout.splitlines()[-1]) == [1, True, True, 3.0]
 
 
 def test_ctrl_c_during_solve_ivp_raises_keyboard_interrupt_within_half_a_second():

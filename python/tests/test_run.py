@@ -139,6 +139,27 @@ def test_a_dict_scene_runs_like_its_file():
     assert_same_columns(from_dict.columns, from_file.columns)
 
 
+def test_columns_are_the_engines_vectors_and_outlive_the_run():
+    """The columns are the engine's own vectors behind numpy's array interface (no copy):
+    each is a writable float64 array that keeps its memory alive after the Run and every
+    other reference is gone, whatever is allocated meanwhile; the values stay the command's
+    (test_the_press_run_equals_the_commands_files)."""
+    import gc
+    r = lash.run(LUBRICATED, t_end=0.05)
+    t, a = r.columns["t"], r.columns["slider_a"]
+    expected_t, expected_a = t.copy(), a.copy()
+    assert t.dtype == np.float64 and t.flags.writeable and t.flags.c_contiguous
+    assert t[0] == 0.0 and t[-1] == 0.05 and np.all(np.diff(t) > 0)
+    del r
+    gc.collect()
+    junk = [np.full(len(t), 7.0) for _ in range(64)]  # reuses freed memory, if any
+    assert not np.shares_memory(t, a)
+    np.testing.assert_array_equal(t, expected_t)
+    np.testing.assert_array_equal(a, expected_a)
+    t[0] = -1.0
+    assert t[0] == -1.0 and a[0] == expected_a[0] and len(junk) == 64
+
+
 def test_a_built_in_test_problem_meets_its_reference():
     """VDPOLM of the IVP Test Set through the engine's defaults (rodas5p, rtol 1e-6): the
     summary's reference_error is the engine's own measure against the Test Set's reference

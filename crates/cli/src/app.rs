@@ -366,6 +366,7 @@ mod tests {
             dirs: vec![out.clone()],
             out: None,
             allow_partial: false,
+            columns: Vec::new(),
         })))
         .unwrap();
         let csv = std::fs::read_to_string(out.join("merged.csv")).unwrap();

@@ -12,7 +12,7 @@
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
 //!                          [--controllers C,..] [--t-end S] [--max-wall-time S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--max-wall-time S] [--out DIR]
-//! lash merge DIR... [--out DIR] [--allow-partial]
+//! lash merge DIR... [--out DIR] [--allow-partial] [--columns A,B,C]
 //! lash stiffness CASE [solver flags] [--samples N] [--t-end S] [--no-measure] [--out DIR]
 //! lash poincare CASE [--revolutions N] [--perturbation D] [--renorm-per-rev R]
 //!                    [solver flags] [--out DIR]
@@ -447,6 +447,11 @@ pub struct WorkPrecisionArgs {
     /// Output directory. Default `out/work-precision/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Formulations compared side by side, comma-separated (lagrange_baumgarte,
+    /// augmented_lagrangian; docs/model.md §12): every run with each, against one reference
+    /// (the case's own formulation's), each row naming its formulation. Default: the case's.
+    #[arg(long, value_name = "F,..", value_delimiter = ',', value_parser = parse_formulation)]
+    pub formulations: Option<Vec<lash_model::FormulationName>>,
 }
 
 impl WorkPrecisionArgs {
@@ -461,6 +466,7 @@ impl WorkPrecisionArgs {
             t_end: self.t_end,
             max_wall_time: self.max_wall_time,
             out: self.out.clone(),
+            formulations: self.formulations.clone(),
         }
     }
 
@@ -569,7 +575,7 @@ impl ExtremesArgs {
 /// Arguments of `lash merge`.
 ///
 /// ```text
-/// lash merge DIR... [--out DIR] [--allow-partial]  →  DIR/merged.csv, DIR/merged.md
+/// lash merge DIR... [--out DIR] [--allow-partial] [--columns A,B,C]  →  DIR/merged.csv, DIR/merged.md
 /// ```
 ///
 /// Source: docs/outputs.md ("Sweeps").
@@ -586,6 +592,11 @@ pub struct MergeArgs {
     /// incomplete sweep is an error (exit 2) that names the missing points.
     #[arg(long = "allow-partial")]
     pub allow_partial: bool,
+    /// The columns merged.md shows, comma-separated, in order (names as in merged.csv's
+    /// header). Default: the parameters, status, error and a short set of metrics; merged.csv
+    /// has every column either way.
+    #[arg(long, value_name = "A,B,C", value_delimiter = ',')]
+    pub columns: Vec<String>,
 }
 
 impl MergeArgs {
@@ -595,6 +606,7 @@ impl MergeArgs {
             dirs: self.dirs.clone(),
             out: self.out.clone(),
             allow_partial: self.allow_partial,
+            columns: self.columns.clone(),
         }
     }
 }

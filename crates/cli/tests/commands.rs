@@ -813,3 +813,180 @@ fn compare_measures_errors_on_the_chosen_window() {
         assert!(err.contains(needle), "{err}");
     }
 }
+
+/// The dry four-bar of cases/examples cut to `t_end` s, as `dir/fourbar.json`.
+fn short_fourbar(dir: &Path, t_end: f64) {
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases/examples/fourbar_clearance.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(case).unwrap()).unwrap();
+    j.as_object_mut().unwrap().remove("revolutions");
+    j["t_end"] = serde_json::json!(t_end);
+    std::fs::write(dir.join("fourbar.json"), j.to_string()).unwrap();
+}
+
+/// A sampled sweep end to end (issue 22): a Latin hypercube of 4 points over the journal's
+/// radius and the friction coefficient; each sampled path is a column of merged.csv named as
+/// written, its values inside the distribution's range, one per stratum, and they reach the
+/// scene (four distinct friction dissipations); a rerun runs nothing.
+#[test]
+fn sampled_sweep_runs_merges_and_resumes() {
+    let d = tempfile::tempdir().unwrap();
+    short_fourbar(d.path(), 0.1);
+    std::fs::write(
+        d.path().join("lhs.json"),
+        r#"{"case": "fourbar.json", "method": ["bdf"], "rtol": [1e-6],
+            "sample": {"count": 4, "seed": 5, "method": "latin_hypercube",
+                       "vary": {"joints[coupler_rocker].journal.radius": {"uniform": [0.0094, 0.0096]},
+                                "joints[coupler_rocker].friction.mu": {"lognormal": [-2.3, 0.3]}}}}"#,
+    )
+    .unwrap();
+    let o = lash(&["sweep", "lhs.json", "--out", "s"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("4 points to run"), "{err}");
+    ok(&["merge", "s"], d.path());
+    let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| head.iter().position(|c| *c == n).expect(n);
+    let (r, mu, fric) = (
+        col("joints[coupler_rocker].journal.radius"),
+        col("joints[coupler_rocker].friction.mu"),
+        col("metrics.energy.dissipated_friction"),
+    );
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    let mut strata: Vec<usize> = rows
+        .iter()
+        .map(|row| {
+            let x: f64 = row[r].parse().unwrap();
+            assert!((0.0094..0.0096).contains(&x), "{x}");
+            ((x - 0.0094) / 0.0002 * 4.0) as usize
+        })
+        .collect();
+    strata.sort_unstable();
+    assert_eq!(strata, [0, 1, 2, 3]);
+    assert!(rows.iter().all(|row| row[mu].parse::<f64>().unwrap() > 0.0));
+    let mut f: Vec<&str> = rows.iter().map(|row| row[fric]).collect();
+    f.sort_unstable();
+    f.dedup();
+    assert_eq!(f.len(), 4, "{csv}");
+    let o = lash(&["sweep", "lhs.json", "--out", "s"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("4 of 4 points already done"), "{err}");
+    // merged.md: a readable table by default (no solver statistics beyond the step count),
+    // the quantiles of every metric; --columns chooses the table; an unknown column is exit 2.
+    let md = std::fs::read_to_string(d.path().join("s/merged.md")).unwrap();
+    let header = md.lines().find(|l| l.starts_with("| id |")).unwrap();
+    assert!(
+        header.contains("| joints[coupler_rocker].friction.mu |"),
+        "{header}"
+    );
+    assert!(header.contains("| metrics.eps_max |"), "{header}");
+    assert!(!header.contains("stats.h_min_used") && !header.contains("scene_sha256"));
+    let fr: Vec<f64> = rows.iter().map(|row| row[fric].parse().unwrap()).collect();
+    let mut sorted = fr.clone();
+    sorted.sort_by(f64::total_cmp);
+    // Type 7 over 4 numbers: Q(0.5) = (x1 + x2)/2, 6 significant digits in merged.md.
+    let q = md
+        .lines()
+        .find(|l| l.starts_with("| metrics.energy.dissipated_friction |"))
+        .expect(&md);
+    let cells: Vec<&str> = q.split('|').map(str::trim).collect();
+    assert_eq!(cells[2], "4");
+    let median: f64 = cells[4].parse().unwrap();
+    let want = 0.5 * (sorted[1] + sorted[2]);
+    assert!(
+        (median - want).abs() <= 1e-5 * want.abs(),
+        "{median} vs {want}"
+    );
+    ok(
+        &[
+            "merge",
+            "s",
+            "--columns",
+            "index,metrics.energy.dissipated_friction",
+        ],
+        d.path(),
+    );
+    let md = std::fs::read_to_string(d.path().join("s/merged.md")).unwrap();
+    assert!(
+        md.contains("| index | metrics.energy.dissipated_friction |\n|---|---|\n| 0 |"),
+        "{md}"
+    );
+    let o = lash(&["merge", "s", "--columns", "index,nope"], d.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no column 'nope'") && err.contains("--columns"),
+        "{err}"
+    );
+}
+
+/// Bad sampled sweep files (issue 22): each ends in one line naming the key, exit 2, with
+/// nothing run (no output directory).
+#[test]
+fn bad_sample_sweeps_fail_before_any_point_runs() {
+    let d = tempfile::tempdir().unwrap();
+    short_fourbar(d.path(), 0.1);
+    let mass = r#""vary": {"bodies[2].mass": {"uniform": [0.5, 1.5]}}"#;
+    let cases: Vec<(String, &str)> = vec![
+        (
+            format!(r#""sample": {{"count": 0, "seed": 1, {mass}}}"#),
+            "sample.count must be in 1 ..= 1000000, got 0",
+        ),
+        (
+            format!(r#""sample": {{"count": [3], "seed": 1, {mass}}}"#),
+            "sample.count: invalid type",
+        ),
+        (
+            r#""sample": {"count": 3, "seed": 1, "vary": {"bodies[2].mass": {"uniform": [2, 1]}}}"#.into(),
+            "sample.vary['bodies[2].mass'].uniform: needs lo < hi",
+        ),
+        (
+            r#""sample": {"count": 3, "seed": 1, "vary": {"bodies[2].mass": {"normal": [1, 0]}}}"#.into(),
+            "sample.vary['bodies[2].mass'].normal: needs sd > 0",
+        ),
+        (
+            r#""sample": {"count": 3, "seed": 1, "vary": {"bodies[2].mass": {"lognormal": [0, -0.1]}}}"#.into(),
+            "sample.vary['bodies[2].mass'].lognormal: needs sigma > 0",
+        ),
+        (
+            format!(r#""set": {{"bodies[2].mass": [1.0, 2.0]}}, "sample": {{"count": 3, "seed": 1, {mass}}}"#),
+            "sample.vary['bodies[2].mass'] is also in set",
+        ),
+        (
+            r#""sample": {"count": 3, "seed": 1, "vary": {"bodies[2].weight": {"uniform": [1, 2]}}}"#.into(),
+            "sample.vary['bodies[2].weight'] (point 0 (",
+        ),
+        (
+            r#""sample": {"count": 3, "seed": 1, "vary": {"bodies[2].name": {"uniform": [1, 2]}}}"#.into(),
+            "bodies[2].name",
+        ),
+        (
+            // A normal of mean 0: about half the masses drawn are negative, which the scene refuses.
+            r#""sample": {"count": 8, "seed": 1, "vary": {"bodies[2].mass": {"normal": [0, 1]}}}"#.into(),
+            "bodies[2].mass",
+        ),
+    ];
+    for (i, (body, expect)) in cases.into_iter().enumerate() {
+        let f = format!("bad{i}.json");
+        std::fs::write(
+            d.path().join(&f),
+            format!(r#"{{"case": "fourbar.json", {body}}}"#),
+        )
+        .unwrap();
+        let out = format!("o{i}");
+        let o = lash(&["sweep", &f, "--out", &out], d.path());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{body}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{body}: {err}");
+        assert!(err.contains(expect), "{body}: {err}");
+        assert!(!d.path().join(&out).exists(), "{body}: ran something");
+    }
+}

@@ -134,6 +134,71 @@ fn two_processes_on_one_sweep_compute_each_point_once() {
     ok(&["merge", "s"], d.path());
 }
 
+/// Issue 23: two processes on one sweep, the first killed (SIGKILL: no clean-up) while it
+/// holds a claim the second has already skipped. The second, once its own points are done,
+/// finds the holder dead, takes the point over and exits 0 with every point finished (it used
+/// to exit 0 with that point unfinished).
+#[test]
+fn a_survivor_takes_over_the_claims_of_a_killed_peer() {
+    let d = tempfile::tempdir().unwrap();
+    // Points of most of a second each (0.6 s of motion take about 0.06 s), one at a time per
+    // process, so the first still holds its claim when the second has passed it.
+    grid(d.path(), 6.0, &[120.0, 150.0, 180.0]);
+    let spawn = || {
+        Command::new(env!("CARGO_BIN_EXE_lash"))
+            .args(["sweep", "grid.json", "--out", "s", "--jobs", "1"])
+            .current_dir(d.path())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let mut a = spawn();
+    // Wait until the first process holds a claim.
+    let s = d.path().join("s");
+    let t0 = std::time::Instant::now();
+    while !(s.is_dir()
+        && point_dirs(&s)
+            .iter()
+            .any(|p| p.join("claim.json").is_file()))
+    {
+        assert!(t0.elapsed().as_secs() < 60, "no claim appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let mut b = spawn();
+    let mut err = BufReader::new(b.stderr.take().unwrap());
+    let mut seen = String::new();
+    // The second process skips the point the first holds ...
+    loop {
+        let mut l = String::new();
+        assert!(err.read_line(&mut l).unwrap() > 0, "ended early: {seen}");
+        seen.push_str(&l);
+        if l.contains("left to it") {
+            break;
+        }
+    }
+    // ... and then the first dies holding it (reaped, as a shell or a scheduler would).
+    a.kill().unwrap();
+    a.wait().unwrap();
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
+    seen.push_str(&rest);
+    let status = b.wait().unwrap();
+    assert_eq!(status.code(), Some(0), "{seen}");
+    assert!(
+        seen.contains("left it unfinished; taken over here: ok"),
+        "{seen}"
+    );
+    // Every point finished, no claim or temporary file left; merge finds nothing missing.
+    let finished = point_dirs(&s)
+        .iter()
+        .filter(|p| p.join("result.json").is_file())
+        .count();
+    assert_eq!(finished, 6, "{seen}");
+    assert!(leftovers(&s).is_empty(), "{:?}", leftovers(&s));
+    ok(&["merge", "s"], d.path());
+}
+
 #[test]
 fn sigint_abandons_the_point_in_flight_and_a_rerun_resumes() {
     let d = tempfile::tempdir().unwrap();

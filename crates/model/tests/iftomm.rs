@@ -11,7 +11,7 @@
 
 use lash_model::iftomm::{n_four_bar, parallel_cranks, simple_pendulum, OneDof};
 use lash_model::{FormulationName, Mechanism, Scene};
-use lash_solver::{solve, Atol, Method, SolverOptions};
+use lash_solver::{solve, Atol, Method, SolveError, SolverOptions};
 
 struct Run {
     t: Vec<f64>,
@@ -112,9 +112,9 @@ fn a02_n_four_bar_n40_follows_the_one_dof_reference() {
 
 #[test]
 fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
-    // 20 s as published, through about 15 singular positions; Lagrange–Baumgarte stops at
-    // the first (t ≈ 0.71 s, "step size too small") or, with bdf, flips to the
-    // anti-parallelogram.
+    // 20 s as published, through about 15 singular positions; Lagrange–Baumgarte ends at
+    // the first in a typed error (lagrange_baumgarte_stops_at_the_first_singular_configuration;
+    // before that check it stalled or, with bdf, flipped to the anti-parallelogram).
     let (scene, reference) = n_four_bar(1, 20.0);
     for method in [
         Method::Dop853,
@@ -141,6 +141,48 @@ fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
         // A branch switch is about 1 m off; at rtol 1e-8 over 20 s the global error of the
         // methods is 2e-7 (dopri54) to 3.2e-3 (bs32, third order).
         assert!(err < 1e-2, "{method:?}: B0 error {err:e}");
+    }
+}
+
+#[test]
+fn lagrange_baumgarte_stops_at_the_first_singular_configuration() {
+    // A02 N = 1 with Lagrange–Baumgarte and bdf used to exit 0 with the cranks π apart (the
+    // parallelogram turned into an anti-parallelogram at the first horizontal position,
+    // t ≈ 0.708 s, where Φ_q loses a rank). It now ends there in a typed error naming it.
+    let (mut scene, reference) = n_four_bar(1, 20.0);
+    scene.formulation = FormulationName::LagrangeBaumgarte;
+    let m = Mechanism::from_scene(&scene).unwrap();
+    // The first time the reference reaches θ = 0 (cranks horizontal): θ(t) from π/2 down.
+    let ts: Vec<f64> = (0..=20_000).map(|k| k as f64 * 1e-4).collect();
+    let th = reference.solve(&ts);
+    let t_sing = ts[th.iter().position(|x| x[0] <= 0.0).unwrap()];
+    for method in [Method::Bdf, Method::Dop853, Method::Rodas5p] {
+        let opts = SolverOptions {
+            method,
+            rtol: 1e-8,
+            atol: Atol::Scalar(1e-10),
+            max_steps: 2_000_000,
+            ..Default::default()
+        };
+        let e = solve(&m, (0.0, m.t_end()), &m.initial_state(), &opts).unwrap_err();
+        let SolveError::StateRejected {
+            t, kind, reason, ..
+        } = &e
+        else {
+            panic!("{method:?}: expected a singular configuration, got {e}");
+        };
+        assert_eq!(*kind, "singular_configuration", "{method:?}: {reason}");
+        assert!(
+            reason.contains("lagrange_baumgarte cannot pass it; use augmented_lagrangian"),
+            "{reason}"
+        );
+        // Stopped at the first horizontal position: at a state within 1e-4 rad of it (ρ ≈ θ²
+        // < 1e-8; θ̇ ≈ −4.9 rad/s there) or at the end of the step that crossed it (these
+        // steps are shorter than 0.05 s; the next singular position is 1.3 s later).
+        assert!(
+            *t > t_sing - 1e-3 && *t < t_sing + 0.05,
+            "{method:?}: t = {t}, singular at {t_sing}"
+        );
     }
 }
 

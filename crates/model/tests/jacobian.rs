@@ -281,3 +281,79 @@ fn jacobian_of_a_mechanism_with_two_body_joints_matches_differences_of_f() {
     let err = worst_row_error(&jac, &reference);
     assert!(err < 1e-6, "worst relative error {err:e}");
 }
+
+/// The augmented Lagrangian's Jacobian (docs/model.md §12: the direct KKT solve where Φ_q has
+/// full row rank, the multiplier iteration where it has not) against Richardson differences
+/// of f. The right-hand side iterates its multipliers to `tol`, so f is smooth only to about
+/// tol · |q̈|: with tol = 1e-14 the differences carry about 1e-14 / h of each row's scale.
+/// - the dry press in contact (the state of `press_jacobian_matches_differences_of_f`,
+///   h = 1e-7 m: noise 1e-7) to 1e-5 of each row's scale;
+/// - A02 N = 1, cranks at 1 rad, moving (smooth on the scale of its 1 m links, h = 1e-5:
+///   noise 1e-9) to 1e-7 (the direct solve);
+/// - the parallel cranks (three cranks on one bar: 12 equations of rank 11, the iteration's
+///   path) at a moving state, likewise to 1e-7.
+#[test]
+fn augmented_lagrangian_jacobian_matches_differences_of_f() {
+    use lash_model::cases::{press_scene, PressJoint};
+    use lash_model::iftomm::{n_four_bar, parallel_cranks};
+    use lash_model::FormulationName;
+    let al = |mut s: Scene| {
+        s.formulation = FormulationName::AugmentedLagrangian;
+        s.augmented_lagrangian.tol = 1e-14;
+        Mechanism::from_scene(&s).unwrap()
+    };
+    let check = |m: &Mechanism, t: f64, y: &[f64], h: f64, tol: f64, what: &str| {
+        let n = m.dim();
+        let mut jac = Mat::<f64>::zeros(n, n);
+        m.jacobian(t, y, jac.as_mut());
+        let reference = richardson(m, t, y, |_| h);
+        let err = worst_row_error(&jac, &reference);
+        eprintln!("{what}: worst relative error {err:.2e}");
+        assert!(err < tol, "{what}: worst relative error {err:e}");
+    };
+    // The press in contact.
+    let m = al(press_scene(PressJoint::Dry, 150.0, 1e-4));
+    let mut y = m.initial_state();
+    let pert = [
+        9.0e-5, -8.0e-5, 0.0, 0.0, 0.0, 0.0, 0.02, -0.01, 0.3, -0.05, 0.0, 0.0,
+    ];
+    for (v, p) in y.iter_mut().zip(pert) {
+        *v += p;
+    }
+    let o = m.outputs(0.05, &y);
+    assert!(o.clearance[0].contact_force > 0.0);
+    check(&m, 0.05, &y, 1e-7, 1e-5, "press, dry, in contact");
+    // A02 N = 1 at θ = 1 rad (bodies: crank, coupler, crank), θ̇ = −2 rad/s.
+    let m = al(n_four_bar(1, 1.0).0);
+    let (th, w) = (1.0f64, -2.0);
+    let (c, s) = (th.cos(), th.sin());
+    let mut y = vec![0.0; m.dim()];
+    y[..9].copy_from_slice(&[
+        0.5 * c,
+        0.5 * s,
+        th,
+        c + 0.5,
+        s,
+        0.0,
+        1.0 + 0.5 * c,
+        0.5 * s,
+        th,
+    ]);
+    y[9..].copy_from_slice(&[
+        -0.5 * s * w,
+        0.5 * c * w,
+        w,
+        -s * w,
+        c * w,
+        0.0,
+        -0.5 * s * w,
+        0.5 * c * w,
+        w,
+    ]);
+    check(&m, 0.0, &y, 1e-5, 1e-7, "A02 N = 1");
+    // The parallel cranks from their initial state, moving.
+    let m = al(parallel_cranks(1.0).0);
+    let y = m.initial_state();
+    assert!(y[y.len() / 2..].iter().any(|v| v.abs() > 0.1));
+    check(&m, 0.0, &y, 1e-5, 1e-7, "parallel cranks (redundant)");
+}

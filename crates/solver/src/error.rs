@@ -102,6 +102,21 @@ pub enum SolveError {
         /// Where it returned NaN.
         at: f64,
     },
+    /// The system refused an accepted state ([`crate::OdeSystem::check_accepted`]): the
+    /// numbers are finite but no longer a solution of the system's model (for a mechanism: a
+    /// singular configuration its formulation cannot pass, or a constraint violation above
+    /// its tolerance). `t` and `y` are the refused state's.
+    #[error("{reason}")]
+    StateRejected {
+        /// Time of the refused state (the end of the step that reached it).
+        t: f64,
+        /// The refused state.
+        y: Vec<f64>,
+        /// What happened, as a snake_case name (the system's [`crate::Rejection::kind`]).
+        kind: &'static str,
+        /// The system's message, naming the time and what happened.
+        reason: String,
+    },
     /// The dense matrices the method needs (its Jacobian and LU, n² each) do not fit the
     /// memory budget ([`crate::memory`]), or the allocator refused them; nothing was
     /// integrated.
@@ -120,7 +135,8 @@ impl SolveError {
             | SolveError::NewtonFailure { t, .. }
             | SolveError::BudgetExhausted { t, .. }
             | SolveError::Interrupted { t, .. }
-            | SolveError::EventNan { t, .. } => Some(*t),
+            | SolveError::EventNan { t, .. }
+            | SolveError::StateRejected { t, .. } => Some(*t),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }
@@ -135,7 +151,8 @@ impl SolveError {
             | SolveError::NewtonFailure { y, .. }
             | SolveError::BudgetExhausted { y, .. }
             | SolveError::Interrupted { y, .. }
-            | SolveError::EventNan { y, .. } => Some(y),
+            | SolveError::EventNan { y, .. }
+            | SolveError::StateRejected { y, .. } => Some(y),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
     }

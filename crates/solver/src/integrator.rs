@@ -397,6 +397,17 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
                 });
             }
         }
+        if let Err(r) = self
+            .sys
+            .check_accepted(self.t_cur, &self.y_cur, t_b, self.stepper.y())
+        {
+            return Err(SolveError::StateRejected {
+                t: t_b,
+                y: self.stepper.y().to_vec(),
+                kind: r.kind,
+                reason: r.reason,
+            });
+        }
         if !self.specs.is_empty() {
             if let Some((t_ev, hits)) = self.locate_events(t_b)? {
                 return self.handle_event(t_ev, hits);

@@ -136,4 +136,4 @@ pub use method::{Method, MethodInfo};
 pub use options::{Atol, Config, OptionError, OptionField, Output, Rule, SolverOptions};
 pub use stats::Stats;
 pub use stepper::Stepper;
-pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
+pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem, Rejection};

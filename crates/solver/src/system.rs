@@ -73,6 +73,16 @@ pub struct EventHit {
     pub rising: bool,
 }
 
+/// Why a system refused an accepted state ([`OdeSystem::check_accepted`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rejection {
+    /// What happened, as a snake_case name (`"singular_configuration"`).
+    pub kind: &'static str,
+    /// The message: the time and what happened, and what to do about it when there is a
+    /// remedy.
+    pub reason: String,
+}
+
 /// A first-order ODE system `y' = f(t, y)`.
 pub trait OdeSystem {
     /// Dimension n of the state.
@@ -137,6 +147,23 @@ pub trait OdeSystem {
     fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
         let _ = (t, y, g, g_dot);
         false
+    }
+
+    /// Checks a step the method has accepted, from (t_a, y_a) (the last accepted state, or
+    /// the state an event hook left) to (t_b, y_b), before events are looked for in it: `Err`
+    /// stops the integration with [`crate::SolveError::StateRejected`] at t_b. For the
+    /// conditions a step's error estimate cannot see: a finite state that is no longer a
+    /// solution of the system's model, or a step that crossed a point where the model does not
+    /// hold. The default accepts every step. Not counted as an RHS evaluation.
+    fn check_accepted(
+        &self,
+        t_a: f64,
+        y_a: &[f64],
+        t_b: f64,
+        y_b: &[f64],
+    ) -> Result<(), Rejection> {
+        let _ = (t_a, y_a, t_b, y_b);
+        Ok(())
     }
 
     /// Runs after an event has been located, with the state at the event time. It may change

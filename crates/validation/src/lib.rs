@@ -48,7 +48,10 @@ pub use commands::{
     diagnose::{poincare, stiffness, PoincareOptions, StiffnessOptions},
     run::{default_run, describe_run, run, run_in_memory, RunOptions},
     study::{extremes, study_paper, study_robustness, ExtremesOptions, StudyOptions},
-    sweep::{merge, sweep, sweep_with, MergeOptions, Merged, SweepOutcome, SweepRunOptions},
+    sweep::{
+        merge, sweep, sweep_points, sweep_run, sweep_with, MergeOptions, Merged, SweepOutcome,
+        SweepRunOptions,
+    },
     viz::{animate, animate_in_memory, plot, AnimateOptions, Animated, PlotOptions},
 };
 pub use error::{Error, ErrorKind, Message, OptionError};

@@ -156,5 +156,6 @@ fn failure_message(e: &SolveError, t: f64, dir: f64, name: &dyn Fn(usize) -> Str
             dir * at
         ),
         SolveError::OutOfMemory(m) => m.to_string(),
+        SolveError::StateRejected { reason, .. } => reason.clone(),
     }
 }

@@ -9,6 +9,7 @@
 //! scratch.rs       the buffers of one evaluation
 //! build.rs         Mechanism::from_scene, in named phases
 //! ode.rs           impl OdeSystem, and the event hooks
+//! accepted.rs      the checks of an accepted state: a singular configuration, a violation
 //!
 //! one evaluation at (t, y): kinematics (formulation: y → poses and velocities of every
 //!   body) → applied forces g (forces.rs) → q̈ (formulation) → ẏ (formulation)
@@ -22,6 +23,7 @@
 //! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
 //! Baumgarte 1972), Peng et al. 2025 §3.
 
+pub(crate) mod accepted;
 pub(crate) mod bodies;
 mod build;
 pub(crate) mod constraints;

@@ -1,7 +1,7 @@
 //! The mechanism as an `OdeSystem` for the integrators of `lash-solver`, with its event hooks.
 
 use faer::MatMut;
-use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
+use lash_solver::{Direction, EventAction, EventHit, EventSpec, OdeSystem, Rejection};
 
 use crate::mechanism::events::{self, event_list, EventKind};
 use crate::mechanism::Mechanism;
@@ -47,6 +47,18 @@ impl OdeSystem for Mechanism {
         self.kinematics(t, y, &mut sc);
         events::values(&self.events, &self.forces, t, &sc, g, Some(g_dot));
         true
+    }
+
+    /// mechanism/accepted.rs: a singular configuration Lagrange–Baumgarte cannot pass, or a
+    /// constraint violation over its tolerance.
+    fn check_accepted(
+        &self,
+        t_a: f64,
+        y_a: &[f64],
+        t_b: f64,
+        y_b: &[f64],
+    ) -> Result<(), Rejection> {
+        self.check_accepted_state(t_a, y_a, t_b, y_b)
     }
 
     fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {

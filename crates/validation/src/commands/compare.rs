@@ -163,6 +163,10 @@ pub struct WorkPrecisionOptions {
     pub max_wall_time: Option<f64>,
     /// Output directory; None = `out/work-precision/CASE`.
     pub out: Option<PathBuf>,
+    /// Formulations compared side by side (docs/model.md §12): every run of the plan is made
+    /// with each, against one reference (the case's own formulation's), and its row names
+    /// it. None = the case's own only.
+    pub formulations: Option<Vec<lash_model::FormulationName>>,
 }
 
 impl WorkPrecisionOptions {
@@ -244,7 +248,8 @@ pub fn work_precision(
             }
         })
         .sum();
-    progress.started("runs", 1 + usize::from(derive) + total_runs);
+    let n_passes = o.formulations.as_ref().map_or(1, |f| f.len());
+    progress.started("runs", 1 + usize::from(derive) + total_runs * n_passes);
     let clock = Instant::now();
     let reference = Reference::compute(&p, o.t_end)?;
     progress.finished(
@@ -258,10 +263,12 @@ pub fn work_precision(
     };
     let mut runs = Vec::new();
     let mut clock = Instant::now();
-    let mut push = |c: Compared| {
+    let mut tag: Option<String> = None;
+    let mut push = |c: Compared, tag: &Option<String>| {
         progress.finished(&run_line(&c), clock.elapsed().as_secs_f64());
         clock = Instant::now();
         runs.push(WpRun {
+            formulation: tag.clone(),
             method: c.method,
             controller: c.controller,
             rtol: c.rtol,
@@ -272,20 +279,43 @@ pub fn work_precision(
             failure: c.failure,
         });
     };
-    for &m in &plan.methods {
-        if m.is_fixed_step() {
-            for &h in &steps {
-                push(compare::compare_one(&p, &reference, m, None, Some(h), None)?.0);
+    // One pass per formulation (the case's own when none are listed), every pass against
+    // the same reference.
+    let passes: Vec<Option<lash_model::FormulationName>> = match &o.formulations {
+        Some(fs) => fs.iter().map(|&f| Some(f)).collect(),
+        None => vec![None],
+    };
+    for f in passes {
+        let pf = match f {
+            Some(f) => {
+                tag = Some(f.to_string());
+                p.clone().with_formulation(f)?
             }
-        } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
-            for &c in &plan.controllers {
-                for &r in &plan.tolerances {
-                    push(compare::compare_one(&p, &reference, m, Some(r), None, Some(c))?.0);
+            None => p.clone(),
+        };
+        let p = &pf;
+        for &m in &plan.methods {
+            if m.is_fixed_step() {
+                for &h in &steps {
+                    push(
+                        compare::compare_one(p, &reference, m, None, Some(h), None)?.0,
+                        &tag,
+                    );
                 }
-            }
-        } else {
-            for &r in &plan.tolerances {
-                push(compare::compare_one(&p, &reference, m, Some(r), None, None)?.0);
+            } else if Some(m) == ctl_method && !plan.controllers.is_empty() {
+                for &c in &plan.controllers {
+                    for &r in &plan.tolerances {
+                        let c = compare::compare_one(p, &reference, m, Some(r), None, Some(c))?;
+                        push(c.0, &tag);
+                    }
+                }
+            } else {
+                for &r in &plan.tolerances {
+                    push(
+                        compare::compare_one(p, &reference, m, Some(r), None, None)?.0,
+                        &tag,
+                    );
+                }
             }
         }
     }
@@ -312,4 +342,61 @@ fn run_line(c: &Compared) -> String {
         c.rhs_evals,
         c.wall_time_s
     )
+}
+
+#[cfg(test)]
+mod tests {
+    //! `--formulations`: one pass of the plan per formulation, every row naming its
+    //! formulation, every error against the one reference (the case's own formulation's).
+    use super::*;
+    use crate::progress::NoProgress;
+    use lash_model::FormulationName;
+
+    #[test]
+    fn formulations_are_compared_side_by_side_against_one_reference() {
+        // A02 N = 1 over 1 s: the first horizontal (singular) position is at t = 0.708 s.
+        let out = std::env::temp_dir().join(format!("lash-wp-formulations-{}", std::process::id()));
+        let o = WorkPrecisionOptions {
+            case: concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../cases/iftomm/a02_n1.json"
+            )
+            .into(),
+            methods: Some(vec![Method::Dop853]),
+            tolerances: Some(vec![1e-5, 1e-9]),
+            controllers: Some(vec![ControllerKind::Pi]),
+            t_end: Some(1.0),
+            out: Some(out.clone()),
+            formulations: Some(vec![
+                FormulationName::LagrangeBaumgarte,
+                FormulationName::AugmentedLagrangian,
+            ]),
+            ..Default::default()
+        };
+        let w = work_precision(&o, &NoProgress).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        let runs = &w.result.table.runs;
+        let tags: Vec<_> = runs.iter().map(|r| r.formulation.as_deref()).collect();
+        assert_eq!(
+            tags,
+            [
+                Some("lagrange_baumgarte"),
+                Some("lagrange_baumgarte"),
+                Some("augmented_lagrangian"),
+                Some("augmented_lagrangian")
+            ]
+        );
+        assert_eq!(runs[0].label(), "dop853/pi [lagrange_baumgarte]");
+        // Lagrange–Baumgarte cannot pass the singular position: its rows are failures naming
+        // it (issue 26), not numbers.
+        for r in &runs[..2] {
+            assert!(r.error.is_none(), "{r:?}");
+            let f = r.failure.as_deref().unwrap_or_default();
+            assert!(f.contains("singular configuration"), "{f}");
+        }
+        // The augmented Lagrangian converges to the reference: the error falls with rtol, to
+        // below 1e-6 at rtol 1e-9 (B0 moves 1 m: a branch switch would be ~1).
+        let (loose, tight) = (runs[2].error.unwrap(), runs[3].error.unwrap());
+        assert!(tight < 1e-6 && tight < loose, "{loose:e} {tight:e}");
+    }
 }

@@ -15,7 +15,7 @@ use crate::run::prepare::Prepared;
 use crate::run::simulate::simulate;
 use crate::sweep::merge::MergedTable;
 use crate::sweep::runner::{PointResult, SweepOptions, SweepReport};
-use crate::sweep::spec::{Shard, SweepPoint};
+use crate::sweep::spec::{Shard, SweepPoint, SweepSpec};
 
 /// What to sweep.
 ///
@@ -59,29 +59,143 @@ pub struct SweepOutcome {
 }
 
 /// Runs a sweep of scene runs (`sweep_point`): loads and checks the sweep file and its base
-/// case, then [`sweep_with`].
+/// case (every point's scene built and checked before any point runs: [`sweep_points`]'s
+/// checks), then runs the shard's unfinished points in parallel ([`sweep_run`]).
 pub fn sweep(o: &SweepRunOptions, progress: &dyn Progress) -> Result<SweepOutcome, Error> {
-    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
+    sweep_run(o, None, None, progress)
+}
+
+/// The points of a sweep as `lash sweep` expands and checks them, each with the JSON text of
+/// the scene it runs (None for a built-in test problem): the grid of the sweep file `o.file`,
+/// or of `text` (that file's JSON, read as `o.file`: a relative case path is resolved against
+/// its directory). Every point's scene is built and checked: a bad sweep is an error naming
+/// the key (and the point) before anything runs. Nothing is written.
+pub fn sweep_points(
+    o: &SweepRunOptions,
+    text: Option<&[u8]>,
+) -> Result<Vec<(SweepPoint, Option<String>)>, Error> {
+    let (spec, points) = expand(o, text)?;
+    let base = checked_base(&spec, &points, None, o.window)?;
+    points
+        .into_iter()
+        .map(|p| {
+            let scene = match point_scene(&base, &p)? {
+                Some(s) => Some(s),
+                None => base.scene().cloned(),
+            };
+            let json = scene
+                .map(|s| serde_json::to_string(&s))
+                .transpose()
+                .map_err(|e| Error::Internal(format!("scene of point {}: {e}", p.id)))?;
+            Ok((p, json))
+        })
+        .collect()
+}
+
+/// Runs the points of a sweep (`o.file`, or `text` as in [`sweep_points`]) into `o.out`, as
+/// `lash sweep` does: OUT/points.json (the whole grid), each point claimed (OUT/id/claim.json),
+/// its summary.json and result.json written atomically, a solver failure recorded as
+/// finished, a finished point skipped; `lash merge OUT` joins them. `only`: None = the
+/// points of `o.shard`, in parallel (`o.jobs`), every point's scene checked first (the
+/// command); Some(i) = the point with index i alone, only its scene checked: one point of a
+/// sweep spread over processes or machines (lash.sweep's executors), whose grid
+/// [`sweep_points`] checked.
+pub fn sweep_run(
+    o: &SweepRunOptions,
+    text: Option<&[u8]>,
+    only: Option<usize>,
+    progress: &dyn Progress,
+) -> Result<SweepOutcome, Error> {
+    let (spec, points) = expand(o, text)?;
+    let Some(index) = only else {
+        let base = checked_base(&spec, &points, o.max_wall_time, o.window)?;
+        return run_points(
+            o,
+            &points,
+            |p, dir| sweep_point(&base, p, dir, o.window),
+            progress,
+        );
+    };
+    let Some(point) = points.get(index) else {
+        return Err(Error::Usage(format!(
+            "sweep: no point {index} (the grid has {})",
+            points.len()
+        )));
+    };
+    let base = checked_base(
+        &spec,
+        std::slice::from_ref(point),
+        o.max_wall_time,
+        o.window,
+    )?;
+    let one = SweepRunOptions {
+        jobs: Some(1),
+        shard: Some(Shard {
+            index,
+            count: points.len(),
+        }),
+        ..o.clone()
+    };
+    run_points(
+        &one,
+        &points,
+        |p, dir| sweep_point(&base, p, dir, o.window),
+        progress,
+    )
+}
+
+/// The sweep (from its file, or `text` read as it) and its grid: the one expansion of
+/// `lash sweep`, [`sweep_points`] and [`sweep_run`].
+fn expand(o: &SweepRunOptions, text: Option<&[u8]>) -> Result<(SweepSpec, Vec<SweepPoint>), Error> {
+    let spec = match text {
+        Some(t) => SweepSpec::from_json(&o.file, t)?,
+        None => SweepSpec::load(&o.file)?,
+    };
     let points = spec.points()?;
+    Ok((spec, points))
+}
+
+/// The sweep's base case, loaded, with `points`' scenes built and checked: a path that does
+/// not exist or a value the scene rejects is an input error naming the path and the point.
+fn checked_base(
+    spec: &SweepSpec,
+    points: &[SweepPoint],
+    max_wall_time: Option<f64>,
+    window: Option<lash_model::MetricsWindow>,
+) -> Result<Prepared, Error> {
     let mut base = Prepared::load(spec.case.clone())?;
-    base.max_wall_time = o.max_wall_time;
+    base.max_wall_time = max_wall_time;
     // Every point's scene is built and checked before any point runs: a path that does not
     // exist or a value the scene rejects is an input error naming the path and the point.
-    for p in &points {
-        let scene = point_scene(&base, p)?;
-        if o.window.is_none() {
-            continue;
-        }
-        let checked = match scene {
-            Some(s) => Prepared::with_scene(base.case.clone(), s)?,
-            None => base.clone(),
-        };
-        if checked.info.is_some() {
-            let (t0, t_end) = checked.t_span(None)?;
-            checked.window_plan(o.window, t0, t_end)?;
+    // A sampled path is named as the sweep file names it, not as a `set` key.
+    let sampled: Vec<&String> = spec
+        .file
+        .sample
+        .iter()
+        .flat_map(|s| s.vary.keys())
+        .collect();
+    for p in points {
+        point_scene(&base, p).map_err(|e| match e {
+            Error::Input(m) => Error::Input(sampled.iter().fold(m, |m, k| {
+                m.replace(&format!("set['{k}']"), &format!("sample.vary['{k}']"))
+            })),
+            e => e,
+        })?;
+    }
+    // A window a point's run cannot have is an option error before anything runs.
+    if window.is_some() {
+        for p in points {
+            let checked = match point_scene(&base, p)? {
+                Some(s) => Prepared::with_scene(base.case.clone(), s)?,
+                None => base.clone(),
+            };
+            if checked.info.is_some() {
+                let (t0, t_end) = checked.t_span(None)?;
+                checked.window_plan(window, t0, t_end)?;
+            }
         }
     }
-    sweep_with(o, |p, dir| sweep_point(&base, p, dir, o.window), progress)
+    Ok(base)
 }
 
 /// Runs a sweep with a point runner: loads and checks the sweep file, runs the shard's
@@ -96,8 +210,21 @@ pub fn sweep_with<F>(
 where
     F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
 {
-    let spec = crate::sweep::spec::SweepSpec::load(&o.file)?;
-    let points = spec.points()?;
+    let (_, points) = expand(o, None)?;
+    run_points(o, &points, runner, progress)
+}
+
+/// Runs a sweep's `points` with a point runner: the shard's unfinished points in parallel,
+/// into `o.out` (or the default directory of the sweep file).
+fn run_points<F>(
+    o: &SweepRunOptions,
+    points: &[SweepPoint],
+    runner: F,
+    progress: &dyn Progress,
+) -> Result<SweepOutcome, Error>
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
     let out = o.out.clone().unwrap_or_else(|| {
         let stem = o
             .file
@@ -111,7 +238,7 @@ where
         shard: o.shard.unwrap_or(Shard::ALL),
     };
     let report =
-        crate::sweep::runner::run_sweep(&points, &out, &opts, runner, progress)?.into_result()?;
+        crate::sweep::runner::run_sweep(points, &out, &opts, runner, progress)?.into_result()?;
     Ok(SweepOutcome {
         report,
         shard: opts.shard,
@@ -221,6 +348,9 @@ pub struct MergeOptions {
     /// Merge what finished even if some points of the grid are unfinished or corrupt (they
     /// get rows with status `unfinished` / `corrupt`); else that is an error.
     pub allow_partial: bool,
+    /// The columns merged.md shows, in order; empty = the parameters, `status`, `error` and a
+    /// short default set of metrics. merged.csv has every column either way.
+    pub columns: Vec<String>,
 }
 
 /// What [`merge`] wrote.
@@ -260,6 +390,6 @@ pub fn merge(o: &MergeOptions) -> Result<Merged, Error> {
             .into());
     }
     let table = table.with_missing();
-    let (csv, md) = table.write(&out)?;
+    let (csv, md) = table.write(&out, &o.columns)?;
     Ok(Merged { table, csv, md })
 }

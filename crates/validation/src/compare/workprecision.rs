@@ -150,12 +150,16 @@ impl WorkPrecisionPlan {
 /// One run of a work–precision set.
 ///
 /// ```text
-/// (method, controller, rtol | step) → (error, rhs_evals, wall_time_s)
+/// (formulation, method, controller, rtol | step) → (error, rhs_evals, wall_time_s)
 /// ```
 ///
 /// Source: this module.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct WpRun {
+    /// The formulation the run was made with, when formulations are compared
+    /// (`--formulations`); None: the case's own (and not written).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<String>,
     /// Method.
     pub method: Method,
     /// Controller (None for fixed-step and diffsol's methods).
@@ -175,11 +179,16 @@ pub(crate) struct WpRun {
 }
 
 impl WpRun {
-    /// The curve the run belongs to: `method` or `method/controller`.
+    /// The curve the run belongs to: `method` or `method/controller`, followed by
+    /// ` [formulation]` when formulations are compared.
     pub(crate) fn label(&self) -> String {
-        match self.controller {
+        let base = match self.controller {
             Some(c) => format!("{}/{}", self.method, c),
             None => self.method.to_string(),
+        };
+        match &self.formulation {
+            Some(f) => format!("{base} [{f}]"),
+            None => base,
         }
     }
 
@@ -471,6 +480,7 @@ mod tests {
         wall: f64,
     ) -> WpRun {
         WpRun {
+            formulation: None,
             method: m,
             controller: c,
             rtol: (!m.is_fixed_step()).then_some(rtol),

@@ -286,13 +286,14 @@ impl Columns {
         self.header.as_ref()
     }
 
-    /// Number of rows.
-    pub fn len(&self) -> usize {
+    /// Number of rows (a run's `trajectory_rows`).
+    pub(crate) fn len(&self) -> usize {
         self.data.first().map_or(0, Vec::len)
     }
 
     /// Whether no row was collected.
-    pub fn is_empty(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
@@ -324,6 +325,14 @@ impl Columns {
     /// Writes the CSV to `path` atomically.
     pub(crate) fn write_csv(&self, path: &Path) -> Result<(), Error> {
         io::write_atomic(path, self.to_csv().as_bytes())
+    }
+}
+
+/// The values of every column, in the header's order (NaN in absent columns), handed over
+/// without a copy: what a front end wraps as arrays (lash.run's columns).
+impl From<Columns> for Vec<Vec<f64>> {
+    fn from(c: Columns) -> Vec<Vec<f64>> {
+        c.data
     }
 }
 

@@ -148,6 +148,10 @@ impl FailureError {
                 "invalid_options"
             }
             SolveError::EventNan { .. } => "event_nan",
+            SolveError::StateRejected { kind, reason, .. } => {
+                f.reason = Some(reason.clone());
+                kind
+            }
             SolveError::OutOfMemory(m) => {
                 f.reason = Some(m.to_string());
                 "out_of_memory"

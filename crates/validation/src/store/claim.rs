@@ -3,11 +3,13 @@
 //! whether a process that left a file behind is still alive.
 //!
 //! ```text
-//! claim     DIR/claim.json = { pid, host, process_start, since, nonce }, created exclusively
+//! claim     DIR/claim.json = { pid, host, process_start, since, nonce, boot_id }, created
+//!           exclusively
 //!           (hard link of a complete temporary file, which fails if the claim exists; or
 //!           O_CREAT|O_EXCL where hard links are refused), so a reader never sees half a claim
 //! busy      a claim that is not stale: another process has the point
-//! stale     same host and the pid is gone (or is another process: its start time differs),
+//! stale     same machine (host name, and boot id where known) and the pid is gone, a zombie,
+//!           or another process (its start time differs),
 //!           or the claim's modification time is older than STALE_AFTER (any host: its holder
 //!           refreshes it every HEARTBEAT while it works, so an old one lost its holder)
 //! take-over rename(claim → .claim.stale-NONCE): one process wins the rename; the winner
@@ -17,10 +19,14 @@
 //!           failed or abandoned
 //! ```
 //!
-//! Across hosts a claim is judged by its age alone: a process killed on another node (a
-//! job that hit its time limit) blocks its point for at most [`STALE_AFTER`]; a rerun within
-//! that time skips the point and says so. Liveness on this host is read from `/proc`
-//! (Linux); elsewhere only the age counts.
+//! Across hosts a claim is judged by its age alone (a lease renewed by the heartbeat): a
+//! process killed on another node (a job that hit its time limit) blocks its point for at most
+//! [`STALE_AFTER`], and a sweep process that has finished its own points waits for it and then
+//! takes the point over (module `sweep::runner`). Liveness on this machine is read from
+//! `/proc` (Linux: pid, start time, zombie state), the machine told by its host name and boot
+//! id, so two nodes that share a host name never judge each other's pids; elsewhere only the
+//! age counts. Only the modification time of the claim is compared with this host's clock:
+//! nodes whose clocks disagree by more than a minute or two shorten or lengthen the lease.
 //!
 //! Source: docs/outputs.md ("Sweeps": claims, resuming).
 
@@ -49,6 +55,7 @@ pub(crate) const STALE_AFTER: Duration = Duration::from_secs(300);
 ///
 /// ```text
 /// { pid, host, process_start (Linux: start time in clock ticks after boot), since (Unix s),
+///   boot_id (Linux),
 ///   nonce (unique per claim) }
 /// ```
 ///
@@ -65,6 +72,10 @@ pub(crate) struct ClaimRecord {
     pub since: u64,
     /// Unique token of this claim.
     pub nonce: String,
+    /// Boot id of the holder's machine (Linux), so that a machine that shares the host name
+    /// never judges the holder's pid; absent in claims of older versions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub boot_id: Option<String>,
 }
 
 impl ClaimRecord {
@@ -82,6 +93,7 @@ impl ClaimRecord {
             process_start: process_start(pid),
             since,
             nonce: format!("{}-{pid}-{since}-{n}", host_name()),
+            boot_id: boot_id().map(str::to_string),
         }
     }
 
@@ -114,10 +126,20 @@ pub(crate) fn process_start(pid: u32) -> Option<u64> {
 }
 
 /// Whether a process on this host is alive: Some(true/false) where /proc tells (Linux), None
-/// where it cannot be known. A pid whose start time differs from `start` is another process.
+/// where it cannot be known. A pid whose start time differs from `start` is another process;
+/// a zombie (state Z or X in /proc/PID/stat: killed, not yet reaped) is dead.
 pub(crate) fn alive_here(pid: u32, start: Option<u64>) -> Option<bool> {
     if !Path::new("/proc/self/stat").exists() {
         return None;
+    }
+    let Ok(stat) = fs::read_to_string(format!("/proc/{pid}/stat")) else {
+        return Some(false);
+    };
+    let state = stat
+        .rfind(')')
+        .and_then(|i| stat[i + 1..].split_whitespace().next());
+    if matches!(state, Some("Z" | "X")) {
+        return Some(false);
     }
     match process_start(pid) {
         None => Some(false),
@@ -125,10 +147,29 @@ pub(crate) fn alive_here(pid: u32, start: Option<u64>) -> Option<bool> {
     }
 }
 
+/// This machine's boot id (Linux: /proc/sys/kernel/random/boot_id), which tells two machines
+/// apart when they share a host name (containers, cloned images); None elsewhere.
+pub(crate) fn boot_id() -> Option<&'static str> {
+    static BOOT: OnceLock<Option<String>> = OnceLock::new();
+    BOOT.get_or_init(|| {
+        fs::read_to_string("/proc/sys/kernel/random/boot_id")
+            .ok()
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+    })
+    .as_deref()
+}
+
 /// Whether a claim is stale (module doc): its holder is gone from this host, or it is older
 /// than [`STALE_AFTER`].
 pub(crate) fn is_stale(c: &ClaimRecord, age: Duration) -> bool {
-    if c.host == host_name() && alive_here(c.pid, c.process_start) == Some(false) {
+    // The same machine: the same host name and, where both are known, the same boot.
+    let here = c.host == host_name()
+        && match (c.boot_id.as_deref(), boot_id()) {
+            (Some(a), Some(b)) => a == b,
+            _ => true,
+        };
+    if here && alive_here(c.pid, c.process_start) == Some(false) {
         return true;
     }
     age > STALE_AFTER
@@ -188,7 +229,11 @@ fn age_of(path: &Path) -> Duration {
 fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, Error> {
     let tmp = io::temp_path(path);
     let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    let written = f.write_all(bytes).and_then(|()| f.sync_all());
+    // No fsync: other processes read the claim through the page cache (or, on NFS, after the
+    // close-to-open flush of `drop`), and a claim need not outlive a crash of its machine (its
+    // holder is dead then: the claim is stale). An fsync here cost 3.5 ms a point, a quarter
+    // of a short sweep point's wall time (BENCHMARKS.md, "Sweeps").
+    let written = f.write_all(bytes);
     drop(f);
     if let Err(e) = written {
         let _ = fs::remove_file(&tmp);
@@ -242,6 +287,7 @@ pub(crate) fn try_claim(dir: &Path) -> Result<Claimed, Error> {
                     process_start: None,
                     since: 0,
                     nonce: String::new(),
+                    boot_id: None,
                 }));
             }
             let _ = fs::remove_file(&path);
@@ -393,6 +439,41 @@ mod tests {
             assert!(is_stale(&reused, Duration::ZERO));
         }
         assert!(!is_stale(&ClaimRecord::mine(), Duration::ZERO));
+    }
+
+    /// A killed process not yet reaped (a zombie) is dead; a claim from a machine that shares
+    /// this host name but not its boot is judged by its age only, whatever its pid.
+    #[test]
+    fn zombies_are_dead_and_other_machines_pids_are_not_judged() {
+        if alive_here(std::process::id(), None).is_none() {
+            return; // no /proc: only ages count
+        }
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let t0 = std::time::Instant::now();
+        // Until it has exited (a zombie until waited for).
+        while alive_here(child.id(), None) != Some(false) {
+            assert!(
+                t0.elapsed() < Duration::from_secs(10),
+                "a zombie counted as alive"
+            );
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        assert!(process_start(child.id()).is_some(), "reaped too early");
+        child.wait().unwrap();
+        let twin = ClaimRecord {
+            pid: 4_194_305,
+            boot_id: Some("another-machine".into()),
+            ..ClaimRecord::mine()
+        };
+        if boot_id().is_some() {
+            assert!(!is_stale(&twin, Duration::from_secs(10)));
+            assert!(is_stale(&twin, STALE_AFTER + Duration::from_secs(1)));
+        }
+        let here = ClaimRecord {
+            pid: 4_194_305,
+            ..ClaimRecord::mine()
+        };
+        assert!(is_stale(&here, Duration::ZERO));
     }
 
     #[test]

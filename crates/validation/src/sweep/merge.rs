@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::error::Error;
+use crate::error::{Error, OptionError};
 use crate::store::claim;
 use crate::store::io;
 use crate::sweep::runner::point_state;
@@ -320,14 +320,188 @@ impl MergedTable {
         out
     }
 
-    /// Writes `merged.csv` and `merged.md` atomically into `dir` (created if needed); returns
-    /// their paths.
-    pub(crate) fn write(&self, dir: &Path) -> Result<(PathBuf, PathBuf), Error> {
+    /// Writes `merged.csv` (every column) and `merged.md` ([`MergedTable::report`] of
+    /// `columns`) atomically into `dir` (created if needed); returns their paths.
+    pub(crate) fn write(
+        &self,
+        dir: &Path,
+        columns: &[String],
+    ) -> Result<(PathBuf, PathBuf), Error> {
+        let report = self.report(columns)?;
         io::create_dir(dir)?;
         let csv = dir.join("merged.csv");
         let md = dir.join("merged.md");
         io::write_atomic(&csv, self.to_csv().as_bytes())?;
-        io::write_atomic(&md, self.to_markdown().as_bytes())?;
+        io::write_atomic(&md, report.as_bytes())?;
         Ok((csv, md))
+    }
+
+    /// The columns merged.md shows by default: `id`, `index`, the parameter columns but
+    /// `scene_sha256`, `status`, `error`, and those of [`DEFAULT_METRICS`] the table has (the
+    /// first four value columns if it has none of them).
+    pub(crate) fn default_columns(&self) -> Vec<String> {
+        let st = self.columns.iter().position(|c| c == "status");
+        let values_from = st.map_or(self.columns.len(), |s| s + 2);
+        let mut out: Vec<String> = self.columns[..values_from.min(self.columns.len())]
+            .iter()
+            .filter(|c| *c != "scene_sha256")
+            .cloned()
+            .collect();
+        let values = &self.columns[values_from.min(self.columns.len())..];
+        let metrics: Vec<&String> = DEFAULT_METRICS
+            .iter()
+            .filter_map(|m| values.iter().find(|c| c == m))
+            .collect();
+        if metrics.is_empty() {
+            out.extend(values.iter().take(4).cloned());
+        } else {
+            out.extend(metrics.into_iter().cloned());
+        }
+        out
+    }
+
+    /// The quantiles of every metric ([`quantile`], type 7) over the points that
+    /// finished ok: (column, n, [Q(0.05), Q(0.5), Q(0.95)]) for each value column that has a
+    /// number in at least one of them, in column order; settings (`used.*`, `t_end`) left out.
+    pub(crate) fn quantiles(&self) -> Vec<(String, usize, [f64; 3])> {
+        let Some(st) = self.columns.iter().position(|c| c == "status") else {
+            return Vec::new();
+        };
+        let ok: Vec<&Vec<String>> = self.rows.iter().filter(|r| r[st] == "ok").collect();
+        let mut out = Vec::new();
+        for (j, name) in self.columns.iter().enumerate().skip(st + 2) {
+            if name.starts_with("used.") || name == "t_end" {
+                continue;
+            }
+            let mut v: Vec<f64> = ok
+                .iter()
+                .filter_map(|r| r[j].parse::<f64>().ok())
+                .filter(|x| x.is_finite())
+                .collect();
+            if v.is_empty() {
+                continue;
+            }
+            v.sort_by(f64::total_cmp);
+            let q = [0.05, 0.5, 0.95].map(|p| quantile(&v, p));
+            out.push((name.clone(), v.len(), q));
+        }
+        out
+    }
+
+    /// merged.md: the table of `columns` (none: [`MergedTable::default_columns`]), then the
+    /// quantiles of every metric. A column the table does not have is an error naming it.
+    pub(crate) fn report(&self, columns: &[String]) -> Result<String, Error> {
+        let cols = if columns.is_empty() {
+            self.default_columns()
+        } else {
+            columns.to_vec()
+        };
+        let mut idx = Vec::new();
+        for c in &cols {
+            match self.columns.iter().position(|k| k == c) {
+                Some(i) => idx.push(i),
+                None => {
+                    return Err(OptionError::new("columns")
+                        .text(format!("merge: no column '{c}' to show with "))
+                        .name("columns")
+                        .text(format!(" (merged.csv has {})", self.columns.join(", ")))
+                        .into())
+                }
+            }
+        }
+        let shown = MergedTable {
+            columns: cols,
+            rows: self
+                .rows
+                .iter()
+                .map(|r| idx.iter().map(|&i| r[i].clone()).collect())
+                .collect(),
+            unfinished: Vec::new(),
+            corrupt: Vec::new(),
+        };
+        let mut out = String::from("# Merged sweep\n\n");
+        out.push_str(&format!(
+            "{} point(s); {} of the {} columns shown (all of them are in merged.csv).\n\n",
+            self.rows.len(),
+            shown.columns.len(),
+            self.columns.len()
+        ));
+        out.push_str(&shown.to_markdown());
+        let q = self.quantiles();
+        let n_ok = self
+            .columns
+            .iter()
+            .position(|c| c == "status")
+            .map_or(0, |st| self.rows.iter().filter(|r| r[st] == "ok").count());
+        out.push_str(&format!(
+            "\n## Quantiles of every metric over the {n_ok} point(s) that finished ok\n\n\
+             Type 7 (linear interpolation between order statistics, the default of R and NumPy): \
+             the n numbers of a column sorted, x₀ ≤ … ≤ x₍ₙ₋₁₎, h = (n − 1)·p, \
+             Q(p) = x₍⌊h⌋₎ + (h − ⌊h⌋)·(x₍⌊h⌋+1₎ − x₍⌊h⌋₎); empty and non-numeric cells left out \
+             (n counts the rest).\n\n"
+        ));
+        let table = MergedTable {
+            columns: ["metric", "n", "5 %", "50 %", "95 %"]
+                .map(String::from)
+                .to_vec(),
+            rows: q
+                .into_iter()
+                .map(|(name, n, [a, b, c])| {
+                    vec![name, n.to_string(), number(a), number(b), number(c)]
+                })
+                .collect(),
+            unfinished: Vec::new(),
+            corrupt: Vec::new(),
+        };
+        out.push_str(&table.to_markdown());
+        Ok(out)
+    }
+}
+
+/// The metrics merged.md shows by default (those the table has), in this order.
+pub(crate) const DEFAULT_METRICS: [&str; 6] = [
+    "metrics.eps_max",
+    "metrics.contact_force_max",
+    "metrics.penetration_max",
+    "metrics.energy.balance_error",
+    "stats.steps",
+    "wall_time_s",
+];
+
+/// The p-quantile of sorted numbers, type 7 of Hyndman & Fan (1996):
+///
+/// ```text
+/// h = (n − 1)·p,  Q(p) = x[⌊h⌋] + (h − ⌊h⌋)·(x[⌊h⌋ + 1] − x[⌊h⌋])   (x 0-based, sorted)
+/// ```
+///
+/// NaN for no numbers.
+pub(crate) fn quantile(sorted: &[f64], p: f64) -> f64 {
+    let Some(&last) = sorted.last() else {
+        return f64::NAN;
+    };
+    let h = (sorted.len() - 1) as f64 * p;
+    let lo = h.floor() as usize;
+    if lo + 1 >= sorted.len() {
+        return last;
+    }
+    sorted[lo] + (h - lo as f64) * (sorted[lo + 1] - sorted[lo])
+}
+
+/// A number for merged.md: 6 significant digits.
+fn number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    let a = x.abs();
+    if (1e-3..1e6).contains(&a) {
+        let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{x:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        format!("{x:.5e}")
     }
 }

@@ -6,10 +6,12 @@
 //!                "speed_rpm": [..], "clearance": [..], "viscosity": [..], "stiffness": [..],
 //!                "method": [..], "rtol": [..] (alias "tolerance"), "step": [..],
 //!                "controller": [..],
-//!                "set": {PATH: [..], …} }                  (every list optional, none empty;
+//!                "set": {PATH: [..], …},                   (every list optional, none empty;
 //!                                                           PATH any scene field, module set)
+//!                "sample": {count, seed, method, vary: {PATH: {"uniform": [lo, hi]} | …}} }
+//!                                                          (module sample)
 //! grid   = speed × clearance × viscosity × stiffness × set (paths in sorted order)
-//!          × solver choices, in that order, where
+//!          × samples (in draw order) × solver choices, in that order, where
 //!          solver choices = for each method: fixed-step → step list;
 //!                                             diffsol   → rtol list;
 //!                                             ours      → rtol × controller
@@ -31,8 +33,11 @@
 
 pub(crate) mod merge;
 pub(crate) mod runner;
+pub(crate) mod sample;
 pub(crate) mod set;
 pub(crate) mod spec;
 
+#[cfg(test)]
+mod sample_tests;
 #[cfg(test)]
 mod tests;

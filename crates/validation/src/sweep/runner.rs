@@ -161,14 +161,42 @@ impl SweepReport {
     /// Ok if no point failed unrecorded and no stop was requested; else the first failure's
     /// error kind with a message that counts them, or [`Error::Interrupted`] with the counts.
     pub(crate) fn into_result(mut self) -> Result<SweepReport, Error> {
+        let held = if self.busy.is_empty() {
+            String::new()
+        } else {
+            self.busy.sort();
+            let mut v: Vec<String> = self
+                .busy
+                .iter()
+                .take(5)
+                .map(|(i, h)| format!("#{i} (claimed by {h})"))
+                .collect();
+            if self.busy.len() > 5 {
+                v.push(format!("and {} more", self.busy.len() - 5));
+            }
+            format!(
+                "; {} of them claimed by other live processes: {}",
+                self.busy.len(),
+                v.join(", ")
+            )
+        };
         if self.abandoned > 0 {
             let done = self.skipped + self.ok + self.solver_failed;
             return Err(Error::Interrupted(format!(
                 "sweep: {} point(s) finished in this run and {done} of {} in all are kept; {} \
-                 left (rerun the same command to resume)",
+                 left{held} (rerun the same command to resume)",
                 self.ok + self.solver_failed,
                 self.selected,
                 self.selected - done
+            )));
+        }
+        if !self.busy.is_empty() && self.failed.is_empty() {
+            let done = self.skipped + self.ok + self.solver_failed;
+            return Err(Error::Input(format!(
+                "sweep: {} of {} point(s) unfinished{held} (rerun the same command to finish \
+                 them)",
+                self.selected - done,
+                self.selected
             )));
         }
         if self.failed.is_empty() {
@@ -266,11 +294,14 @@ pub(crate) struct ManifestPoint {
 /// ```text
 /// root/points.json  the grid (atomically, every run)
 /// per point:  stop requested → left (abandoned);  finished → skipped;
-///             claim::try_claim(root/id) busy → left to its holder;
+///             claim::try_claim(root/id) busy → left to its holder for now;
 ///             claimed → finished meanwhile? skipped : clear temporaries of dead holders,
 ///             run, write result.json, release the claim
 /// a stop requested while a point runs: the point's partial files are removed, its claim
 ///             released; the report counts it as abandoned
+/// then        the points left to other processes, every RECHECK until none is left:
+///             finished by the holder → already done; holder dead (claim stale) → taken over
+///             and run here; stop requested → left in `busy` (an error naming them)
 /// ```
 pub(crate) fn run_sweep<F>(
     points: &[SweepPoint],
@@ -355,41 +386,14 @@ where
             todo.par_iter().for_each(|p| {
                 let clock = Instant::now();
                 let outcome = run_point(p, root, &runner, held);
-                let mut r = report.lock().unwrap_or_else(|e| e.into_inner());
-                let what = match outcome {
-                    Ok(Ran::Status(PointStatus::Ok)) => {
-                        r.ok += 1;
-                        "ok".to_string()
-                    }
-                    Ok(Ran::Status(PointStatus::SolverFailed)) => {
-                        r.solver_failed += 1;
-                        "solver failure (recorded)".to_string()
-                    }
-                    Ok(Ran::AlreadyDone) => {
-                        r.skipped += 1;
-                        "finished meanwhile by another process".to_string()
-                    }
-                    Ok(Ran::Busy(holder)) => {
-                        r.busy.push((p.index, holder.clone()));
-                        format!("claimed by {holder}, left to it")
-                    }
-                    Ok(Ran::Abandoned) => {
-                        r.abandoned += 1;
-                        "abandoned (stop requested)".to_string()
-                    }
-                    Err(e) => {
-                        let s = format!("failed: {e}");
-                        r.failed.push((p.index, e));
-                        s
-                    }
-                };
-                drop(r);
+                let what = tally(outcome, p, &report);
                 progress.finished(
                     &format!("point {} ({}): {what}", p.index, p.id),
                     clock.elapsed().as_secs_f64(),
                 );
             })
         });
+        wait_for_holders(points, root, &runner, held, &report, &pool, progress);
         let _ = stop_beat.send(());
     });
     let r = report.into_inner().unwrap_or_else(|e| e.into_inner());
@@ -399,7 +403,7 @@ where
         holders.dedup();
         progress.note(
             &format!(
-                "sweep: {} point(s) claimed by other processes ({}), left to them",
+                "sweep: {} point(s) claimed by other processes ({}) left unfinished",
                 r.busy.len(),
                 holders.join(", ")
             )
@@ -407,6 +411,132 @@ where
         );
     }
     Ok(r)
+}
+
+/// Counts how a point went in `report`; returns the words for its progress line.
+fn tally(outcome: Result<Ran, Error>, p: &SweepPoint, report: &Mutex<SweepReport>) -> String {
+    let mut r = report.lock().unwrap_or_else(|e| e.into_inner());
+    match outcome {
+        Ok(Ran::Status(PointStatus::Ok)) => {
+            r.ok += 1;
+            "ok".to_string()
+        }
+        Ok(Ran::Status(PointStatus::SolverFailed)) => {
+            r.solver_failed += 1;
+            "solver failure (recorded)".to_string()
+        }
+        Ok(Ran::AlreadyDone) => {
+            r.skipped += 1;
+            "finished meanwhile by another process".to_string()
+        }
+        Ok(Ran::Busy(holder)) => {
+            r.busy.push((p.index, holder.clone()));
+            format!("claimed by {holder}, left to it")
+        }
+        Ok(Ran::Abandoned) => {
+            r.abandoned += 1;
+            "abandoned (stop requested)".to_string()
+        }
+        Err(e) => {
+            let s = format!("failed: {e}");
+            r.failed.push((p.index, e));
+            s
+        }
+    }
+}
+
+/// How often a process that has finished its own points looks again at the claims of
+/// points other processes hold.
+pub(crate) const RECHECK: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// The second pass (issue 23): once this process has run its own points, the points it left
+/// to other processes are looked at again every [`RECHECK`] until each is finished (by its
+/// holder: counted as already done) or its claim is stale (its holder died: the claim is
+/// taken over and the point run here, `claim::try_claim`), or a stop is requested (those
+/// left stay in `busy`: the sweep's error names them).
+fn wait_for_holders<F>(
+    points: &[SweepPoint],
+    root: &Path,
+    runner: &F,
+    held: &Mutex<BTreeSet<PathBuf>>,
+    report: &Mutex<SweepReport>,
+    pool: &rayon::ThreadPool,
+    progress: &dyn Progress,
+) where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let take = || std::mem::take(&mut report.lock().unwrap_or_else(|e| e.into_inner()).busy);
+    let mut busy = take();
+    if busy.is_empty() {
+        return;
+    }
+    let mut holders: Vec<&str> = busy.iter().map(|(_, h)| h.as_str()).collect();
+    holders.sort();
+    holders.dedup();
+    progress.note(
+        &format!(
+            "sweep: waiting for {} point(s) claimed by other processes ({}); a holder that dies \
+             is taken over (on this host at once, on another when its claim is {} s without \
+             heartbeat)",
+            busy.len(),
+            holders.join(", "),
+            claim::STALE_AFTER.as_secs()
+        )
+        .into(),
+    );
+    loop {
+        if lash_solver::interrupt::stop_requested() {
+            report.lock().unwrap_or_else(|e| e.into_inner()).busy = busy;
+            return;
+        }
+        std::thread::sleep(RECHECK);
+        let mut again: Vec<(usize, String)> = Vec::new();
+        let next: Vec<(&SweepPoint, String)> = busy
+            .iter()
+            .filter_map(|(i, h)| {
+                points
+                    .iter()
+                    .find(|p| p.index == *i)
+                    .map(|p| (p, h.clone()))
+            })
+            .collect();
+        let outcomes: Vec<(usize, String, Option<String>)> = pool.install(|| {
+            next.par_iter()
+                .map(|(p, holder)| {
+                    let clock = Instant::now();
+                    match run_point(p, root, runner, held) {
+                        Ok(Ran::Busy(h)) => (p.index, h, None),
+                        outcome => {
+                            let took_over = matches!(outcome, Ok(Ran::Status(_)) | Err(_));
+                            let what = tally(outcome, p, report);
+                            let line = if took_over {
+                                format!(
+                                    "sweep: point {} ({}): its holder {holder} left it \
+                                     unfinished; taken over here: {what} ({:.2} s)",
+                                    p.index,
+                                    p.id,
+                                    clock.elapsed().as_secs_f64()
+                                )
+                            } else {
+                                format!("sweep: point {} ({}): {what}", p.index, p.id)
+                            };
+                            (p.index, holder.clone(), Some(line))
+                        }
+                    }
+                })
+                .collect()
+        });
+        for (i, h, line) in outcomes {
+            match line {
+                Some(l) => progress.note(&l.into()),
+                None => again.push((i, h)),
+            }
+        }
+        busy = again;
+        if busy.is_empty() {
+            return;
+        }
+    }
 }
 
 /// How one point of a sweep went in this process.

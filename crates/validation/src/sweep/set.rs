@@ -107,6 +107,11 @@ fn field<'a>(v: &'a mut Value, path: &str) -> Result<&'a mut Value, String> {
     Ok(cur)
 }
 
+/// Checks that `path` is well-formed (module doc), saying what is wrong with it if not.
+pub(crate) fn check_path(path: &str) -> Result<(), String> {
+    parse_path(path).map(|_| ())
+}
+
 /// Checks the `set` lists of a sweep file: each path well-formed, each list non-empty, no
 /// value twice; the first failure names its key.
 pub(crate) fn check_set(set: &BTreeMap<String, Vec<Value>>) -> Result<(), Error> {

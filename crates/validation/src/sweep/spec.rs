@@ -17,6 +17,7 @@ use serde_json::Value;
 use crate::error::Error;
 use crate::run::case::{sha256_hex, Case};
 use crate::store::cache::canonical;
+use crate::sweep::sample::SampleSpec;
 
 /// A slice of a grid for one machine of a job array.
 ///
@@ -66,7 +67,8 @@ impl fmt::Display for Shard {
 /// The contents of SWEEP.json.
 ///
 /// ```text
-/// grid = speed_rpm × clearance × viscosity × stiffness × (method-dependent solver choices)
+/// grid = speed_rpm × clearance × viscosity × stiffness × set × sample
+///        × (method-dependent solver choices)
 /// ```
 ///
 /// Source: docs/outputs.md ("Sweeps": the sweep file).
@@ -105,6 +107,10 @@ pub(crate) struct SweepFile {
     /// the values of each (module `sweep::set`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub set: Option<BTreeMap<String, Vec<Value>>>,
+    /// Scene fields drawn from distributions (module `sweep::sample`): each sample a point of
+    /// its own (times the rest of the grid), its values under their paths as `set`'s are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample: Option<SampleSpec>,
 }
 
 /// The parameters of one grid point; `None` means "as in the base case".
@@ -222,8 +228,23 @@ impl SweepSpec {
             )));
         }
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let file: SweepFile = serde_json::from_slice(&bytes)
-            .map_err(|e| Error::Input(format!("sweep file {}: {e}", path.display())))?;
+        SweepSpec::from_json(path, &bytes)
+    }
+
+    /// Parses and checks a sweep file's JSON text as if read from `path` (the base case is
+    /// resolved relative to its directory): a sweep given as text (lash.sweep's dict).
+    pub(crate) fn from_json(path: &Path, bytes: &[u8]) -> Result<SweepSpec, Error> {
+        // The path of a field that does not parse is named (`sample.count: invalid type…`).
+        let de = &mut serde_json::Deserializer::from_slice(bytes);
+        let file: SweepFile = serde_path_to_error::deserialize(de).map_err(|e| {
+            let at = e.path().to_string();
+            let at = if at == "." {
+                String::new()
+            } else {
+                format!("{at}: ")
+            };
+            Error::Input(format!("sweep file {}: {at}{}", path.display(), e.inner()))
+        })?;
         let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
         SweepSpec::new(file, dir)
     }
@@ -245,7 +266,20 @@ impl SweepSpec {
             }
         };
         let solver = solver_choices(f);
-        let sets = set_combinations(f.set.as_ref());
+        let mut sets = set_combinations(f.set.as_ref());
+        if let Some(sample) = &f.sample {
+            let draws = sample.draws()?;
+            sets = sets
+                .iter()
+                .flat_map(|c| {
+                    draws.iter().map(move |d| {
+                        let mut c = c.clone();
+                        c.extend(d.iter().map(|(k, v)| (k.clone(), v.clone())));
+                        c
+                    })
+                })
+                .collect();
+        }
         let mut points = Vec::new();
         for &speed_rpm in &opt(&f.speed_rpm) {
             for &clearance in &opt(&f.clearance) {
@@ -363,6 +397,9 @@ fn check_file(f: &SweepFile) -> Result<(), Error> {
     let bad = |m: String| Err(Error::Input(format!("sweep: {m}")));
     if let Some(set) = &f.set {
         crate::sweep::set::check_set(set)?;
+    }
+    if let Some(sample) = &f.sample {
+        sample.check(f.set.as_ref())?;
     }
     let lists: [(&str, &Option<Vec<f64>>); 6] = [
         ("speed_rpm", &f.speed_rpm),

@@ -215,9 +215,96 @@ fn shards_partition_the_grid_and_merge_joins_them() {
             .len(),
         6
     );
-    let (c, m) = t.write(&d.path().join("merged")).unwrap();
+    let (c, m) = t.write(&d.path().join("merged"), &[]).unwrap();
     assert_eq!(std::fs::read_to_string(c).unwrap(), csv);
-    assert_eq!(std::fs::read_to_string(m).unwrap(), md);
+    assert_eq!(std::fs::read_to_string(m).unwrap(), t.report(&[]).unwrap());
+}
+
+/// Type 7 quantiles against NumPy's default: numpy.percentile([1, 2, 3, 4, 10], [5, 50, 95])
+/// = [1.2, 3, 8.8] (h = 4p: 0.2, 2, 3.8), and the ends of one and two numbers.
+#[test]
+fn quantiles_are_type_7() {
+    let v = [1.0, 2.0, 3.0, 4.0, 10.0];
+    assert!((quantile(&v, 0.05) - 1.2).abs() < 1e-15);
+    assert_eq!(quantile(&v, 0.5), 3.0);
+    assert!((quantile(&v, 0.95) - 8.8).abs() < 1e-14);
+    assert_eq!((quantile(&v, 0.0), quantile(&v, 1.0)), (1.0, 10.0));
+    assert_eq!(quantile(&[7.0], 0.05), 7.0);
+    assert_eq!(quantile(&[0.0, 1.0], 0.95), 0.95);
+    assert!(quantile(&[], 0.5).is_nan());
+}
+
+/// merged.md: by default the parameters, status, error and the default metrics the table has
+/// (here none, so the first four values), then the quantiles of every metric over the ok
+/// points; `columns` chooses the table's columns, and an unknown one is an error naming it.
+#[test]
+fn merged_md_is_short_by_default_and_has_the_quantiles() {
+    let d = tempfile::tempdir().unwrap();
+    let pts = spec(d.path(), GRID).unwrap().points().unwrap();
+    let root = d.path().join("out");
+    let calls = AtomicUsize::new(0);
+    run_sweep(
+        &pts,
+        &root,
+        &SweepOptions::default(),
+        |p, dir| fake(p, dir, &calls),
+        &NoProgress,
+    )
+    .unwrap();
+    let t = merge(std::slice::from_ref(&root)).unwrap();
+    assert_eq!(
+        t.default_columns(),
+        [
+            "id",
+            "index",
+            "case",
+            "speed_rpm",
+            "method",
+            "rtol",
+            "step",
+            "controller",
+            "status",
+            "error",
+            "metrics.slider_acc_max",
+            "stats.rhs_evals"
+        ]
+    );
+    // slider_acc_max = speed²: 8 points at 120 rpm (14 400), 8 at 150 (22 500); h = 15p:
+    // Q(0.05) = x[0] (h = 0.75 between equal values), Q(0.5) = (x[7] + x[8])/2, Q(0.95) = x[15].
+    // rhs_evals = index 0 … 15: Q(p) = 15p.
+    let q = t.quantiles();
+    assert_eq!(q.len(), 2);
+    assert_eq!(
+        q[0],
+        (
+            "metrics.slider_acc_max".into(),
+            16,
+            [14400.0, 18450.0, 22500.0]
+        )
+    );
+    assert_eq!(q[1].0, "stats.rhs_evals");
+    for (got, want) in q[1].2.iter().zip([0.75, 7.5, 14.25]) {
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
+    let md = t.report(&[]).unwrap();
+    assert!(
+        md.contains("| metrics.slider_acc_max | 16 | 14400 | 18450 | 22500 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| stats.rhs_evals | 16 | 0.75 | 7.5 | 14.25 |"),
+        "{md}"
+    );
+    assert!(!md.contains("scene_sha256"));
+    let cols = ["index".to_string(), "metrics.slider_acc_max".to_string()];
+    let md = t.report(&cols).unwrap();
+    assert!(
+        md.contains("| index | metrics.slider_acc_max |\n|---|---|\n| 0 | 14400.0 |"),
+        "{md}"
+    );
+    let e = t.report(&["nope".to_string()]).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::BadInput);
+    assert!(e.to_string().contains("no column 'nope'"), "{e}");
 }
 
 #[test]

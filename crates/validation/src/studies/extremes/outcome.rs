@@ -37,6 +37,9 @@ pub enum FailureKind {
     NewtonFailure,
     /// The wall-clock budget ran out.
     BudgetExhausted,
+    /// The system refused an accepted state (a singular configuration, a constraint
+    /// violation above its tolerance).
+    StateRejected,
 }
 
 impl FailureKind {
@@ -49,6 +52,7 @@ impl FailureKind {
             FailureKind::Rk4Unstable => "unstable",
             FailureKind::NewtonFailure => "newton",
             FailureKind::BudgetExhausted => "wall",
+            FailureKind::StateRejected => "refused",
         }
     }
 
@@ -60,6 +64,7 @@ impl FailureKind {
             SolveError::Rk4Unstable { .. } => FailureKind::Rk4Unstable,
             SolveError::NewtonFailure { .. } => FailureKind::NewtonFailure,
             SolveError::BudgetExhausted { .. } => FailureKind::BudgetExhausted,
+            SolveError::StateRejected { .. } => FailureKind::StateRejected,
             SolveError::InvalidOptions(_)
             | SolveError::Interrupted { .. }
             | SolveError::EventNan { .. }

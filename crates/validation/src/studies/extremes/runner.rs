@@ -382,11 +382,18 @@ pub fn run_cell(r: &Ready, setting: Setting, budget: &Budget) -> Cell {
                 if let (Setting::Rk4Beyond { .. }, Outcome::Failed { kind, .. }) =
                     (setting, &cell.outcome)
                 {
-                    if !matches!(kind, FailureKind::NonFiniteState | FailureKind::Rk4Unstable) {
+                    // A blown-up mechanism may first come apart: the constraint-violation
+                    // check of an accepted step (docs/model.md §12.1) is a stop too.
+                    if !matches!(
+                        kind,
+                        FailureKind::NonFiniteState
+                            | FailureKind::Rk4Unstable
+                            | FailureKind::StateRejected
+                    ) {
                         cell.outcome = Outcome::Rejected {
                             reason: format!(
                                 "rk4 beyond its stability limit failed with {e} instead of its \
-                                 stability stop or a non-finite state"
+                                 stability stop, a non-finite state or a refused step"
                             ),
                         };
                     }

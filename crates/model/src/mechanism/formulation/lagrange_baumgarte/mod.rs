@@ -105,6 +105,9 @@ pub(crate) struct LagrangeBaumgarte {
     kkt_blocks: Vec<Vec<usize>>,
     work: RefCell<Work>,
     jac_work: RefCell<JacWork>,
+    /// S of the accepted-state check (mechanism/accepted.rs), kept apart from `work`, which
+    /// holds the last evaluation's multipliers.
+    check_s: RefCell<Vec<f64>>,
 }
 
 impl LagrangeBaumgarte {
@@ -158,6 +161,7 @@ impl LagrangeBaumgarte {
             kkt_blocks,
             work: RefCell::new(Work::new(rows.len(), nq)),
             jac_work: RefCell::default(),
+            check_s: RefCell::new(vec![0.0; rows.len() * rows.len()]),
         }
     }
 
@@ -292,6 +296,45 @@ impl LagrangeBaumgarte {
             }
         }
         true
+    }
+
+    /// The smallest relative pivot ρ_j = d_j / S_jj of the Cholesky factorisation of
+    /// S = Φ_q M⁻¹ Φ_qᵀ from the term blocks of every row (the blocks and order of the
+    /// acceleration solve), and its row; ρ ≤ 0 when a pivot is not positive (mechanism/
+    /// accepted.rs).
+    pub(crate) fn smallest_relative_pivot(
+        &self,
+        cons: &Constraints,
+        term_jac: &[[[f64; 3]; 2]],
+    ) -> (f64, usize) {
+        let m = cons.rows.len();
+        let mut smat = self.check_s.borrow_mut();
+        let smat = &mut smat[..m * m];
+        for a in 0..m {
+            smat[a * m..a * m + a + 1].fill(0.0);
+        }
+        for p in &self.schur {
+            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
+            let w = &self.minv[3 * p.i..3 * p.i + 3];
+            smat[p.a * m + p.b] +=
+                ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
+        }
+        let diag: Vec<f64> = (0..m).map(|j| smat[j * m + j]).collect();
+        let mut best = (f64::INFINITY, 0);
+        for blk in &self.kkt_blocks {
+            if let Err(j) = block_cholesky_inv(smat, m, blk) {
+                return (smat[j * m + j] / diag[j], j);
+            }
+            for &j in blk {
+                // The factor holds 1/√d_j on its diagonal.
+                let d = 1.0 / (smat[j * m + j] * smat[j * m + j]);
+                let rho = d / diag[j];
+                if rho < best.0 {
+                    best = (rho, j);
+                }
+            }
+        }
+        best
     }
 
     /// The constraint forces −Σ J_r,kᵀ λ_r of the last evaluation on every body, added to `cf`

@@ -1,0 +1,340 @@
+//! The checks of an accepted state (`OdeSystem::check_accepted`, run by the integrator at the
+//! end of every step): a run never ends with a wrong mechanism and exit 0 (issue 26).
+//!
+//! ```text
+//! every formulation   |Φ_r(q, t)| ≤ VIOLATION_REL · L   (rows of positions, m)
+//!                     |Φ_r(q, t)| ≤ VIOLATION_ANGLE      (rows of angles, rad)
+//!                     L = the largest attachment offset |s| of the constraint rows (the
+//!                     mechanism's size as its joints see it; 1 m when there is none)
+//!   → "constraint_violation"
+//! lagrange_baumgarte  S = Φ_q M⁻¹ Φ_qᵀ factored as in the acceleration solve; the relative
+//!                     pivot of row j, ρ_j = d_j / S_jj (d_j the Cholesky pivot), is sin² of
+//!                     the angle between row j of Φ_q M^{-1/2} and the span of the rows before
+//!                     it; min_j ρ_j < PIVOT_MIN (or S not positive definite)
+//!                     or the step crossed a singular configuration (below)
+//!   → "singular_configuration": the rank of Φ_q drops
+//! ```
+//! Why these bounds:
+//! - PIVOT_MIN = 1e-8: cond(S) ≥ 1/min ρ, so the multipliers of the Schur-complement solve
+//!   carry a relative rounding error of about ε / min ρ; at 1e-8 that is 2e-8, the size of
+//!   the default rtol of a scene run (1e-8): past it, the solve's own error is larger than
+//!   what the run promises, and at the singular configuration itself the equations of
+//!   Lagrange–Baumgarte do not determine the motion (IFToMM A02: the parallelogram turns into
+//!   an anti-parallelogram, or the method stalls). The augmented Lagrangian's matrix
+//!   M + Φ_qᵀαΦ_q stays positive definite there: it is not checked.
+//! - VIOLATION_REL = 1e-2 of the mechanism's size, VIOLATION_ANGLE = 1e-2 rad: above every
+//!   run the tests accept (the largest seen: a 1 cm pendulum's reference run in `lash
+//!   stiffness`, 3.3e-3 of its size under Baumgarte's drift; the press stays below 1e-6), far
+//!   below a mechanism that came apart (an RK4 run beyond its stability limit: 0.8 of it).
+//!
+//! - A crossing: a step can pass a singular configuration with no accepted state near it.
+//!   Every maximal minor of Φ_q vanishes there, so under Lagrange–Baumgarte the determinant of
+//!   the best-conditioned m × m minor at the step's start (its columns D by complete pivoting)
+//!   changes sign across it: sign det Φ_q(q_b)[:, D] ≠ sign det Φ_q(q_a)[:, D] is a crossing.
+//!   (A minor chosen as the best at the start does not degenerate within a step otherwise,
+//!   unless the step turns the mechanism that far.)
+//!
+//! It costs one kinematic evaluation and the constraint rows per step (two, a factorisation of
+//! S, a complete pivoting of Φ_q and two m × m determinants under Lagrange–Baumgarte); it is
+//! not counted as a right-hand side.
+
+use lash_solver::Rejection;
+
+use crate::mechanism::constraints::{eval_row, RowEval, TermKind};
+use crate::mechanism::formulation::Formulation;
+use crate::mechanism::Mechanism;
+
+/// Smallest allowed relative pivot of S under Lagrange–Baumgarte (module doc).
+pub(crate) const PIVOT_MIN: f64 = 1e-8;
+/// Largest allowed |Φ_r| of a row of positions, relative to the mechanism's size (module doc).
+pub(crate) const VIOLATION_REL: f64 = 1e-2;
+/// Largest allowed |Φ_r| of a row of angles, rad (module doc).
+pub(crate) const VIOLATION_ANGLE: f64 = 1e-2;
+
+impl Mechanism {
+    /// The mechanism's size L for the violation bound: the largest attachment offset |s| of a
+    /// point term of the constraint rows; 1 m when there is none.
+    pub(crate) fn constraint_size(&self) -> f64 {
+        let l = self
+            .constraints
+            .rows
+            .iter()
+            .flat_map(|r| r.terms[..r.n_terms].iter())
+            .filter_map(|t| match t.kind {
+                TermKind::Point { s, .. } => Some(s[0].hypot(s[1])),
+                TermKind::Angle { .. } => None,
+            })
+            .fold(0.0, f64::max);
+        if l > 0.0 {
+            l
+        } else {
+            1.0
+        }
+    }
+
+    /// The constraint rows evaluated at (t, y) (after the kinematics).
+    fn rows_at(&self, t: f64, y: &[f64]) -> Vec<RowEval> {
+        let mut sc = self.scratch.borrow_mut();
+        self.kinematics(t, y, &mut sc);
+        let info = &self.bodies.info;
+        self.constraints
+            .rows
+            .iter()
+            .map(|r| eval_row(r, info, t, &sc))
+            .collect()
+    }
+
+    /// Φ_q of the integrated coordinates (m × n_q, row-major) from evaluated rows.
+    fn dense_jacobian(&self, evals: &[RowEval]) -> Vec<f64> {
+        let nq = self.nq();
+        let mut jac = vec![0.0; evals.len() * nq];
+        for (r, (row, e)) in self.constraints.row_int.iter().zip(evals).enumerate() {
+            for (ti, bi) in row.iter().enumerate() {
+                if let Some(i) = *bi {
+                    for c in 0..3 {
+                        jac[r * nq + 3 * i + c] += e.jrows[ti][c];
+                    }
+                }
+            }
+        }
+        jac
+    }
+
+    /// A singular-configuration rejection (module doc) with what was seen.
+    fn singular(&self, t: f64, what: String) -> Rejection {
+        Rejection {
+            kind: "singular_configuration",
+            reason: format!(
+                "singular configuration at t = {t:e} (rank of Φ_q drops: {what}): \
+                 lagrange_baumgarte cannot pass it; use augmented_lagrangian"
+            ),
+        }
+    }
+
+    /// The checks of the module doc on the accepted step (t_a, y_a) → (t_b, y_b).
+    pub(crate) fn check_accepted_state(
+        &self,
+        t_a: f64,
+        y_a: &[f64],
+        t_b: f64,
+        y_b: &[f64],
+    ) -> Result<(), Rejection> {
+        let cons = &self.constraints;
+        if cons.rows.is_empty() {
+            return Ok(());
+        }
+        let evals = self.rows_at(t_b, y_b);
+        if let Formulation::LagrangeBaumgarte(f) = &self.formulation {
+            let term_jac: Vec<_> = evals.iter().map(|e| e.jrows).collect();
+            let (rho, row) = f.smallest_relative_pivot(cons, &term_jac);
+            if !(rho >= PIVOT_MIN) {
+                let r = &cons.rows[row];
+                return Err(self.singular(
+                    t_b,
+                    format!(
+                        "equation \"{}\" of joint '{}' depends on the others, relative pivot \
+                         {rho:.1e} < {PIVOT_MIN:e}",
+                        r.label,
+                        self.scene.joints[r.joint].name()
+                    ),
+                ));
+            }
+            // Crossed inside the step: the best-conditioned m × m minor of Φ_q at the start
+            // changes the sign of its determinant.
+            let (m, nq) = (cons.rows.len(), self.nq());
+            let jac_a = self.dense_jacobian(&self.rows_at(t_a, y_a));
+            let jac_b = self.dense_jacobian(&evals);
+            let cols = best_minor(&jac_a, m, nq);
+            let (da, db) = (minor_det(&jac_a, nq, &cols), minor_det(&jac_b, nq, &cols));
+            if !(da * db > 0.0) {
+                return Err(self.singular(
+                    t_b,
+                    format!(
+                        "the determinant of its best-conditioned {m} × {m} minor at t = \
+                         {t_a:e} changed sign inside the step to t = {t_b:e}"
+                    ),
+                ));
+            }
+        }
+        let size = self.constraint_size();
+        for (r, e) in cons.rows.iter().zip(&evals) {
+            let angle = r.terms[..r.n_terms]
+                .iter()
+                .all(|t| matches!(t.kind, TermKind::Angle { .. }));
+            let (tol, unit) = if angle {
+                (VIOLATION_ANGLE, "rad")
+            } else {
+                (VIOLATION_REL * size, "m")
+            };
+            if !(e.phi.abs() <= tol) {
+                return Err(Rejection {
+                    kind: "constraint_violation",
+                    reason: format!(
+                        "constraint violation at t = {t_b:e}: equation \"{}\" of joint '{}' \
+                         is off by {:.3e} {unit}, over its tolerance {tol:.1e} {unit} (the \
+                         mechanism came apart; {} cannot hold it at these options)",
+                        r.label,
+                        self.scene.joints[r.joint].name(),
+                        e.phi.abs(),
+                        self.formulation.name()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The m columns of the best-conditioned m × m minor of a (m × n, row-major, full row rank):
+/// the pivot columns of Gaussian elimination with complete pivoting, in increasing order.
+fn best_minor(a: &[f64], m: usize, n: usize) -> Vec<usize> {
+    let mut w = a.to_vec();
+    let mut cols: Vec<usize> = (0..n).collect();
+    let mut rows: Vec<usize> = (0..m).collect();
+    for k in 0..m {
+        let (mut bi, mut bj, mut best) = (k, k, -1.0);
+        for (ii, &i) in rows.iter().enumerate().skip(k) {
+            for (jj, &j) in cols.iter().enumerate().skip(k) {
+                let v = w[i * n + j].abs();
+                if v > best {
+                    (bi, bj, best) = (ii, jj, v);
+                }
+            }
+        }
+        rows.swap(k, bi);
+        cols.swap(k, bj);
+        let (p, pc) = (rows[k], cols[k]);
+        let piv = w[p * n + pc];
+        if piv == 0.0 {
+            break;
+        }
+        for &i in &rows[k + 1..] {
+            let f = w[i * n + pc] / piv;
+            if f != 0.0 {
+                for &j in &cols[k..] {
+                    w[i * n + j] -= f * w[p * n + j];
+                }
+            }
+        }
+    }
+    let mut d = cols[..m].to_vec();
+    d.sort_unstable();
+    d
+}
+
+/// det of the square minor of a (row-major, n columns) on the columns `cols` (all rows), by
+/// Gaussian elimination with partial pivoting.
+fn minor_det(a: &[f64], n: usize, cols: &[usize]) -> f64 {
+    let m = cols.len();
+    let mut w: Vec<f64> = (0..m)
+        .flat_map(|i| cols.iter().map(move |&j| a[i * n + j]))
+        .collect();
+    let mut det = 1.0;
+    for k in 0..m {
+        let p = (k..m)
+            .max_by(|&x, &y| w[x * m + k].abs().total_cmp(&w[y * m + k].abs()))
+            .unwrap_or(k);
+        if w[p * m + k] == 0.0 {
+            return 0.0;
+        }
+        if p != k {
+            for j in 0..m {
+                w.swap(k * m + j, p * m + j);
+            }
+            det = -det;
+        }
+        let piv = w[k * m + k];
+        det *= piv.signum();
+        for i in k + 1..m {
+            let f = w[i * m + k] / piv;
+            for j in k..m {
+                w[i * m + j] -= f * w[k * m + j];
+            }
+        }
+    }
+    det
+}
+
+#[cfg(test)]
+mod tests {
+    //! A02's parallelogram (N = 1) is regular with its cranks vertical and singular with them
+    //! horizontal (every link on one line: Φ_q loses a rank); a pin pulled apart by 4× its
+    //! tolerance is a violation, by 0.4× it is not.
+    use super::*;
+    use crate::iftomm::n_four_bar;
+    use crate::scene::format::FormulationName;
+    use lash_solver::OdeSystem;
+
+    fn al_accepts(scene: &crate::Scene, ya: &[f64], yb: &[f64]) -> bool {
+        let mut scene = scene.clone();
+        scene.formulation = FormulationName::AugmentedLagrangian;
+        let al = Mechanism::from_scene(&scene).unwrap();
+        al.check_accepted(0.0, ya, 0.1, yb).is_ok()
+    }
+
+    #[test]
+    fn a_parallelogram_is_singular_only_when_horizontal() {
+        let (mut scene, _) = n_four_bar(1, 1.0);
+        scene.formulation = FormulationName::LagrangeBaumgarte;
+        let m = Mechanism::from_scene(&scene).unwrap();
+        let y0 = m.initial_state();
+        let nq = m.nq();
+        // Vertical cranks: a regular configuration.
+        assert!(m.check_accepted(0.0, &y0, 0.0, &y0).is_ok());
+        // The cranks turned to horizontal along +x (θ = 0), the coupler translated onto the
+        // line y = 0 — a consistent configuration where Φ_q loses a rank.
+        let mut y = y0.clone();
+        for (i, p) in [[0.5, 0.0, 0.0], [1.5, 0.0, 0.0], [1.5, 0.0, 0.0]]
+            .iter()
+            .enumerate()
+        {
+            y[3 * i..3 * i + 3].copy_from_slice(p);
+        }
+        y[nq..].iter_mut().for_each(|v| *v = 0.0);
+        let e = m.check_accepted(0.0, &y0, 0.0, &y).unwrap_err();
+        assert_eq!(e.kind, "singular_configuration", "{}", e.reason);
+        assert!(
+            e.reason.contains("use augmented_lagrangian"),
+            "{}",
+            e.reason
+        );
+        // A step across the horizontal on the parallelogram branch (θ = 0.05 → −0.05 rad, both
+        // ends regular: ρ ≈ θ² ≫ PIVOT_MIN) is a crossing; a step from 0.3 to 0.05 rad is not.
+        let at = |th: f64| {
+            let (c, s) = (th.cos(), th.sin());
+            let mut y = vec![0.0; 2 * nq];
+            y[..9].copy_from_slice(&[
+                0.5 * c,
+                0.5 * s,
+                th,
+                c + 0.5,
+                s,
+                0.0,
+                1.0 + 0.5 * c,
+                0.5 * s,
+                th,
+            ]);
+            y
+        };
+        assert!(m.check_accepted(0.0, &at(0.3), 0.1, &at(0.05)).is_ok());
+        let e = m
+            .check_accepted(0.1, &at(0.05), 0.2, &at(-0.05))
+            .unwrap_err();
+        assert_eq!(e.kind, "singular_configuration", "{}", e.reason);
+        assert!(e.reason.contains("changed sign"), "{}", e.reason);
+        // The same states are consistent: the augmented Lagrangian accepts them.
+        assert!(al_accepts(&scene, &at(0.05), &at(-0.05)));
+        scene.formulation = FormulationName::AugmentedLagrangian;
+        let al = Mechanism::from_scene(&scene).unwrap();
+        assert!(al.check_accepted(0.0, &y0, 0.0, &y).is_ok());
+        // A pin pulled apart by 2 cm on a 0.5 m offset (bound 5 mm) is a violation.
+        let mut bad = y0.clone();
+        bad[1] += 2e-2;
+        let e = al.check_accepted(0.0, &y0, 0.0, &bad).unwrap_err();
+        assert_eq!(e.kind, "constraint_violation", "{}", e.reason);
+        // …and 2 mm is not.
+        let mut ok = y0.clone();
+        ok[1] += 2e-3;
+        assert!(al.check_accepted(0.0, &y0, 0.0, &ok).is_ok());
+    }
+}
