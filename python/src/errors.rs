@@ -161,6 +161,5 @@ pub fn failure_kind(e: &SolveError) -> &'static str {
         SolveError::StateRejected { kind, .. } => kind,
         SolveError::OutOfMemory(_) => "out_of_memory",
         SolveError::LawOutOfRange { .. } => "law_out_of_range",
-        SolveError::SingularConfiguration { .. } => "singular_configuration",
     }
 }

@@ -488,6 +488,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
         out: None,
         until_periodic: None,
         formulation,
+        window: None,
     };
     let (path, text, name) = (a.path, a.text, a.name);
     let outcome: Result<Ran, Error> = run_watched(py, "lash.run", move || {

@@ -53,6 +53,8 @@ impl SweepArgs {
             shard: None,
             out: self.out.as_ref().map(PathBuf::from),
             max_wall_time: self.max_wall_time,
+            // lash.sweep has no --window: every point's default window, as `lash sweep`.
+            window: None,
         }
     }
 }

@@ -357,6 +357,7 @@ mod tests {
                 shard: Some(Shard { index: i, count: 2 }),
                 out: Some(out.clone()),
                 max_wall_time: None,
+                window: None,
             };
             let r = sweep_command(&a, runner).unwrap();
             assert_eq!((r.selected, r.ok), (3, 3));

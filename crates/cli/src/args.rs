@@ -7,7 +7,8 @@
 //!              [--max-steps N] [--max-wall-time S] [--t-end S]
 //!              [--samples-per-revolution N | --output-every DT] [--out DIR]
 //! lash study paper [--out DIR]
-//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S] [--out DIR]
+//! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S]
+//!                   [--window W] [--out DIR]
 //! lash work-precision CASE [--methods M,..] [--tolerances R,..] [--steps H,..]
 //!                          [--controllers C,..] [--t-end S] [--max-wall-time S] [--out DIR]
 //! lash sweep SWEEP.json [--jobs N] [--shard I/N] [--max-wall-time S] [--out DIR]
@@ -234,7 +235,8 @@ pub struct RunArgs {
     pub out: Option<PathBuf>,
     /// Run until the clearance joint's once-per-revolution section e/c moves by less than TOL
     /// (units of the clearance c) between revolutions, at least 2 revolutions (scenes with a
-    /// crank driver and a clearance joint); replaces the scene's end time. The revolutions
+    /// crank, driven or turned by a motor, and a clearance joint; a motor-driven crank's
+    /// revolutions are its full turns); replaces the scene's end time. The revolutions
     /// used go to stdout and summary.json (`until_periodic`). Default: off (the scene's end
     /// time).
     #[arg(long = "until-periodic", value_name = "TOL", value_parser = parse_until_periodic,
@@ -252,6 +254,17 @@ pub struct RunArgs {
     /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
     pub formulation: Option<lash_model::FormulationName>,
+    /// The window the metrics of summary.json cover: last-revolution (of the crank:
+    /// roles.crank or roles.crank_driver; a crank a motor turns takes a first pass to find
+    /// where its last turn starts), all (the whole run), or T0:T1 in seconds. Default:
+    /// last-revolution with a crank, all without one.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
+}
+
+/// Parses --window (lash_model::MetricsWindow).
+fn parse_window(s: &str) -> Result<lash_model::MetricsWindow, String> {
+    s.parse()
 }
 
 /// Parses --formulation.
@@ -274,6 +287,7 @@ impl RunArgs {
                 max_revolutions: self.max_revolutions.unwrap_or(DEFAULT_MAX_REVOLUTIONS),
             }),
             formulation: self.formulation,
+            window: self.window,
         }
     }
 }
@@ -341,7 +355,7 @@ impl StudyArgs {
 /// Arguments of `lash compare`.
 ///
 /// ```text
-/// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--out DIR]
+/// lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--window W] [--out DIR]
 /// ```
 ///
 /// Source: docs/outputs.md ("`lash compare CASE`").
@@ -354,7 +368,7 @@ pub struct CompareArgs {
           allow_hyphen_values = true)]
     pub tolerances: Option<Vec<f64>>,
     /// RK4 steps, s, comma-separated. Default: the largest stable step h of the case and h/2,
-    /// h/4 (scene cases with a crank); none for test problems.
+    /// h/4 (every scene case); none for test problems.
     #[arg(long, value_name = "H,..", value_delimiter = ',', value_parser = parse_step,
           allow_hyphen_values = true)]
     pub steps: Option<Vec<f64>>,
@@ -366,6 +380,12 @@ pub struct CompareArgs {
     #[arg(long = "max-wall-time", value_name = "S", value_parser = parse_wall_time,
           allow_hyphen_values = true)]
     pub max_wall_time: Option<f64>,
+    /// Where the errors are measured: last-revolution (of the crank; a crank a motor turns:
+    /// its last turn, found by a run at the case's options), all (the whole run), or T0:T1 in
+    /// seconds. Default: the case's rule (the first half revolution with a dry clearance joint,
+    /// else the last revolution of a driven crank, else the whole run). Scene cases only.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
     /// Output directory. Default `out/compare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -380,6 +400,7 @@ impl CompareArgs {
             steps: self.steps.clone(),
             t_end: self.t_end,
             max_wall_time: self.max_wall_time,
+            window: self.window,
             out: self.out.clone(),
         }
     }
@@ -483,6 +504,12 @@ pub struct SweepArgs {
     /// Output directory (one subdirectory per point). Default `out/sweep/STEM` of the file.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// The window the metrics of summary.json cover: last-revolution (of the crank:
+    /// roles.crank or roles.crank_driver; a crank a motor turns takes a first pass to find
+    /// where its last turn starts), all (the whole run), or T0:T1 in seconds. Default:
+    /// last-revolution with a crank, all without one.
+    #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<lash_model::MetricsWindow>,
 }
 
 impl SweepArgs {
@@ -494,6 +521,7 @@ impl SweepArgs {
             shard: self.shard,
             out: self.out.clone(),
             max_wall_time: self.max_wall_time,
+            window: self.window,
         }
     }
 }
@@ -636,7 +664,8 @@ impl StiffnessArgs {
 /// Source: docs/outputs.md ("`lash poincare CASE`").
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PoincareArgs {
-    /// The case: a scene file (JSON) with a crank driver and a clearance joint role.
+    /// The case: a scene file (JSON) with a crank (driven, or turned by a motor: the section is
+    /// then taken at its full turns) and a clearance joint role.
     pub case: String,
     /// Crank revolutions (≥ 1). Default 20.
     #[arg(long, value_name = "N", value_parser = parse_count)]

@@ -22,16 +22,19 @@ fn short_press(dir: &Path, name: &str, joint: PressJoint, c: f64, t_end: f64) ->
     p
 }
 
-// A mechanism run's: `formulation` is absent for built-in test problems (docs/outputs.md).
-const SUMMARY_KEYS: [&str; 16] = [
+// A mechanism run's: `formulation`, `metrics_window` are absent for built-in test problems,
+// `crank_revolutions` without a crank (docs/outputs.md).
+const SUMMARY_KEYS: [&str; 18] = [
     "atol",
     "case",
     "controller",
+    "crank_revolutions",
     "events",
     "final_state",
     "formulation",
     "method",
     "metrics",
+    "metrics_window",
     "reference_error",
     "rtol",
     "scene_sha256",
@@ -65,6 +68,12 @@ fn run_writes_summary_trajectory_and_figures() {
     assert!(s["controller"].is_null() && s["step"].is_null());
     assert_eq!(s["atol"].as_array().unwrap().len(), 12);
     assert_eq!(s["t_end"], 0.1);
+    // A quarter turn at 150 rpm, shorter than the revolution: the window is the whole run.
+    assert!(
+        (s["crank_revolutions"].as_f64().unwrap() - 0.25).abs() < 1e-12,
+        "{s}"
+    );
+    assert_eq!(s["metrics_window"], serde_json::json!([0.0, 0.1]));
     let m = &s["metrics"];
     // The ideal mechanism is its closed form; it has no clearance joint.
     assert!(
@@ -672,6 +681,137 @@ fn bad_set_sweeps_fail_before_any_point_runs() {
         "{err}"
     );
     assert!(!d.path().join("m").exists());
+}
+
+/// `--window` on sweep and run: a window the scene cannot have (last-revolution without a
+/// crank, a span outside the run) is one line, exit 2, before any point runs; a span is every
+/// point's metrics window; the motor-driven punch press measures its last turn.
+#[test]
+fn the_metrics_window_is_chosen_on_run_and_sweep() {
+    let d = tempfile::tempdir().unwrap();
+    let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+    std::fs::copy(
+        cases.join("examples/pendulum.json"),
+        d.path().join("pendulum.json"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.path().join("sw.json"),
+        r#"{"case": "pendulum.json", "set": {"bodies[0].mass": [1.0, 2.0]}}"#,
+    )
+    .unwrap();
+    for (i, (w, expect)) in [
+        ("last-revolution", "last-revolution needs a crank"),
+        ("0.1:99", "is not inside the run"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = format!("bad{i}");
+        let o = lash(
+            &["sweep", "sw.json", "--window", w, "--out", &out],
+            d.path(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{w}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{w}: {err}");
+        assert!(
+            err.contains("--window") && err.contains(expect),
+            "{w}: {err}"
+        );
+        assert!(!d.path().join(&out).exists(), "{w}: ran something");
+    }
+    ok(
+        &["sweep", "sw.json", "--window", "0.1:0.5", "--out", "s"],
+        d.path(),
+    );
+    let mut n = 0;
+    for e in std::fs::read_dir(d.path().join("s")).unwrap() {
+        let p = e.unwrap().path().join("summary.json");
+        if p.exists() {
+            let w = json(&p)["metrics_window"].clone();
+            let (a, b) = (w[0].as_f64().unwrap(), w[1].as_f64().unwrap());
+            assert!((a - 0.1).abs() < 1e-12 && b == 0.5, "{w}");
+            n += 1;
+        }
+    }
+    assert_eq!(n, 2);
+    let o = lash(
+        &["run", "pendulum.json", "--window", "0.5:0.1", "--out", "r"],
+        d.path(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("T0 must be before T1"));
+    // The punch press: its crank pivot is the crank; the last turn ends at t_end and is about
+    // 60/152 s long (152 rpm mean, README), the crank turned about 2.03 times.
+    let punch = cases.join("press/punch_motor_150rpm_c0.1.json");
+    ok(&["run", punch.to_str().unwrap(), "--out", "p"], d.path());
+    let s = json(&d.path().join("p/summary.json"));
+    let (a, b) = (
+        s["metrics_window"][0].as_f64().unwrap(),
+        s["metrics_window"][1].as_f64().unwrap(),
+    );
+    assert_eq!(b, 0.8);
+    assert!((b - a - 60.0 / 152.0).abs() < 0.01, "{a}");
+    let turns = s["crank_revolutions"].as_f64().unwrap();
+    assert!((turns - 2.03).abs() < 0.01, "{turns}");
+    let csv = std::fs::read_to_string(d.path().join("p/trajectory.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let k = header.iter().position(|h| *h == "crank_angle").unwrap();
+    let last = csv.lines().last().unwrap().split(',').nth(k).unwrap();
+    let phi: f64 = last.parse().unwrap();
+    assert!((phi / std::f64::consts::TAU - turns).abs() < 1e-9, "{phi}");
+}
+
+/// `lash compare --window`: a span is where the errors are measured (compare.json's window),
+/// `all` the whole run; a span outside the run and any window on a test problem (compared at
+/// its end point) are usage errors, exit 2, before the reference runs.
+#[test]
+fn compare_measures_errors_on_the_chosen_window() {
+    let d = tempfile::tempdir().unwrap();
+    let case = short_press(d.path(), "ideal_rev", PressJoint::Ideal, 0.0, 0.4);
+    let c = case.to_str().unwrap();
+    for (w, dir, start, end, label) in [
+        ("0.1:0.3", "s", 0.1, 0.3, "chosen span 0.1:0.3"),
+        ("all", "a", 0.0, 0.4, "whole run"),
+    ] {
+        ok(
+            &[
+                "compare",
+                c,
+                "--steps",
+                "1e-3",
+                "--tolerances",
+                "1e-6",
+                "--window",
+                w,
+                "--out",
+                dir,
+            ],
+            d.path(),
+        );
+        let j = json(&d.path().join(dir).join("compare.json"));
+        assert_eq!(j["window"]["start"].as_f64().unwrap(), start, "{w}");
+        assert_eq!(j["window"]["end"].as_f64().unwrap(), end, "{w}");
+        assert_eq!(j["window"]["label"], label);
+        let md = std::fs::read_to_string(d.path().join(dir).join("compare.md")).unwrap();
+        assert!(md.contains(&format!("[{start}, {end}]")), "{md}");
+    }
+    for (args, needle) in [
+        (
+            vec!["compare", c, "--window", "0.5:0.9"],
+            "is not inside the run",
+        ),
+        (
+            vec!["compare", "testset:hires", "--window", "all"],
+            "applies to scene cases",
+        ),
+    ] {
+        let o = lash(&args, d.path());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{err}");
+    }
 }
 
 /// The dry four-bar of cases/examples cut to `t_end` s, as `dir/fourbar.json`.

@@ -159,6 +159,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         slider: Some("slider".into()),
         crank_driver: Some("crank_driver".into()),
         clearance_joint: None,
+        crank: None,
     };
     match joint {
         PressJoint::Ideal => {

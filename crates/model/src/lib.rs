@@ -112,5 +112,5 @@ pub use outputs::{
     PowerTerms, PrismaticOutput,
 };
 pub use projection::{CoordinateChange, ProjectionReport};
-pub use roles::Roles;
+pub use roles::{MetricsWindow, Roles};
 pub use scene::{AugmentedLagrangianParams, FormulationName, Scene, SceneError, GROUND};

@@ -189,8 +189,11 @@ pub struct PrismaticOutput {
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outputs {
-    /// Angle φ (rad) of the body turned by the `crank_driver` role (not wrapped).
+    /// Crank angle (rad, not wrapped): φ of the `crank` role's body, φ_a − φ_b of its
+    /// revolute joint, or φ of the body the `crank_driver` role turns.
     pub crank_angle: Option<f64>,
+    /// Rate of the crank angle (rad/s).
+    pub crank_rate: Option<f64>,
     /// x of the `slider` role's centre of mass (m).
     pub slider_x: Option<f64>,
     /// ẋ of the slider (m/s).
@@ -429,7 +432,13 @@ impl Mechanism {
         let f = self.full_evaluation(t, y);
         let (sc, forces, roles) = (&f.sc, self.forces(), self.roles());
         let nan_if = |v: f64| if f.ok { v } else { f64::NAN };
-        let crank_angle = roles.crank_body.map(|k| sc.pose[k][2]);
+        let side = |k: Option<usize>, v: &[[f64; 3]]| k.map_or(0.0, |k| v[k][2]);
+        let crank_angle = roles
+            .crank
+            .map(|[a, b]| side(a, &sc.pose) - side(b, &sc.pose));
+        let crank_rate = roles
+            .crank
+            .map(|[a, b]| side(a, &sc.vel) - side(b, &sc.vel));
         let (slider_x, slider_v, slider_a) = match roles.slider {
             Some(k) => (
                 Some(sc.pose[k][0]),
@@ -525,6 +534,7 @@ impl Mechanism {
             elements,
             prismatic,
             crank_angle,
+            crank_rate,
             slider_x,
             slider_v,
             slider_a,

@@ -305,6 +305,58 @@ fn other_documented_checks() {
     );
 }
 
+/// `roles.crank`: a body or a revolute joint, the same crank as `crank_driver` when both are
+/// given; the crank angle of the body, of its pivot (φ_crank − φ_ground) and of the driver
+/// agree exactly.
+#[test]
+fn the_crank_role_names_a_body_or_a_revolute_joint() {
+    for (name, expect) in [
+        (
+            "slide",
+            "roles.crank: joint 'slide' is a translational joint, not a revolute joint (a crank is a body or a revolute joint)",
+        ),
+        ("nope", "roles.crank: no body or revolute joint named 'nope'"),
+        (
+            "ground",
+            "roles.crank: the ground does not turn: name a body or a revolute joint",
+        ),
+        (
+            "rod",
+            "roles.crank: 'rod' is not the body 'crank' that the crank driver 'crank_driver' turns against the ground (crank_driver implies the crank; give one)",
+        ),
+    ] {
+        let mut v = dry_press_value();
+        v["roles"]["crank"] = json!(name);
+        assert_eq!(err(&v).to_string(), expect);
+    }
+    let driven = build(&dry_press_value()).unwrap();
+    let y = driven.initial_state();
+    let phi = driven.outputs(0.1, &y).crank_angle.unwrap();
+    for crank in ["crank", "crank_pivot"] {
+        let mut v = dry_press_value();
+        v["roles"]["crank"] = json!(crank);
+        let m = build(&v).unwrap();
+        assert_eq!(m.outputs(0.1, &y).crank_angle, Some(phi), "{crank}");
+        // Without the driver role the body alone is the crank (and the run needs t_end).
+        v["roles"].as_object_mut().unwrap().remove("crank_driver");
+        v.as_object_mut().unwrap().remove("revolutions");
+        v["t_end"] = json!(0.8);
+        let m = build(&v).unwrap();
+        assert_eq!(m.outputs(0.1, &y).crank_angle, Some(phi), "{crank}");
+        assert_eq!(m.roles().crank_driver, None);
+    }
+    // The crank against the rod: φ_crank − φ_rod.
+    let mut v = dry_press_value();
+    v["roles"].as_object_mut().unwrap().remove("crank_driver");
+    v.as_object_mut().unwrap().remove("revolutions");
+    v["t_end"] = json!(0.8);
+    v["roles"]["crank"] = json!("crank_rod");
+    let o = build(&v).unwrap().outputs(0.1, &y);
+    let (k, r) = (o.bodies[0].theta, o.bodies[1].theta);
+    assert_eq!(o.crank_angle, Some(k - r));
+    assert_eq!(o.crank_rate, Some(o.bodies[0].omega - o.bodies[1].omega));
+}
+
 #[test]
 fn output_lookups_name_the_unknown_body_or_point() {
     let m = build(&dry_press_value()).unwrap();

@@ -135,20 +135,6 @@ pub enum SolveError {
         /// Which law, which part of the model, the value and the limit.
         reason: String,
     },
-    /// The model could not be evaluated at a state the integration reached: a singular
-    /// configuration (for a mechanism: the constraint Jacobian Φ_q lost rank, so the
-    /// accelerations and the Lagrange multipliers have no unique value; docs/model.md §1).
-    /// The same kind whether the right-hand side or an evaluation between step ends met it.
-    #[error("singular configuration at t = {t:e}: {reason}")]
-    SingularConfiguration {
-        /// Where it was met: a step's end, or a time inside an accepted step (the dense
-        /// output there).
-        t: f64,
-        /// The state there.
-        y: Vec<f64>,
-        /// Where it was met, and what is singular.
-        reason: String,
-    },
 }
 
 impl SolveError {
@@ -164,7 +150,6 @@ impl SolveError {
             | SolveError::Interrupted { t, .. }
             | SolveError::EventNan { t, .. }
             | SolveError::LawOutOfRange { t, .. }
-            | SolveError::SingularConfiguration { t, .. }
             | SolveError::StateRejected { t, .. } => Some(*t),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }
@@ -182,7 +167,6 @@ impl SolveError {
             | SolveError::Interrupted { y, .. }
             | SolveError::EventNan { y, .. }
             | SolveError::LawOutOfRange { y, .. }
-            | SolveError::SingularConfiguration { y, .. }
             | SolveError::StateRejected { y, .. } => Some(y),
             SolveError::InvalidOptions(_) | SolveError::OutOfMemory(_) => None,
         }

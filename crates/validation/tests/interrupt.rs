@@ -216,6 +216,7 @@ fn sweep_abandons_the_point_in_flight(dir: &Path) {
     let root = dir.join("sweep");
     let options = SweepRunOptions {
         max_wall_time: None,
+        window: None,
         file,
         jobs: Some(1),
         shard: None,

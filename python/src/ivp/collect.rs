@@ -159,9 +159,6 @@ fn failure_message(e: &SolveError, t: f64, dir: f64, name: &dyn Fn(usize) -> Str
         SolveError::LawOutOfRange { reason, .. } => {
             format!("model outside the range of its laws at t = {t:e}: {reason}")
         }
-        SolveError::SingularConfiguration { reason, .. } => {
-            format!("singular configuration at t = {t:e}: {reason}")
-        }
         SolveError::StateRejected { reason, .. } => reason.clone(),
     }
 }

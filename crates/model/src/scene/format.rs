@@ -389,7 +389,9 @@ impl Default for Baumgarte {
 /// Names of the parts the press metrics need (docs/outputs.md, "Scene roles").
 ///
 /// ```text
-/// slider: BODY,  crank_driver: driver JOINT,  clearance_joint: clearance JOINT
+/// slider: BODY,  crank_driver: driver JOINT,  clearance_joint: clearance JOINT,
+/// crank: BODY | revolute JOINT  (the crank angle φ_body, or φ_a − φ_b of the joint;
+///        crank_driver implies crank = the driver's body)
 /// ```
 #[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -403,6 +405,10 @@ pub struct RoleNames {
     /// The clearance joint the metrics report.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clearance_joint: Option<String>,
+    /// The crank whose angle counts revolutions: a body, or a revolute joint (its relative
+    /// angle φ_a − φ_b). Default: the crank driver's body, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crank: Option<String>,
 }
 
 tagged_kinds! {

@@ -183,6 +183,9 @@ impl Scene {
                 }
             }
         }
+        if let Some(c) = &self.roles.crank {
+            self.check_crank_role(c)?;
+        }
         if let Some(d) = &self.roles.clearance_joint {
             match self.joint_index(d).map(|k| &self.joints[k]) {
                 Some(JointSpec::Clearance(_)) => {}
@@ -200,6 +203,52 @@ impl Scene {
                         "roles.clearance_joint",
                         format!("no joint named '{d}'"),
                     ))
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `roles.crank` names a body or a revolute joint that is not ground on both sides, and
+    /// agrees with `roles.crank_driver` (whose body is the crank) when both are given.
+    fn check_crank_role(&self, c: &str) -> Result<(), SceneError> {
+        const P: &str = "roles.crank";
+        let bodies = if c == crate::scene::GROUND {
+            return Err(invalid(
+                P,
+                "the ground does not turn: name a body or a revolute joint",
+            ));
+        } else if self.body_index(c).is_some() {
+            [c.to_string(), crate::scene::GROUND.to_string()]
+        } else {
+            match self.joint_index(c).map(|k| &self.joints[k]) {
+                Some(JointSpec::Revolute(r)) => [r.a.body.clone(), r.b.body.clone()],
+                Some(other) => {
+                    return Err(invalid(
+                        P,
+                        format!(
+                            "joint '{c}' is a {} joint, not a revolute joint (a crank is a body \
+                             or a revolute joint)",
+                            other.type_name()
+                        ),
+                    ))
+                }
+                None => return Err(invalid(P, format!("no body or revolute joint named '{c}'"))),
+            }
+        };
+        if let Some(d) = &self.roles.crank_driver {
+            if let Some(JointSpec::Driver(dr)) = self.joint_index(d).map(|k| &self.joints[k]) {
+                let agrees = (bodies[0] == dr.body && bodies[1] == crate::scene::GROUND)
+                    || (bodies[1] == dr.body && bodies[0] == crate::scene::GROUND);
+                if !agrees {
+                    return Err(invalid(
+                        P,
+                        format!(
+                            "'{c}' is not the body '{}' that the crank driver '{d}' turns \
+                             against the ground (crank_driver implies the crank; give one)",
+                            dr.body
+                        ),
+                    ));
                 }
             }
         }
@@ -230,10 +279,17 @@ impl Scene {
             (None, Some(n)) => {
                 C::positive("revolutions", n, "revolutions")?;
                 let Some(d) = &self.roles.crank_driver else {
-                    return Err(invalid(
-                        "revolutions",
-                        "needs roles.crank_driver (the driver whose revolutions are counted)",
-                    ));
+                    let why = match &self.roles.crank {
+                        Some(c) => format!(
+                            "needs roles.crank_driver (a driver at a prescribed speed): the \
+                             time the crank '{c}' takes to turn is not known before the run; \
+                             give t_end"
+                        ),
+                        None => "needs roles.crank_driver (the driver whose revolutions are \
+                                 counted)"
+                            .to_string(),
+                    };
+                    return Err(invalid("revolutions", why));
                 };
                 let k = self.joint_index(d).expect("checked above");
                 if let JointSpec::Driver(dr) = &self.joints[k] {

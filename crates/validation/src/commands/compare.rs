@@ -19,7 +19,8 @@ use crate::run::prepare::Prepared;
 use crate::store::io::Written;
 
 /// The RK4 steps of a comparison: the given ones, else the largest stable step h and h/2,
-/// h/4 (`halvings` + 1 steps) for scene cases with a crank, none for test problems.
+/// h/4 (`halvings` + 1 steps) for every scene case (compare::Rk4Search), none for test
+/// problems.
 fn rk4_steps(
     p: &Prepared,
     given: &Option<Vec<f64>>,
@@ -29,14 +30,12 @@ fn rk4_steps(
 ) -> Result<Vec<f64>, Error> {
     match given {
         Some(v) => Ok(v.clone()),
-        None if p.period().is_some() => {
+        None if p.scene().is_some() => {
             let clock = Instant::now();
             let h = compare::stable_rk4_step(p, t_end)?;
+            let rule = compare::Rk4Search::of(p, t_end)?.rule;
             progress.finished(
-                &format!(
-                    "{}: largest stable RK4 step {h:e} s (1-2-5 series from T/400, ‖Φ‖ < 1e-8)",
-                    p.case.name
-                ),
+                &format!("{}: largest stable RK4 step {h:e} s ({rule})", p.case.name),
                 clock.elapsed().as_secs_f64(),
             );
             Ok((0..=halvings).map(|k| h / f64::from(1u32 << k)).collect())
@@ -58,14 +57,16 @@ pub struct CompareOptions {
     pub case: String,
     /// Relative tolerances of the adaptive methods; None = `COMPARE_TOLERANCES`.
     pub tolerances: Option<Vec<f64>>,
-    /// RK4 steps, s; None = the largest stable step h of the case and h/2, h/4 (scene cases
-    /// with a crank), none for test problems.
+    /// RK4 steps, s; None = the largest stable step h of the case and h/2, h/4 (every scene
+    /// case), none for test problems.
     pub steps: Option<Vec<f64>>,
     /// End time override, s (scene cases only).
     pub t_end: Option<f64>,
     /// Wall-clock budget of each integration (the reference and every row), s; a row over it
     /// fails with "budget exhausted". None = no budget.
     pub max_wall_time: Option<f64>,
+    /// Where errors are measured (`--window`); None = the case's own rule (docs/outputs.md).
+    pub window: Option<lash_model::MetricsWindow>,
     /// Output directory; None = `out/compare/CASE`.
     pub out: Option<PathBuf>,
 }
@@ -84,7 +85,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         .tolerances
         .clone()
         .unwrap_or_else(|| COMPARE_TOLERANCES.to_vec());
-    let derive = o.steps.is_none() && p.period().is_some();
+    let derive = o.steps.is_none() && p.scene().is_some();
     let n_steps = o
         .steps
         .as_ref()
@@ -95,7 +96,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         1 + usize::from(derive) + n_steps + adaptive * tolerances.len(),
     );
     let clock = Instant::now();
-    let reference = Reference::compute(&p, o.t_end)?;
+    let reference = Reference::compute_in(&p, o.t_end, o.window)?;
     progress.finished(
         &format!("{}: reference {}", p.case.name, reference.how),
         clock.elapsed().as_secs_f64(),
@@ -209,13 +210,13 @@ pub fn work_precision(
         .clone()
         .unwrap_or_else(|| default_out("work-precision", &p.case.name));
     let wants_rk4 = plan.methods.iter().any(|m| m.is_fixed_step());
-    if wants_rk4 && plan.steps.is_none() && p.period().is_none() {
+    if wants_rk4 && plan.steps.is_none() && p.scene().is_none() {
         if o.methods.is_some() {
             return Err(OptionError::new("steps")
                 .text("rk4 needs ")
                 .name("steps")
                 .text(format!(
-                    " for {} (no crank period to derive them from)",
+                    " for {} (a test problem: no scene to derive them from)",
                     p.case.name
                 ))
                 .into());
@@ -228,7 +229,7 @@ pub fn work_precision(
         );
     }
     let ctl_method = plan.controller_method();
-    let derive = wants_rk4 && plan.steps.is_none() && p.period().is_some();
+    let derive = wants_rk4 && plan.steps.is_none() && p.scene().is_some();
     let n_steps = match &plan.steps {
         Some(v) => v.len(),
         None if derive => 4,

@@ -62,6 +62,9 @@ pub struct RunOptions {
     /// The formulation over the scene's own (scene cases only; docs/model.md §12): a
     /// [`lash_model::FormulationName`], which front ends take from the model crate.
     pub formulation: Option<lash_model::FormulationName>,
+    /// The metrics window (`--window`); None: the crank's last revolution, else the whole run
+    /// (docs/outputs.md, "The metrics window").
+    pub window: Option<lash_model::MetricsWindow>,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -192,18 +195,25 @@ fn run_request(
                     .text(", not both")
                     .into());
             }
-            Some(crate::run::steady::settle(&prepared, &opts, u)?)
+            Some(crate::run::steady::settle_until(&prepared, &opts, u)?)
         }
         None => None,
     };
     let mut req = RunRequest::new(opts);
-    req.t_end = match (&settled, &prepared.info) {
-        (Some(s), Some(i)) => i.period.map(|t| i.t_start + t * s.revolutions as f64),
-        _ => o.t_end,
+    req.t_end = match &settled {
+        Some((_, t_end)) => Some(*t_end),
+        None => o.t_end,
     };
+    let settled = settled.map(|(s, _)| s);
     req.samples_per_revolution = o.samples_per_revolution;
     req.output_every = o.output_every;
     req.deadline = deadline;
+    req.window = o.window;
+    if prepared.info.is_some() {
+        // A window the run cannot have is an option error before anything runs.
+        let (t0, t_end) = prepared.t_span(req.t_end)?;
+        prepared.window_plan(req.window, t0, t_end)?;
+    }
     Ok((prepared, req, settled))
 }
 

@@ -38,6 +38,9 @@ pub struct SweepRunOptions {
     /// Wall-clock budget of each point's integration, s; a point over it is a solver failure
     /// ("budget exhausted", recorded like any other). None = no budget.
     pub max_wall_time: Option<f64>,
+    /// The metrics window of every point (`--window`); None: the crank's last revolution,
+    /// else the whole run (docs/outputs.md, "The metrics window").
+    pub window: Option<lash_model::MetricsWindow>,
 }
 
 /// What a sweep did.
@@ -72,7 +75,7 @@ pub fn sweep_points(
     text: Option<&[u8]>,
 ) -> Result<Vec<(SweepPoint, Option<String>)>, Error> {
     let (spec, points) = expand(o, text)?;
-    let base = checked_base(&spec, &points, None)?;
+    let base = checked_base(&spec, &points, None, o.window)?;
     points
         .into_iter()
         .map(|p| {
@@ -105,8 +108,13 @@ pub fn sweep_run(
 ) -> Result<SweepOutcome, Error> {
     let (spec, points) = expand(o, text)?;
     let Some(index) = only else {
-        let base = checked_base(&spec, &points, o.max_wall_time)?;
-        return run_points(o, &points, |p, dir| sweep_point(&base, p, dir), progress);
+        let base = checked_base(&spec, &points, o.max_wall_time, o.window)?;
+        return run_points(
+            o,
+            &points,
+            |p, dir| sweep_point(&base, p, dir, o.window),
+            progress,
+        );
     };
     let Some(point) = points.get(index) else {
         return Err(Error::Usage(format!(
@@ -114,7 +122,12 @@ pub fn sweep_run(
             points.len()
         )));
     };
-    let base = checked_base(&spec, std::slice::from_ref(point), o.max_wall_time)?;
+    let base = checked_base(
+        &spec,
+        std::slice::from_ref(point),
+        o.max_wall_time,
+        o.window,
+    )?;
     let one = SweepRunOptions {
         jobs: Some(1),
         shard: Some(Shard {
@@ -123,7 +136,12 @@ pub fn sweep_run(
         }),
         ..o.clone()
     };
-    run_points(&one, &points, |p, dir| sweep_point(&base, p, dir), progress)
+    run_points(
+        &one,
+        &points,
+        |p, dir| sweep_point(&base, p, dir, o.window),
+        progress,
+    )
 }
 
 /// The sweep (from its file, or `text` read as it) and its grid: the one expansion of
@@ -143,6 +161,7 @@ fn checked_base(
     spec: &SweepSpec,
     points: &[SweepPoint],
     max_wall_time: Option<f64>,
+    window: Option<lash_model::MetricsWindow>,
 ) -> Result<Prepared, Error> {
     let mut base = Prepared::load(spec.case.clone())?;
     base.max_wall_time = max_wall_time;
@@ -162,6 +181,19 @@ fn checked_base(
             })),
             e => e,
         })?;
+    }
+    // A window a point's run cannot have is an option error before anything runs.
+    if window.is_some() {
+        for p in points {
+            let checked = match point_scene(&base, p)? {
+                Some(s) => Prepared::with_scene(base.case.clone(), s)?,
+                None => base.clone(),
+            };
+            if checked.info.is_some() {
+                let (t0, t_end) = checked.t_span(None)?;
+                checked.window_plan(window, t0, t_end)?;
+            }
+        }
     }
     Ok(base)
 }
@@ -254,6 +286,7 @@ pub(crate) fn sweep_point(
     base: &Prepared,
     point: &SweepPoint,
     dir: &Path,
+    window: Option<lash_model::MetricsWindow>,
 ) -> Result<PointResult, Error> {
     let pp = &point.params;
     let prepared = match point_scene(base, point)? {
@@ -273,6 +306,7 @@ pub(crate) fn sweep_point(
     };
     let mut req = RunRequest::new(prepared.options(&choice)?);
     req.trajectory_points = Some(0);
+    req.window = window;
     let r = simulate(&prepared, &req)?;
     r.summary.write(dir)?;
     let v = serde_json::to_value(&r.summary)

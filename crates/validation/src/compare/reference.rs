@@ -25,6 +25,7 @@
 
 use std::path::{Path, PathBuf};
 
+use lash_model::MetricsWindow;
 use lash_solver::{ControllerKind, Method};
 
 use crate::compare::workprecision::fmt_num;
@@ -34,6 +35,7 @@ use crate::run::plan::{uniform_grid, RunRequest};
 use crate::run::prepare::Prepared;
 use crate::run::result::RunResult;
 use crate::run::simulate::simulate;
+use crate::run::window::WindowPlan;
 use crate::store::io;
 
 /// Relative tolerance of reference runs.
@@ -93,6 +95,51 @@ impl ErrorWindow {
                 label: "whole run".into(),
             },
         }
+    }
+
+    /// The window `--window` chooses for a scene case run to `t_end` (crate::run::window):
+    /// last-revolution (a driven crank's last period; for a crank a motor turns, its last
+    /// turn as a run at the case's own options finds it), all, or T0:T1. Option errors: a
+    /// test problem (compared at its end point), a window the run cannot have.
+    pub(crate) fn chosen(
+        p: &Prepared,
+        t_end: Option<f64>,
+        choice: MetricsWindow,
+    ) -> Result<ErrorWindow, Error> {
+        if p.info.is_none() {
+            return Err(OptionError::leading(
+                "window",
+                format!(
+                    " applies to scene cases; {} is a test problem, compared at its end point",
+                    p.case.name
+                ),
+            )
+            .into());
+        }
+        let (t0, te) = p.t_span(t_end)?;
+        let label = match choice {
+            MetricsWindow::LastRevolution => "last revolution".to_string(),
+            MetricsWindow::All => "whole run".to_string(),
+            MetricsWindow::Span { from, to } => {
+                format!("chosen span {}:{}", fmt_num(from), fmt_num(to))
+            }
+        };
+        let (start, end) = match p.window_plan(Some(choice), t0, te)? {
+            WindowPlan::Known(w) => (w.t_end - w.period, w.t_end),
+            WindowPlan::CrankTurn => {
+                let mut req = RunRequest::new(p.default_options());
+                req.t_end = t_end;
+                req.window = Some(choice);
+                req.trajectory_points = Some(0);
+                req.energy = false;
+                let r = simulate(p, &req)?;
+                let [a, b] = r.summary.metrics_window.ok_or_else(|| {
+                    Error::Internal("compare: the crank's last turn was not found".into())
+                })?;
+                (a, b)
+            }
+        };
+        Ok(ErrorWindow { start, end, label })
     }
 
     /// The 2001 sampling times (none for test problems, which compare end points).
@@ -264,8 +311,21 @@ impl Reference {
     /// Computes the reference of a case run to `t_end` (None: the scene's end time). A
     /// failure of the reference itself is the solver's error (exit 3).
     pub(crate) fn compute(p: &Prepared, t_end: Option<f64>) -> Result<Reference, Error> {
+        Reference::compute_in(p, t_end, None)
+    }
+
+    /// [`Reference::compute`] with the error window chosen (`--window`; None: the case's own
+    /// rule, [`ErrorWindow::of`]; [`ErrorWindow::chosen`]).
+    pub(crate) fn compute_in(
+        p: &Prepared,
+        t_end: Option<f64>,
+        choice: Option<MetricsWindow>,
+    ) -> Result<Reference, Error> {
         let (t0, te) = p.t_span(t_end)?;
-        let window = ErrorWindow::of(p, t0, te);
+        let window = match choice {
+            None => ErrorWindow::of(p, t0, te),
+            Some(c) => ErrorWindow::chosen(p, t_end, c)?,
+        };
         if p.info.is_none() {
             return Ok(Reference {
                 how: "the published reference solution at t_end (IVP Test Set 2.4, \
@@ -486,17 +546,79 @@ fn timed(f: impl Fn() -> Result<RunResult, Error>) -> Result<RunResult, Error> {
     Ok(best)
 }
 
-/// The largest RK4 step of the 1–2–5 series not above T/400 (1 ms at 150 rpm) whose run to
-/// `t_end` succeeds with ‖Φ‖ < 1e-8 on a 401-point trajectory: how the paper would choose a
-/// fixed step ("the largest step that runs stably"). Tries down to T·1e-7.
+/// Where the search for a stable RK4 step starts and what it accepts ([`stable_rk4_step`]).
+///
+/// ```text
+/// driven crank (T = 2π/|ω|)      top T/400 (1 ms at 150 rpm), floor T·1e-7, ‖Φ‖ < 1e-8
+/// any other scene                 τ = 2π/|φ̇(t_0)| for a crank turning at the start, else the
+///                                 run's span t_end − t_0; top τ/400, floor τ·1e-7,
+///                                 ‖Φ‖ ≤ L/100 (the constraint check of `lash stiffness`)
+/// ```
+///
+/// Source: docs/outputs.md ("`lash compare CASE`").
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Rk4Search {
+    /// Largest step tried, s.
+    pub top: f64,
+    /// Smallest step tried, s.
+    pub floor: f64,
+    /// Largest ‖Φ‖ on the 401-point trajectory of a stable run, m.
+    pub phi_max: f64,
+    /// The rule in words (the progress line).
+    pub rule: String,
+}
+
+impl Rk4Search {
+    /// The search of a scene case over [t_0, t_end]; an option error for a test problem.
+    pub(crate) fn of(p: &Prepared, t_end: Option<f64>) -> Result<Rk4Search, Error> {
+        if let Some(period) = p.period() {
+            return Ok(Rk4Search {
+                top: period / 400.0,
+                floor: period * 1e-7,
+                phi_max: STABLE_PHI_MAX,
+                rule: "1-2-5 series from T/400, ‖Φ‖ < 1e-8".into(),
+            });
+        }
+        let Some(scene) = p.scene() else {
+            return Err(OptionError::new("steps")
+                .text("RK4 needs ")
+                .name("steps")
+                .text(" for a test problem")
+                .into());
+        };
+        let mech = lash_model::Mechanism::from_scene(scene)
+            .map_err(|e| crate::run::prepare::scene_error(&p.case, e))?;
+        let (t0, t1) = p.t_span(t_end)?;
+        let rate = mech
+            .outputs(t0, &mech.initial_state())
+            .crank_rate
+            .map_or(0.0, f64::abs);
+        let (tau, what) = if rate > 0.0 && rate.is_finite() {
+            (std::f64::consts::TAU / rate, "the crank's starting turn τ")
+        } else {
+            (t1 - t0, "the run's span τ")
+        };
+        let phi_max = crate::diagnostics::stiffness::sample::phi_max(p);
+        Ok(Rk4Search {
+            top: tau / 400.0,
+            floor: tau * 1e-7,
+            phi_max,
+            rule: format!(
+                "1-2-5 series from τ/400, τ = {tau:.4e} s {what}; the run's own stability check \
+                 and ‖Φ‖ ≤ {phi_max:.1e} m"
+            ),
+        })
+    }
+}
+
+/// The largest RK4 step of the 1–2–5 series not above the search's top ([`Rk4Search`]) whose
+/// run to `t_end` succeeds — the run's own stability check (RK4's stage check confirmed by the
+/// eigenvalues, the check `lash stiffness` measures with) does not stop it and no state is
+/// non-finite — with ‖Φ‖ below the search's bound on a 401-point trajectory: how the paper
+/// would choose a fixed step ("the largest step that runs stably"). Tries down to the floor.
 pub(crate) fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, Error> {
-    let period = p.period().ok_or_else(|| {
-        OptionError::new("steps")
-            .text("RK4 needs ")
-            .name("steps")
-            .text(" for a case without a crank")
-    })?;
-    let top = period / 400.0;
+    let search = Rk4Search::of(p, t_end)?;
+    let top = search.top;
     let mut exp = top.log10().floor() as i32;
     loop {
         for k in STEP_SERIES {
@@ -505,7 +627,7 @@ pub(crate) fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, E
             if h > top * (1.0 + 1e-12) {
                 continue;
             }
-            if h < period * 1e-7 {
+            if h < search.floor {
                 return Err(Error::Input(format!(
                     "no stable RK4 step down to {h:e} s for {}",
                     p.case.name
@@ -523,7 +645,7 @@ pub(crate) fn stable_rk4_step(p: &Prepared, t_end: Option<f64>) -> Result<f64, E
                         .unwrap_or_default()
                         .iter()
                         .fold(0.0, |m: f64, v| m.max(*v));
-                    if phi < STABLE_PHI_MAX {
+                    if phi < search.phi_max {
                         return Ok(h);
                     }
                 }
@@ -622,6 +744,54 @@ impl Comparison {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hub on a pivot at its centre (I = 0.5 kg m²), turned by a motor T_s(1 − ω/ω_0) from
+    /// 10 rad/s (ω_0 = 4π rad/s), and a free wheel on it through a clearance joint (no
+    /// gravity: no contact). The hub's speed relaxes at the rate λ = T_s/(I ω_0); with
+    /// T_s = 58 327 N m, λ = 9 283 1/s and RK4's limit on the real axis is 2.7853/λ = 3.0e-4 s.
+    /// The search starts at τ/400, τ = 2π/10 s (1.57 ms), so the series runs 1e-3 and 5e-4
+    /// (|R(−hλ)| = 219 and 9.8: the run fails) and accepts 2e-4 (|R| = 0.30).
+    #[test]
+    fn rk4_step_of_a_scene_without_a_driven_crank() {
+        let d = tempfile::tempdir().unwrap();
+        let scene = serde_json::json!({
+            "bodies": [
+                {"name": "hub", "mass": 1.0, "inertia": 0.5, "points": {"O": [0.0, 0.0]},
+                 "position": [0.0, 0.0], "angle": 0.0},
+                {"name": "wheel", "mass": 1.0, "inertia": 0.1, "points": {"C": [0.0, 0.0]},
+                 "position": [0.0, 0.0], "angle": 0.0}
+            ],
+            "joints": [
+                {"type": "revolute", "name": "hub_pivot", "a": {"body": "hub", "point": "O"},
+                 "b": {"body": "ground", "at": [0.0, 0.0]}, "initial_rate": 10.0},
+                {"type": "clearance", "name": "hub_wheel",
+                 "bearing": {"body": "hub", "point": "O", "radius": 0.05},
+                 "journal": {"body": "wheel", "point": "C", "radius": 0.0499},
+                 "normal": {"law": "impact", "k": 2.34e10, "c_max": 100.0, "d_max": 1e-5}}
+            ],
+            "forces": [
+                {"type": "motor", "name": "motor", "rotor": "hub", "stall_torque": 58327.0,
+                 "no_load_rpm": 120.0}
+            ],
+            "gravity": [0.0, 0.0],
+            "t_start": 0.0,
+            "t_end": 0.05,
+            "roles": {"clearance_joint": "hub_wheel", "crank": "hub_pivot"}
+        });
+        let path = d.path().join("stiff_motor.json");
+        std::fs::write(&path, scene.to_string()).unwrap();
+        let p = Prepared::load_spec(path.to_str().unwrap(), None).unwrap();
+        let search = Rk4Search::of(&p, None).unwrap();
+        let tau = std::f64::consts::TAU / 10.0;
+        assert!((search.top - tau / 400.0).abs() < 1e-15, "{search:?}");
+        // L/100 with c = 0.05 − 0.0499 m (to the rounding of the difference).
+        assert!((search.phi_max / 1e-6 - 1.0).abs() < 1e-12, "{search:?}");
+        assert_eq!(stable_rk4_step(&p, None).unwrap(), 2e-4);
+        // A test problem has no scene to search: an option error naming the steps.
+        let t = Prepared::load_spec("testset:hires", None).unwrap();
+        let e = Rk4Search::of(&t, None).unwrap_err();
+        assert_eq!(e.kind(), crate::ErrorKind::BadInput, "{e}");
+    }
 
     fn s(t: f64, a: f64, ex: f64) -> Sample {
         Sample {

@@ -3,6 +3,8 @@
 //!
 //! ```text
 //! section       T = 2π/|ω_crank| (= 60/rpm); y_j = y(t_0 + jT), j = 0..N (N = --revolutions);
+//!               a crank that a motor turns (roles.crank, no driver): y_j = y(t_j) at its full
+//!               turns φ(t_j) = φ_0 ± 2πj (crate::run::turns), T = (t_N − t_0)/N the mean turn;
 //!               (e_x/c, e_y/c, |e|/c) of the clearance-joint role at each y_j
 //! Lyapunov      two trajectories (two Mechanism instances: contact hooks keep state), the
 //!               second displaced by d0 = --perturbation along u, u_i ∝ 1/w_i;
@@ -39,7 +41,7 @@ use lash_model::Mechanism;
 use lash_solver::analysis::lyapunov::{
     largest_lyapunov_pair, stroboscopic_map, LyapunovEstimate, LyapunovOptions,
 };
-use lash_solver::SolverOptions;
+use lash_solver::{Problem, SolverOptions, StepOutcome};
 
 use crate::diagnostics::stiffness::sample::analysis_error;
 use crate::error::{Error, OptionError};
@@ -51,6 +53,7 @@ use crate::report::trajectory::fmt_num;
 use crate::run::prepare::scene_error;
 use crate::run::prepare::{Model, Prepared, DEFAULT_LENGTH_SCALE};
 use crate::run::sample::Sampler;
+use crate::run::turns::{Turns, HORIZON_FACTOR};
 use crate::store::io;
 
 /// Default number of revolutions.
@@ -67,6 +70,11 @@ pub(crate) const DEFAULT_RENORM_PER_REV: usize = 10;
 /// d0, and from rtol 1e-10 down it does not; 1e-11 adds a margin at a moderate cost
 /// (measurements: BENCHMARKS.md, "Chaos diagnostics").
 pub(crate) const DEFAULT_RTOL: f64 = 1e-11;
+/// What poincare.md adds for a crank that a motor turns.
+const AUTONOMOUS_NOTE: &str = "\nThe crank is turned by a motor, not driven: the section is \
+    taken where the crank angle completes each full turn, T is the mean turn, and the \
+    mechanism is autonomous. A shift along the orbit neither grows nor decays, so a stable \
+    periodic response has λ = 0 (inconclusive), not λ < 0; λ > 3σ still reads chaotic.\n";
 /// Standard errors by which the estimate must clear zero for a verdict.
 pub(crate) const SIGMAS: f64 = 3.0;
 
@@ -275,23 +283,27 @@ pub(crate) fn options(p: &Prepared, choice: &SolverChoice) -> Result<SolverOptio
     p.options(&f)
 }
 
-/// The crank period, or a usage error naming the case.
-fn period_of(p: &Prepared) -> Result<f64, Error> {
-    match (&p.model, p.period()) {
-        (Model::Mechanism(_), Some(t)) => Ok(t),
+/// A usage error naming the case unless it is a mechanism with a crank (a driven one, or
+/// `roles.crank` that a motor turns).
+fn check_crank(p: &Prepared) -> Result<(), Error> {
+    let has_crank = p.period().is_some() || p.info.as_ref().is_some_and(|i| i.has_crank);
+    match (&p.model, has_crank) {
+        (Model::Mechanism(_), true) => Ok(()),
         _ => Err(Error::Usage(format!(
-            "poincare needs a scene with a crank driver (roles.crank_driver, ω ≠ 0); {} has none",
+            "poincare needs a scene with a crank (roles.crank_driver with ω ≠ 0, or roles.crank \
+             that a motor turns); {} has none",
             p.case.name
         ))),
     }
 }
 
-/// Norm weights of the Lyapunov separation: 1/L on positions, 1/(L ω) on velocities.
-pub(crate) fn weights(p: &Prepared) -> Vec<f64> {
+/// Norm weights of the Lyapunov separation: 1/L on positions, 1/(L ω) on velocities, with
+/// ω = 2π/T (T the crank period: the driver's, or the mean turn of the section).
+pub(crate) fn weights(p: &Prepared, period: f64) -> Vec<f64> {
     let (l, w, n) = match &p.info {
         Some(i) => (
             i.clearance_min.unwrap_or(DEFAULT_LENGTH_SCALE),
-            i.crank_speed.unwrap_or(1.0),
+            i.crank_speed.unwrap_or(std::f64::consts::TAU / period),
             i.dim,
         ),
         None => (DEFAULT_LENGTH_SCALE, 1.0, p.dim()),
@@ -323,21 +335,26 @@ pub(crate) struct LyapunovRun {
 }
 
 /// The largest Lyapunov exponent of a mechanism case with a crank (module doc), with solver
-/// options `opts` for both trajectories.
+/// options `opts` for both trajectories; `period` is the driven crank's period, or for a crank
+/// that a motor turns the mean turn of its section ([`Section::period`]).
 pub(crate) fn lyapunov(
     p: &Prepared,
     opts: &SolverOptions,
     s: &PoincareSettings,
+    period: f64,
 ) -> Result<LyapunovRun, Error> {
     s.validate()?;
-    let period = period_of(p)?;
+    check_crank(p)?;
+    if !(period.is_finite() && period > 0.0) {
+        return Err(Error::Internal(format!("lyapunov: period {period}")));
+    }
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
     let build = || Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e));
     let (a, b) = (build()?, build()?);
     let y0 = a.initial_state();
-    let w = weights(p);
+    let w = weights(p, period);
     let dir: Vec<f64> = w.iter().map(|w| 1.0 / w).collect();
     let dt = period / s.renorm_per_rev as f64;
     let lo = LyapunovOptions {
@@ -405,20 +422,25 @@ pub(crate) struct Section {
     pub points: Vec<SectionPoint>,
     /// Wall time of the run, s.
     pub wall_time_s: f64,
+    /// The crank period T: the driver's, or for a crank that a motor turns the mean turn
+    /// (t_N − t_0)/N.
+    pub period: f64,
+    /// Whether the points are taken on the crank angle (a crank that is not driven) rather
+    /// than every period.
+    pub on_angle: bool,
 }
 
-/// The settings and the case's roles checked (usage errors naming what is missing); the crank
-/// period.
-fn check(p: &Prepared, s: &PoincareSettings) -> Result<f64, Error> {
+/// The settings and the case's roles checked (usage errors naming what is missing).
+fn check(p: &Prepared, s: &PoincareSettings) -> Result<(), Error> {
     s.validate()?;
-    let period = period_of(p)?;
+    check_crank(p)?;
     if p.info.as_ref().and_then(|i| i.joint.as_ref()).is_none() {
         return Err(Error::Usage(format!(
             "poincare needs a clearance joint role (roles.clearance_joint); {} has none",
             p.case.name
         )));
     }
-    Ok(period)
+    Ok(())
 }
 
 /// The stroboscopic section of the clearance-joint role's e/c (one run with `opts`).
@@ -427,7 +449,7 @@ pub(crate) fn section(
     opts: &SolverOptions,
     s: &PoincareSettings,
 ) -> Result<Section, Error> {
-    let period = check(p, s)?;
+    check(p, s)?;
     let Some(scene) = p.scene() else {
         return Err(Error::Internal("poincare: no scene".into()));
     };
@@ -435,6 +457,17 @@ pub(crate) fn section(
     let sampler = Sampler::new(&mech, scene);
     let y0 = mech.initial_state();
     let clock = Instant::now();
+    let Some(period) = p.period() else {
+        let (t, states) = turn_sections(p, &mech, &y0, opts, s.revolutions)?;
+        let wall = clock.elapsed().as_secs_f64();
+        let points = section_points(&sampler, &t, &states, y0.len())?;
+        return Ok(Section {
+            period: (t[s.revolutions] - t[0]) / s.revolutions as f64,
+            points,
+            wall_time_s: wall,
+            on_angle: true,
+        });
+    };
     let map = stroboscopic_map(
         &mech,
         mech.t_start(),
@@ -447,10 +480,76 @@ pub(crate) fn section(
     )
     .map_err(analysis_error)?;
     let wall = clock.elapsed().as_secs_f64();
-    let n = map.dim;
-    let mut points = Vec::with_capacity(map.t.len());
-    for (j, &t) in map.t.iter().enumerate() {
-        let smp = sampler.sample(t, &map.states[j * n..(j + 1) * n]);
+    Ok(Section {
+        points: section_points(&sampler, &map.t, &map.states, map.dim)?,
+        wall_time_s: wall,
+        period,
+        on_angle: false,
+    })
+}
+
+/// The times and states (row-major) of the crank's turns k = 0..=N (crate::run::turns) of a
+/// crank that is not driven: one integration up to the turns' horizon, stopped after turn N.
+fn turn_sections(
+    p: &Prepared,
+    mech: &Mechanism,
+    y0: &[f64],
+    opts: &SolverOptions,
+    turns: usize,
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let t0 = mech.t_start();
+    let mut tr =
+        Turns::new(mech, t0, y0).ok_or_else(|| Error::Internal("poincare: no crank".into()))?;
+    let t_cap = tr
+        .horizon(t0, turns)
+        .ok_or_else(|| Turns::at_rest("poincare", &p.case.name))?;
+    let problem = Problem::new(mech, opts)?;
+    let mut it = problem.integrator(t0, t_cap, y0)?;
+    let n = y0.len();
+    let (mut t, mut states) = (vec![t0], y0.to_vec());
+    let mut probe = vec![0.0; n];
+    let mut buf = vec![0.0; n];
+    while t.len() <= turns {
+        let outcome = it.step()?;
+        let mut from = it.t_prev();
+        while t.len() <= turns {
+            let mut phi = |s: f64| {
+                it.interpolate(s, &mut probe);
+                mech.outputs(s, &probe).crank_angle.unwrap_or(f64::NAN)
+            };
+            let Some(tk) = tr.crossing(t.len(), from, it.t(), &mut phi) else {
+                break;
+            };
+            it.interpolate(tk, &mut buf);
+            t.push(tk);
+            states.extend_from_slice(&buf);
+            from = tk;
+        }
+        if t.len() <= turns && (matches!(outcome, StepOutcome::StopTime { .. }) || it.is_finished())
+        {
+            return Err(Error::Input(format!(
+                "poincare: the crank of {} turned {} of {turns} times before t = {} s ({} \
+                 times as long as {turns} turns at its starting speed): too slow for a section",
+                p.case.name,
+                t.len() - 1,
+                fmt_num(it.t()),
+                HORIZON_FACTOR
+            )));
+        }
+    }
+    Ok((t, states))
+}
+
+/// The section points of the states at times `ts` (row-major, `n` entries each).
+fn section_points(
+    sampler: &Sampler,
+    ts: &[f64],
+    states: &[f64],
+    n: usize,
+) -> Result<Vec<SectionPoint>, Error> {
+    let mut points = Vec::with_capacity(ts.len());
+    for (j, &t) in ts.iter().enumerate() {
+        let smp = sampler.sample(t, &states[j * n..(j + 1) * n]);
         let (Some(ex), Some(ey), Some(eps)) = (smp.ex_over_c, smp.ey_over_c, smp.eps) else {
             return Err(Error::Internal("poincare: no clearance sample".into()));
         };
@@ -468,10 +567,7 @@ pub(crate) fn section(
             eps,
         });
     }
-    Ok(Section {
-        points,
-        wall_time_s: wall,
-    })
+    Ok(points)
 }
 
 /// poincare.json.
@@ -486,8 +582,12 @@ pub(crate) struct PoincareReport {
     /// Case and settings (the keys of summary.json).
     #[serde(flatten)]
     pub run: RunHeader,
-    /// Crank period T, s.
+    /// Crank period T, s: the driver's, or for a crank that a motor turns the mean turn
+    /// (t_N − t_0)/N of the section.
     pub period: f64,
+    /// Whether the section is taken at the crank's full turns (a crank that a motor turns)
+    /// rather than every period T.
+    pub section_on_crank_angle: bool,
     /// Revolutions N.
     pub revolutions: usize,
     /// d0, clearances.
@@ -551,7 +651,7 @@ pub(crate) fn analyse(
         clock.elapsed().as_secs_f64(),
     );
     let clock = Instant::now();
-    let ly = lyapunov(p, opts, s)?;
+    let ly = lyapunov(p, opts, s, section.period)?;
     progress.finished(
         &format!(
             "Lyapunov exponent: two trajectories, {} renormalisations per revolution",
@@ -569,6 +669,7 @@ pub(crate) fn analyse(
     let report = PoincareReport {
         run: RunHeader::new(&p.case, opts),
         period: ly.period,
+        section_on_crank_angle: section.on_angle,
         revolutions: s.revolutions,
         perturbation: s.perturbation,
         renorm_interval: ly.renorm_interval,
@@ -672,11 +773,16 @@ impl PoincareResult {
         let _ = writeln!(
             s,
             "{} revolutions of T = {:.6} s with {} ({}). Section: e/c of the clearance joint \
-             once per revolution (poincare.png, poincare_eps.png).\n",
+             once per revolution{} (poincare.png, poincare_eps.png).\n",
             r.revolutions,
             r.period,
             r.run.method.name(),
-            r.run.accuracy()
+            r.run.accuracy(),
+            if r.section_on_crank_angle {
+                ", at each full turn of the crank angle (T the mean turn)"
+            } else {
+                ""
+            }
         );
         s.push_str("| quantity | value |\n|---|---|\n");
         let _ = writeln!(
@@ -723,6 +829,9 @@ impl PoincareResult {
             "\n{}.\n\nNorm of the separation: {}.",
             l.sentence, r.norm
         );
+        if r.section_on_crank_angle {
+            s.push_str(AUTONOMOUS_NOTE);
+        }
         s
     }
 

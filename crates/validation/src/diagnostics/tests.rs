@@ -111,7 +111,7 @@ fn lyapunov_exponent_of_the_baumgarte_modes() {
         perturbation: 1e-4,
         renorm_per_rev: 10,
     };
-    let r = poincare::lyapunov(&p, &opts, &s).unwrap();
+    let r = poincare::lyapunov(&p, &opts, &s, p.period().unwrap()).unwrap();
     let l = &r.summary;
     eprintln!(
         "Baumgarte: λ = {:.6} ± {:?}, running {:.4}",

@@ -123,6 +123,14 @@ pub struct Summary {
     /// whether the section settled, its change per revolution (`run::steady`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub until_periodic: Option<Settled>,
+    /// The metrics window [from, to], s, of a mechanism case (`--window`;
+    /// docs/outputs.md, "The metrics window"); absent for built-in test problems.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics_window: Option<[f64; 2]>,
+    /// Turns of the crank over the run, (φ(t_end) − φ(t_start))/2π, signed (counter-clockwise
+    /// positive); absent without a crank (`roles.crank`, `roles.crank_driver`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crank_revolutions: Option<f64>,
     /// The formulation of a mechanism case (`lagrange_baumgarte`, `augmented_lagrangian`;
     /// docs/model.md §12); absent for built-in test problems.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -168,6 +176,8 @@ impl Summary {
             final_state: None,
             reference_error: None,
             until_periodic: None,
+            metrics_window: None,
+            crank_revolutions: None,
             formulation: None,
             formulation_stats: None,
             law_range: None,

@@ -154,10 +154,6 @@ impl FailureError {
                 f.reason = Some(reason.clone());
                 "law_out_of_range"
             }
-            SolveError::SingularConfiguration { reason, .. } => {
-                f.reason = Some(reason.clone());
-                "singular_configuration"
-            }
             SolveError::StateRejected { kind, reason, .. } => {
                 f.reason = Some(reason.clone());
                 kind

@@ -9,6 +9,7 @@ use lash_model::{LawRangeMonitor, Mechanism, Outputs, Scene};
 use lash_solver::{EventHit, OdeSystem, Solution, SolveError};
 
 use crate::error::Error;
+use crate::report::metrics::Window;
 use crate::report::metrics::{
     self, DenseExtremes, EnergyTotals, EventQuantity, EventRecord, JointExtremes, Peaks, Sample,
     GRID_POINTS,
@@ -31,6 +32,7 @@ use crate::run::quadrature::{Powers, Quadrature};
 use crate::run::result::RunResult;
 use crate::run::sample::fixed_values;
 use crate::run::sample::Sampler;
+use crate::run::window::{whole, CrankTrack, WindowPlan};
 
 /// Output lists of a mechanism run, merged in time order.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -55,12 +57,15 @@ struct MechanismRun<'a> {
     idx: [usize; 3],
     t0: f64,
     t_end: f64,
+    // The crank at the step ends (the first pass of a motor-driven crank's last revolution).
+    track: Option<CrankTrack>,
     window: Vec<Sample>,
     extra: Vec<Sample>,
     extra_states: Solution,
     rows: usize,
-    // Extrema over the window's dense output.
+    // Extrema over the window's dense output [w0, w1].
     w0: f64,
+    w1: f64,
     peaks: Peaks,
     cv_max: f64,
     has_slider: bool,
@@ -208,11 +213,17 @@ impl Observer for MechanismRun<'_> {
             };
             q.step(ta, tb, cut, &mut node)?;
         }
-        if tb >= self.w0 {
-            let a = ta.max(self.w0);
+        if let Some(tr) = self.track.as_mut() {
+            let o = self.mech.outputs(tb, y);
+            if let (Some(phi), Some(rate)) = (o.crank_angle, o.crank_rate) {
+                tr.push(tb, phi, rate);
+            }
+        }
+        if tb >= self.w0 && ta <= self.w1 {
+            let (a, b) = (ta.max(self.w0), tb.min(self.w1));
             let mut peaks = std::mem::replace(&mut self.peaks, Peaks::new(0));
             let mut buf = std::mem::take(&mut self.ybuf);
-            let r = peaks.step(a, tb, &mut |t| {
+            let r = peaks.step(a, b, &mut |t| {
                 dense(t, &mut buf);
                 let o = self.mech.outputs(t, &buf);
                 self.quantities(&o)
@@ -256,12 +267,15 @@ pub(crate) fn singular_or(
     (ta, tb): (f64, f64),
 ) -> Error {
     if y.iter().all(|v| v.is_finite()) && !mech.acceleration_solvable(t, y) {
-        Error::Solver(SolveError::SingularConfiguration {
+        // The same kind and wording as the formulations' check of accepted states
+        // (`Mechanism::check_accepted`, docs/model.md §12.1): one error for one situation.
+        Error::Solver(SolveError::StateRejected {
             t,
             y: y.to_vec(),
+            kind: "singular_configuration",
             reason: format!(
-                "the constraint Jacobian lost rank at t = {t:e} inside the accepted step \
-                 [{ta:e}, {tb:e}] s (the accelerations and the constraint forces have no \
+                "singular configuration at t = {t:e} (rank of Φ_q drops inside the accepted \
+                 step [{ta:e}, {tb:e}] s: the accelerations and the constraint forces have no \
                  unique value there; the step jumped over the configuration)"
             ),
         })
@@ -287,6 +301,50 @@ pub(crate) fn simulate_mechanism(
     t_end: f64,
     sink: &mut dyn TrajectorySink,
 ) -> Result<RunResult, Error> {
+    let window = match p.window_plan(req.window, t0, t_end)? {
+        WindowPlan::Known(w) => w,
+        WindowPlan::CrankTurn => {
+            // The first pass (crate::run::window): the same run without energy, trajectory,
+            // extra times or events; only the crank's last turn is kept.
+            let mut probe = req.clone();
+            probe.trajectory_points = Some(0);
+            probe.output_every = None;
+            probe.extra_times.clear();
+            probe.energy = false;
+            probe.keep_events = false;
+            let mut none = Columns::new();
+            let (_, track) = pass(
+                p,
+                scene,
+                &probe,
+                t0,
+                t_end,
+                (whole(t0, t_end), true),
+                &mut none,
+            )?;
+            match track.and_then(|t| t.last_turn_start()) {
+                Some(ts) => Window {
+                    t_end,
+                    period: t_end - ts,
+                },
+                None => whole(t0, t_end),
+            }
+        }
+    };
+    Ok(pass(p, scene, req, t0, t_end, (window, false), sink)?.0)
+}
+
+/// One pass of a mechanism run over [t0, t_end] with its metrics window; `track`: keep the
+/// crank's last turn (crate::run::window).
+fn pass(
+    p: &Prepared,
+    scene: &Scene,
+    req: &RunRequest,
+    t0: f64,
+    t_end: f64,
+    (window, track): (Window, bool),
+    sink: &mut dyn TrajectorySink,
+) -> Result<(RunResult, Option<CrankTrack>), Error> {
     let info = p
         .info
         .as_ref()
@@ -298,7 +356,6 @@ pub(crate) fn simulate_mechanism(
     mech.reset_formulation_stats();
     let opts = &options_within(req, t0, &mech.initial_state())?;
     let sampler = Sampler::new(&mech, scene);
-    let window = p.metrics_window(t0, t_end);
     let header = Header::new(sampler.fixed_present(), mech.output_columns())?;
     sink.start(&header)?;
     let y0 = mech.initial_state();
@@ -352,11 +409,13 @@ pub(crate) fn simulate_mechanism(
         idx: [0; 3],
         t0,
         t_end,
+        track: track.then(CrankTrack::default),
         window: Vec::with_capacity(GRID_POINTS),
         extra: Vec::with_capacity(req.extra_times.len()),
         extra_states: empty_solution(n),
         rows: 0,
         w0,
+        w1: window.t_end,
         peaks: Peaks::new(n_q),
         cv_max: 0.0,
         has_slider,
@@ -372,6 +431,12 @@ pub(crate) fn simulate_mechanism(
     obs.laws
         .observe(&mech, t0, &y0)
         .map_err(|v| law_out_of_range(t0, &y0, &v))?;
+    let start = mech.outputs(t0, &y0);
+    if let (Some(tr), Some(phi), Some(rate)) =
+        (obs.track.as_mut(), start.crank_angle, start.crank_rate)
+    {
+        tr.push(t0, phi, rate);
+    }
     let d = drive(&mech, t0, t_end, &y0, opts, &mut obs)?;
     // The window's grid samples are samples of the extrema too.
     let mut dense = obs.dense_extremes(scene);
@@ -385,11 +450,12 @@ pub(crate) fn simulate_mechanism(
     extra_states.stats = d.stats;
     extra_states.t_final = d.t_final;
     extra_states.y_final = d.y_final.clone();
+    let end = mech.outputs(d.t_final, &d.y_final);
     let energy = match obs.quad.as_mut() {
         Some(q) => {
             q.finish();
-            let o0 = mech.outputs(t0, &y0);
-            let o1 = mech.outputs(d.t_final, &d.y_final);
+            let o0 = &start;
+            let o1 = &end;
             Some(EnergyTotals {
                 driver_work: q.total[0],
                 kinetic_change: o1.kinetic_energy - o0.kinetic_energy,
@@ -420,7 +486,12 @@ pub(crate) fn simulate_mechanism(
     summary.formulation = Some(mech.formulation_name().to_string());
     summary.formulation_stats = mech.formulation_stats();
     summary.law_range = (!obs.laws.is_empty()).then(|| obs.laws.records().to_vec());
-    Ok(RunResult {
+    summary.metrics_window = Some([window.t_end - window.period, window.t_end]);
+    summary.crank_revolutions = start
+        .crank_angle
+        .zip(end.crank_angle)
+        .map(|(a, b)| (b - a) / std::f64::consts::TAU);
+    let result = RunResult {
         summary,
         window: std::mem::take(&mut obs.window),
         trajectory: Columns::new(),
@@ -430,5 +501,6 @@ pub(crate) fn simulate_mechanism(
         events: std::mem::take(&mut obs.events),
         event_names: info.event_names.clone(),
         ideal: obs.sampler.ideal,
-    })
+    };
+    Ok((result, obs.track.take()))
 }

@@ -14,6 +14,8 @@ pub(crate) mod sample;
 pub(crate) mod simulate;
 pub(crate) mod steady;
 pub(crate) mod testset;
+pub(crate) mod turns;
+pub(crate) mod window;
 
 #[cfg(test)]
 mod tests;

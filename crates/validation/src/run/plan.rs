@@ -27,6 +27,7 @@ use crate::error::{Error, OptionError};
 use crate::report::metrics::GRID_POINTS;
 use crate::report::trajectory::fmt_num;
 use crate::run::prepare::Prepared;
+use lash_model::MetricsWindow;
 
 /// Longest trajectory a run writes, rows: beyond it a run is refused (exit 2) and asks to be
 /// thinned. At the press's 47 columns a row is about 1 KB of CSV, so this is about 100 GB, a
@@ -78,6 +79,9 @@ pub(crate) struct RunRequest {
     /// start): the integration gets what is left, and a run past it fails with
     /// `BudgetExhausted`.
     pub deadline: Option<Instant>,
+    /// The metrics window (`--window`); None: the last revolution of a crank, else the whole
+    /// run (crate::run::window).
+    pub window: Option<MetricsWindow>,
 }
 
 impl RunRequest {
@@ -94,6 +98,7 @@ impl RunRequest {
             energy: true,
             keep_events: true,
             deadline: None,
+            window: None,
         }
     }
 }

@@ -64,8 +64,10 @@ use lash_solver::{testset, Atol, Method, OdeSystem, SolverOptions};
 
 use crate::error::{Error, OptionError};
 use crate::options::SolverChoice;
-use crate::report::metrics::{JointInfo, Window};
+use crate::report::metrics::JointInfo;
 use crate::run::case::{Case, CaseSource};
+use crate::run::window::WindowPlan;
+use lash_model::MetricsWindow;
 
 /// Default method of a mechanism run.
 pub(crate) const DEFAULT_METHOD: Method = Method::Bdf;
@@ -119,6 +121,8 @@ pub(crate) struct MechanismInfo {
     pub period: Option<f64>,
     /// |ω| of the crank driver, rad/s.
     pub crank_speed: Option<f64>,
+    /// Whether the scene has a crank (`roles.crank`, or `roles.crank_driver`).
+    pub has_crank: bool,
     /// Start time, s.
     pub t_start: f64,
     /// End time of the scene, s.
@@ -409,12 +413,16 @@ impl Prepared {
         self.info.as_ref().and_then(|i| i.period)
     }
 
-    /// The metrics window of a run ending at `t_end`: the last revolution, or the whole run
-    /// when it is shorter or there is no crank driver.
-    pub(crate) fn metrics_window(&self, t_start: f64, t_end: f64) -> Window {
-        let span = t_end - t_start;
-        let period = self.period().map_or(span, |t| t.min(span));
-        Window { t_end, period }
+    /// How a run over [t_start, t_end] finds its metrics window (`choice`, None: the
+    /// default; crate::run::window): the last revolution of a crank, else the whole run.
+    pub(crate) fn window_plan(
+        &self,
+        choice: Option<MetricsWindow>,
+        t_start: f64,
+        t_end: f64,
+    ) -> Result<WindowPlan, Error> {
+        let has_crank = self.info.as_ref().is_some_and(|i| i.has_crank);
+        crate::run::window::plan(choice, t_start, t_end, self.period(), has_crank)
     }
 }
 
@@ -456,6 +464,7 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
     MechanismInfo {
         period: w.map(|w| 2.0 * std::f64::consts::PI / w),
         crank_speed: w,
+        has_crank: roles.crank.is_some(),
         t_start: mech.t_start(),
         t_end: mech.t_end(),
         clearance_min: c_min,

@@ -220,11 +220,20 @@ fn a_singular_configuration_inside_a_step_is_a_typed_error() {
     assert!(!mech.acceleration_solvable(0.0, &y));
     let bug = || Error::Internal("energy: power terms [NaN, 0, 0, 0] not finite".into());
     match crate::run::mechanism::singular_or(&mech, bug(), 0.25, &y, (0.0, 0.5)) {
-        Error::Solver(SolveError::SingularConfiguration { t, y: ys, reason }) => {
-            assert_eq!((t, ys), (0.25, y.clone()));
+        Error::Solver(SolveError::StateRejected {
+            t,
+            y: ys,
+            kind,
+            reason,
+        }) => {
+            assert_eq!((t, ys, kind), (0.25, y.clone(), "singular_configuration"));
+            assert!(
+                reason.starts_with("singular configuration at t = "),
+                "{reason}"
+            );
             assert!(reason.contains("inside the accepted step"), "{reason}");
         }
-        other => panic!("expected SingularConfiguration, got {other}"),
+        other => panic!("expected a singular configuration, got {other}"),
     }
     // At a state the model can evaluate, a non-finite output stays what it is: a bug.
     let e = crate::run::mechanism::singular_or(&mech, bug(), 0.0, &y0, (0.0, 0.5));

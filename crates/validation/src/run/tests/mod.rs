@@ -4,3 +4,4 @@
 mod edges;
 mod simulate;
 mod steady;
+mod window;

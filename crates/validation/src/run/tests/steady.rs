@@ -7,7 +7,10 @@ use crate::commands::run::{self as commands, RunOptions};
 use crate::error::ErrorKind;
 use crate::progress::NoProgress;
 use crate::run::prepare::Prepared;
-use crate::run::steady::{settle, UntilPeriodic};
+use std::f64::consts::PI;
+
+use crate::diagnostics::poincare::{self, PoincareSettings};
+use crate::run::steady::{settle, settle_until, UntilPeriodic};
 
 fn press(stem: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -121,4 +124,82 @@ fn until_periodic_refuses_what_it_cannot_do() {
     )
     .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadInput, "{e}");
+}
+
+/// A motor turns a hub (I = 0.5 kg m², pivoted at its centre) from ω_s = 10 rad/s towards
+/// its no-load speed ω_0 = 4π rad/s (120 rpm; stall torque T_s = 5 N m); a wheel sits on
+/// the hub through a clearance joint, centred, with no gravity: no contact, so nothing loads
+/// the hub and e/c stays 0. The crank angle is then φ(t) = ω_0 t + (ω_s − ω_0) τ (1 − e^{−t/τ}),
+/// τ = I ω_0/T_s, and turn k is the root of φ(t_k) = 2πk. The section of `--until-periodic`
+/// does not move (change 0 < tol) and the run ends at turn 2; `lash poincare`'s section is
+/// taken at turns 0..3, each at φ = 2πk, with T the mean turn t_3/3. Tolerance: the default
+/// rtol 1e-8 on φ ≈ 4π is an error of about 1e-7 rad, 1e-8 s at ω ≈ 11 rad/s; 1e-7 s and
+/// 1e-6 rad leave a margin of 10.
+#[test]
+fn a_motor_driven_crank_is_sectioned_at_its_turns() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = serde_json::json!({
+        "bodies": [
+            {"name": "hub", "mass": 1.0, "inertia": 0.5, "points": {"O": [0.0, 0.0]},
+             "position": [0.0, 0.0], "angle": 0.0},
+            {"name": "wheel", "mass": 1.0, "inertia": 0.1, "points": {"C": [0.0, 0.0]},
+             "position": [0.0, 0.0], "angle": 0.0}
+        ],
+        "joints": [
+            {"type": "revolute", "name": "hub_pivot", "a": {"body": "hub", "point": "O"},
+             "b": {"body": "ground", "at": [0.0, 0.0]}, "initial_rate": 10.0},
+            {"type": "clearance", "name": "hub_wheel",
+             "bearing": {"body": "hub", "point": "O", "radius": 0.05},
+             "journal": {"body": "wheel", "point": "C", "radius": 0.0499},
+             "normal": {"law": "impact", "k": 2.34e10, "c_max": 100.0, "d_max": 1e-5}}
+        ],
+        "forces": [
+            {"type": "motor", "name": "motor", "rotor": "hub", "stall_torque": 5.0,
+             "no_load_rpm": 120.0}
+        ],
+        "gravity": [0.0, 0.0],
+        "t_start": 0.0,
+        "t_end": 1.0,
+        "roles": {"clearance_joint": "hub_wheel", "crank": "hub_pivot"}
+    });
+    let path = d.path().join("flywheel.json");
+    std::fs::write(&path, scene.to_string()).unwrap();
+    let p = Prepared::load_spec(path.to_str().unwrap(), None).unwrap();
+    let opts = p.default_options();
+    let (w0, ws, tau) = (4.0 * PI, 10.0, 0.5 * 4.0 * PI / 5.0);
+    let phi = |t: f64| w0 * t + (ws - w0) * tau * (1.0 - (-t / tau).exp());
+    let turn = |k: f64| {
+        let mut t = 2.0 * PI * k / ws;
+        for _ in 0..50 {
+            t -= (phi(t) - 2.0 * PI * k) / (w0 + (ws - w0) * (-t / tau).exp());
+        }
+        t
+    };
+    let (s, t_end) = settle_until(&p, &opts, &UntilPeriodic::new(1e-2)).unwrap();
+    assert!(s.settled && s.revolutions == 2, "{s:?}");
+    assert_eq!(s.section_changes, vec![0.0, 0.0]);
+    assert!((t_end - turn(2.0)).abs() < 1e-7, "{t_end} vs {}", turn(2.0));
+    let settings = PoincareSettings {
+        revolutions: 3,
+        ..Default::default()
+    };
+    let sec = poincare::section(&p, &opts, &settings).unwrap();
+    assert_eq!(sec.points.len(), 4);
+    for (k, q) in sec.points.iter().enumerate() {
+        let tk = turn(k as f64);
+        assert!((q.t - tk).abs() < 1e-7, "turn {k}: {} vs {tk}", q.t);
+        let a = q.crank_angle.unwrap();
+        assert!((a - 2.0 * PI * k as f64).abs() < 1e-6, "turn {k}: φ = {a}");
+        assert_eq!((q.ex_over_c, q.eps), (0.0, 0.0));
+    }
+    assert!((sec.period - turn(3.0) / 3.0).abs() < 1e-7);
+    assert!(sec.on_angle);
+    // A crank at rest has no time scale for a turn: a usage error naming the start.
+    let mut rest = scene.clone();
+    rest["joints"][0]["initial_rate"] = serde_json::json!(0.0);
+    std::fs::write(&path, rest.to_string()).unwrap();
+    let p = Prepared::load_spec(path.to_str().unwrap(), None).unwrap();
+    let e = settle(&p, &opts, &UntilPeriodic::new(1e-2)).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::BadInput, "{e}");
+    assert!(e.to_string().contains("at rest"), "{e}");
 }

@@ -69,7 +69,6 @@ impl FailureKind {
             | SolveError::Interrupted { .. }
             | SolveError::EventNan { .. }
             | SolveError::LawOutOfRange { .. }
-            | SolveError::SingularConfiguration { .. }
             | SolveError::OutOfMemory(_) => return None,
         })
     }
