@@ -449,7 +449,7 @@ fn sweep_runs_real_points_resumes_and_merges() {
     let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 5);
-    let head: Vec<&str> = lines[0].split(',').collect();
+    let head: Vec<&str> = csv_row(lines[0]);
     let col = |n: &str| {
         head.iter()
             .position(|h| *h == n)
@@ -458,7 +458,7 @@ fn sweep_runs_real_points_resumes_and_merges() {
     let (eps, speed, visc) = (col("metrics.eps_max"), col("speed_rpm"), col("viscosity"));
     assert_eq!(head.iter().filter(|h| **h == "case").count(), 1);
     for l in &lines[1..] {
-        let c: Vec<&str> = l.split(',').collect();
+        let c: Vec<&str> = csv_row(l);
         let e: f64 = c[eps].parse().unwrap();
         assert!(e > 0.0 && e < 1.0, "{l}");
         assert!(["120.0", "150.0"].contains(&c[speed]) && ["0.2", "0.4"].contains(&c[visc]));
@@ -467,7 +467,7 @@ fn sweep_runs_real_points_resumes_and_merges() {
     let eps_of = |s: &str, v: &str| -> f64 {
         lines[1..]
             .iter()
-            .map(|l| l.split(',').collect::<Vec<_>>())
+            .map(|l| csv_row(l))
             .find(|c| c[speed] == s && c[visc] == v)
             .unwrap()[eps]
             .parse()
@@ -576,18 +576,14 @@ fn sweep_sets_any_scene_field_by_path() {
     assert!(err.contains("4 points to run"), "{err}");
     ok(&["merge", "s"], d.path());
     let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
-    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let head: Vec<&str> = csv_row(csv.lines().next().unwrap());
     let col = |n: &str| head.iter().position(|c| *c == n).expect(n);
     let (mu, mass) = (
         col("joints[coupler_rocker].friction.mu"),
         col("bodies[2].mass"),
     );
     let fric = col("metrics.energy.dissipated_friction");
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| csv_row(l)).collect();
     assert_eq!(rows.len(), 4);
     let mut seen: Vec<(String, String)> = rows
         .iter()
@@ -847,18 +843,14 @@ fn sampled_sweep_runs_merges_and_resumes() {
     assert!(err.contains("4 points to run"), "{err}");
     ok(&["merge", "s"], d.path());
     let csv = std::fs::read_to_string(d.path().join("s/merged.csv")).unwrap();
-    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let head: Vec<&str> = csv_row(csv.lines().next().unwrap());
     let col = |n: &str| head.iter().position(|c| *c == n).expect(n);
     let (r, mu, fric) = (
         col("joints[coupler_rocker].journal.radius"),
         col("joints[coupler_rocker].friction.mu"),
         col("metrics.energy.dissipated_friction"),
     );
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| csv_row(l)).collect();
     assert_eq!(rows.len(), 4);
     let mut strata: Vec<usize> = rows
         .iter()
@@ -989,4 +981,22 @@ fn bad_sample_sweeps_fail_before_any_point_runs() {
         assert!(err.contains(expect), "{body}: {err}");
         assert!(!d.path().join(&out).exists(), "{body}: ran something");
     }
+}
+
+/// The fields of one line of merged.csv (RFC 4180: a field in double quotes may hold commas,
+/// as the JSON of `law_range` and `metrics_window` do); quoted fields keep their quotes.
+fn csv_row(line: &str) -> Vec<&str> {
+    let (mut fields, mut start, mut quoted) = (Vec::new(), 0, false);
+    for (i, c) in line.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => {
+                fields.push(&line[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    fields.push(&line[start..]);
+    fields
 }
