@@ -232,7 +232,7 @@ fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, Error> {
     // No fsync: other processes read the claim through the page cache (or, on NFS, after the
     // close-to-open flush of `drop`), and a claim need not outlive a crash of its machine (its
     // holder is dead then: the claim is stale). An fsync here cost 3.5 ms a point, a quarter
-    // of a short sweep point's wall time (BENCHMARKS.md, "Sweeps").
+    // of a short sweep point's wall time (BENCHMARKS.md, "Sweeps: parallel efficiency").
     let written = f.write_all(bytes);
     drop(f);
     if let Err(e) = written {
