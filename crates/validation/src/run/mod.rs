@@ -18,4 +18,4 @@ pub(crate) mod turns;
 pub(crate) mod window;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -138,30 +138,7 @@ fn until_periodic_refuses_what_it_cannot_do() {
 #[test]
 fn a_motor_driven_crank_is_sectioned_at_its_turns() {
     let d = tempfile::tempdir().unwrap();
-    let scene = serde_json::json!({
-        "bodies": [
-            {"name": "hub", "mass": 1.0, "inertia": 0.5, "points": {"O": [0.0, 0.0]},
-             "position": [0.0, 0.0], "angle": 0.0},
-            {"name": "wheel", "mass": 1.0, "inertia": 0.1, "points": {"C": [0.0, 0.0]},
-             "position": [0.0, 0.0], "angle": 0.0}
-        ],
-        "joints": [
-            {"type": "revolute", "name": "hub_pivot", "a": {"body": "hub", "point": "O"},
-             "b": {"body": "ground", "at": [0.0, 0.0]}, "initial_rate": 10.0},
-            {"type": "clearance", "name": "hub_wheel",
-             "bearing": {"body": "hub", "point": "O", "radius": 0.05},
-             "journal": {"body": "wheel", "point": "C", "radius": 0.0499},
-             "normal": {"law": "impact", "k": 2.34e10, "c_max": 100.0, "d_max": 1e-5}}
-        ],
-        "forces": [
-            {"type": "motor", "name": "motor", "rotor": "hub", "stall_torque": 5.0,
-             "no_load_rpm": 120.0}
-        ],
-        "gravity": [0.0, 0.0],
-        "t_start": 0.0,
-        "t_end": 1.0,
-        "roles": {"clearance_joint": "hub_wheel", "crank": "hub_pivot"}
-    });
+    let scene = super::motor_hub_scene(5.0, 1.0);
     let path = d.path().join("flywheel.json");
     std::fs::write(&path, scene.to_string()).unwrap();
     let p = Prepared::load_spec(path.to_str().unwrap(), None).unwrap();
