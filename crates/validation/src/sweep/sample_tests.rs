@@ -353,29 +353,17 @@ fn a_sampled_sweep_resumes_like_a_grid() {
     assert_eq!(pts[4].id, p.id());
 
     let root = d.path().join("out");
+    let k = 5;
+    let r = super::tests::run_stopped_after(&pts, &root, k, |p, dir| {
+        fake(p, dir, &AtomicUsize::new(0))
+    });
+    assert_eq!((r.ok, r.failed.len()), (k, 12 - k));
+    let reloaded = spec(d.path(), file).unwrap().points().unwrap();
+    let calls = AtomicUsize::new(0);
     let opts = SweepOptions {
         jobs: Some(1),
         ..Default::default()
     };
-    let calls = AtomicUsize::new(0);
-    let k = 5;
-    let r = run_sweep(
-        &pts,
-        &root,
-        &opts,
-        |p, dir| {
-            if calls.fetch_add(1, Ordering::SeqCst) >= k {
-                Err(Error::Internal("killed".into()))
-            } else {
-                fake(p, dir, &AtomicUsize::new(0))
-            }
-        },
-        &NoProgress,
-    )
-    .unwrap();
-    assert_eq!((r.ok, r.failed.len()), (k, 12 - k));
-    let reloaded = spec(d.path(), file).unwrap().points().unwrap();
-    let calls = AtomicUsize::new(0);
     let r = run_sweep(
         &reloaded,
         &root,

@@ -149,6 +149,33 @@ fn bad_sweep_files_name_the_problem() {
     assert_eq!(e.kind(), crate::ErrorKind::BadInput);
 }
 
+/// Runs `pts` one at a time (so exactly the first `k` finish) with `run`, then stops: every
+/// later point fails as if its process were killed.
+pub(super) fn run_stopped_after<F>(pts: &[SweepPoint], root: &Path, k: usize, run: F) -> SweepReport
+where
+    F: Fn(&SweepPoint, &Path) -> Result<PointResult, Error> + Sync,
+{
+    let calls = AtomicUsize::new(0);
+    let opts = SweepOptions {
+        jobs: Some(1),
+        ..Default::default()
+    };
+    run_sweep(
+        pts,
+        root,
+        &opts,
+        |p, dir| {
+            if calls.fetch_add(1, Ordering::SeqCst) >= k {
+                Err(Error::Internal("killed".into()))
+            } else {
+                run(p, dir)
+            }
+        },
+        &NoProgress,
+    )
+    .unwrap()
+}
+
 /// A fake runner: slider_acc_max = speed², and counts its calls.
 fn fake(p: &SweepPoint, dir: &Path, calls: &AtomicUsize) -> Result<PointResult, Error> {
     calls.fetch_add(1, Ordering::SeqCst);
@@ -313,26 +340,7 @@ fn rerun_resumes_after_an_interruption() {
     let pts = spec(d.path(), GRID).unwrap().points().unwrap();
     let root = d.path().join("out");
     let k = 5;
-    let calls = AtomicUsize::new(0);
-    // Sequential, so exactly the first k points finish before the "interruption".
-    let opts = SweepOptions {
-        jobs: Some(1),
-        ..Default::default()
-    };
-    let r = run_sweep(
-        &pts,
-        &root,
-        &opts,
-        |p, dir| {
-            if calls.fetch_add(1, Ordering::SeqCst) >= k {
-                Err(Error::Internal("killed".into()))
-            } else {
-                fake(p, dir, &AtomicUsize::new(0))
-            }
-        },
-        &NoProgress,
-    )
-    .unwrap();
+    let r = run_stopped_after(&pts, &root, k, |p, dir| fake(p, dir, &AtomicUsize::new(0)));
     assert_eq!((r.ok, r.failed.len()), (k, 16 - k));
     let t = merge(std::slice::from_ref(&root)).unwrap();
     assert_eq!((t.rows.len(), t.unfinished.len()), (k, 16 - k));
