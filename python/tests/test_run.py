@@ -272,7 +272,8 @@ def test_a_solver_failure_raises_solve_error_with_time_and_state():
     e = info.value
     assert e.kind == "too_many_steps"
     assert str(e).startswith("too many steps: 50 steps taken")
-    # 50 steps of at most T/100 (h_max of a press run) from t = 0.
+    # 50 steps of at most T/100 (the step limit near contact of a press run: the dry journal
+    # starts at its wall) from t = 0.
     assert 0.0 < e.t <= 50 * 0.4 / 100
     # The state: (x, y, theta) then velocities of the three integrated bodies.
     assert e.y.shape == (12,) and np.all(np.isfinite(e.y))

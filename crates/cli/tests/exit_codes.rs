@@ -172,7 +172,8 @@ fn exhausted_budgets_exit_3_and_name_the_budget() {
     let d = tempfile::tempdir().unwrap();
     let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/press/dry_150rpm_c0.1.json");
     let case = case.to_str().unwrap();
-    // 10 steps cannot cover two revolutions (h_max = T/100 alone needs 200).
+    // 10 steps cannot cover two revolutions (the dry journal is at its wall, where the step
+    // limit near contact, T/100, alone needs 200).
     budget_error(
         &["run", case, "--max-steps", "10", "--out", "a"],
         d.path(),

@@ -843,6 +843,15 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         }
     }
 
+    fn set_h_max(&mut self, h_max: f64) {
+        let h_max = h_max.max(self.opts.h_min);
+        if h_max != self.opts.h_max {
+            // The h_max stop (module documentation) is set again at the next step.
+            self.opts.h_max = h_max;
+            self.tstop = None;
+        }
+    }
+
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         self.sliver = None;
         self.update_stats();

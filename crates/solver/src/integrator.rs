@@ -39,6 +39,26 @@
 //! journal that never comes near its bearing's wall is thus checked at the step ends only,
 //! for one kinematic evaluation per step.
 //!
+//! # The contact-aware step limit
+//!
+//! With `h_max_near_events` = H finite and the rates ġ given, the step after every accepted
+//! step is limited by
+//!
+//! ```text
+//! h ≤ max(H, min_i r_i),   r_i: the largest h with  κ (|ġ_i| h + ½ |g̈_i| h²) ≤ |g_i|,
+//!                          r_i = 2 d / (|ġ_i| + √(ġ_i² + 2 |g̈_i| d)),  d = |g_i| / κ
+//! g_i, ġ_i at the end of the step just taken;  g̈_i ≈ (ġ_i(t_b) − ġ_i(t_a)) / (t_b − t_a)
+//! ```
+//! (and by `h_max` always). A step longer than H is taken only while the distance every g_i
+//! is predicted to travel in it, to second order, is at most 1/κ = 1/2 of its distance from
+//! zero: no g_i can change sign inside it unless its motion departs from the prediction by a
+//! factor 2. Near a zero (a journal at its bearing's wall, in contact or in flight) the
+//! limit is H, and with the interior samples an excursion to the other side of zero longer
+//! than H/(s + 1) cannot hide in a step. Away from every zero (a lubricated journal far from
+//! the wall, a journal crossing its clearance) the step is free up to `h_max`. After an
+//! event, and at the start, where no rate change is known yet, the limit is H. The limit
+//! goes to the method as [`Stepper::set_h_max`] and counts in `h_max_used` like any step.
+//!
 //! Rule for zeros: an event function that is exactly zero at the start (or after a restart)
 //! has no sign yet; it takes the sign of its first nonzero value, and no event is reported for
 //! that first value. A crossing is a change between nonzero signs. The event time is taken on
@@ -64,6 +84,19 @@ use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 /// κ of the far test (module documentation): an event function whose distance from zero at
 /// both ends of a step is at least κ h times its larger end rate is not sampled inside it.
 pub const FAR_FACTOR: f64 = 2.0;
+
+/// r of the contact-aware step limit (module documentation): the longest step over which
+/// an event function at `g`, with rate `gd` and rate change `gdd` (per second), is predicted
+/// to travel at most 1/κ of its distance from zero; 0 at g = 0, ∞ when it does not move.
+#[inline]
+pub fn reach_limit(g: f64, gd: f64, gdd: f64) -> f64 {
+    let d = g.abs() / FAR_FACTOR;
+    if d == 0.0 {
+        return 0.0;
+    }
+    let a = gd.abs();
+    2.0 * d / (a + (a * a + 2.0 * gdd.abs() * d).sqrt())
+}
 
 /// Whether g stays on one side of zero over a step of length `h` by the far test (module
 /// documentation), from its values and rates at both ends.
@@ -280,6 +313,9 @@ pub struct Integrator<'p, S: OdeSystem + ?Sized> {
     g_l: Vec<f64>,
     /// Interior samples skipped by the far test.
     samples_skipped: usize,
+    /// H of the contact-aware step limit (module documentation), when it is on: finite, the
+    /// rates given, events on.
+    h_near: Option<f64>,
     ybuf: Vec<f64>,
     /// Segment end: the end of the step, or the event time when a step was cut.
     seg_end: f64,
@@ -327,6 +363,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             g_t: vec![0.0; m],
             g_l: vec![0.0; m],
             samples_skipped: 0,
+            h_near: None,
             ybuf: vec![0.0; n],
             seg_end: t0,
             pending_restart: None,
@@ -345,6 +382,11 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             it.check_nan(&it.g_a, t0)?;
             for i in 0..m {
                 it.signs[i] = sign(it.g_a[i]);
+            }
+            let h_near = opts.h_max_near_events;
+            if it.rates && h_near.is_finite() && !opts.method.is_fixed_step() {
+                it.h_near = Some(h_near);
+                it.stepper.set_h_max(h_near.min(opts.h_max));
             }
         }
         Ok(it)
@@ -570,6 +612,16 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         if found.is_none() {
             // No event: the end of this step is the start of the next one, so g there becomes
             // the left bracket value of the next step's root finding.
+            if let Some(h_near) = self.h_near {
+                let h = t_b - t_a0;
+                let reach = (0..m)
+                    .map(|i| {
+                        reach_limit(self.g_b[i], self.gd_b[i], (self.gd_b[i] - self.gd_a[i]) / h)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                self.stepper
+                    .set_h_max(h_near.max(reach).min(self.opts.h_max));
+            }
             self.g_a.copy_from_slice(&self.g_b);
             self.gd_a.copy_from_slice(&self.gd_b);
         }
@@ -698,6 +750,9 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             }
         }
         self.g_a.copy_from_slice(&g);
+        if let Some(h_near) = self.h_near {
+            self.stepper.set_h_max(h_near.min(self.opts.h_max));
+        }
         self.t_cur = t_ev;
         self.seg_end = t_ev;
         self.y_cur.copy_from_slice(&y);

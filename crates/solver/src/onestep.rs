@@ -307,6 +307,13 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
             .interpolate(self.sys, self.t_prev, h, &self.y_prev, &self.y, theta, out);
     }
 
+    fn set_h_max(&mut self, h_max: f64) {
+        // Without error control every step is h0; the bounds are not used.
+        if self.control.is_some() {
+            self.h_max = h_max.max(self.h_min);
+        }
+    }
+
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         self.t = t;
         self.t_prev = t;

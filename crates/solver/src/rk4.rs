@@ -266,6 +266,8 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
         }
     }
 
+    fn set_h_max(&mut self, _h_max: f64) {}
+
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         self.unstable_run = 0;
         self.t = t;

@@ -53,6 +53,10 @@ pub trait Stepper {
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError>;
     /// Counters so far, by value. Reading them never changes them.
     fn stats(&self) -> Stats;
+    /// Sets the largest step from the next attempt on (the contact-aware step limit of the
+    /// [`crate::Integrator`], already capped by the options' `h_max`). Fixed-step methods
+    /// ignore it.
+    fn set_h_max(&mut self, h_max: f64);
 }
 
 /// The landing rule of every stepper: the step to try from `t` towards `t_stop` with the

@@ -32,6 +32,8 @@ pub enum OptionField {
     HMin,
     /// `h_max`.
     HMax,
+    /// `h_max_near_events`, the contact-aware step limit.
+    HMaxNearEvents,
     /// `max_steps`.
     MaxSteps,
     /// `controller`.
@@ -90,6 +92,7 @@ impl OptionField {
             F::Adaptive => "adaptive",
             F::HMin => "h_min",
             F::HMax => "h_max",
+            F::HMaxNearEvents => "h_max_near_events",
             F::MaxSteps => "max_steps",
             F::Controller => "controller",
             F::Safety => "limits.safety",

@@ -19,6 +19,7 @@
 //! rtol, atol                 ignored            used                        used
 //! h0                         rejected           used                        used
 //! h_min, h_max               ignored            used                        used
+//! h_max_near_events          ignored            used                        used
 //! controller                 rejected           used (None: the default)    rejected
 //! limits                     ignored            used                        ignored
 //! adaptive = false           (always fixed)     needs h0: every step h0     rejected
@@ -39,6 +40,7 @@
 //! step, h0               finite and > 0
 //! h_min                  finite and >= 0
 //! h_max                  > h_min
+//! h_max_near_events      > 0 (∞: off)
 //! max_steps              >= 1
 //! max_wall_time          finite and > 0
 //! event_rtol             [1e-15, 1e-3]
@@ -111,6 +113,13 @@ pub struct SolverOptions {
     pub h_min: f64,
     /// Largest step of adaptive methods. Default +∞; > h_min.
     pub h_max: f64,
+    /// The contact-aware step limit of adaptive methods with event functions whose rates the
+    /// system gives ([`crate::OdeSystem::event_rates`]): a step longer than this is allowed
+    /// only while no event function can reach zero within it, predicted from its value, rate
+    /// and the change of its rate over the last step (the far-test reach of
+    /// [`crate::integrator`], module documentation "The contact-aware step limit"); `h_max`
+    /// still caps every step. Default +∞ (off); > 0. Ignored by `rk4`.
+    pub h_max_near_events: f64,
     /// Most step attempts before failing with `TooManySteps`. Default 1 000 000; ≥ 1.
     pub max_steps: usize,
     /// Step-size controller of our one-step methods (rejected for fixed-step and diffsol's
@@ -165,6 +174,7 @@ impl Default for SolverOptions {
             adaptive: true,
             h_min: 0.0,
             h_max: f64::INFINITY,
+            h_max_near_events: f64::INFINITY,
             max_steps: 1_000_000,
             controller: None,
             limits: StepLimits::default(),
@@ -251,6 +261,7 @@ impl SolverOptions {
                 Config::Diffsol(DiffsolConfig::new(method, tolerances, bounds, budgets)?)
             }
         };
+        Rule::H_MAX_NEAR_EVENTS.check(self.h_max_near_events)?;
         Rule::EVENT_RTOL.check(self.event_rtol)?;
         Rule::EVENT_SAMPLES.check(self.event_samples as f64)?;
         Rule::DIVERGENCE_BOUND.check(self.divergence_bound)?;
@@ -304,7 +315,7 @@ impl Family {
         let fixed = matches!(self, Family::FixedStep);
         match field {
             F::Step | F::Rk4InstabilitySteps => fixed,
-            F::Rtol | F::Atol | F::H0 | F::HMin | F::HMax => !fixed,
+            F::Rtol | F::Atol | F::H0 | F::HMin | F::HMax | F::HMaxNearEvents => !fixed,
             F::Controller
             | F::Safety
             | F::MaxGrowth

@@ -44,6 +44,8 @@ impl Rule {
     pub const H0: Rule = Rule::new(OptionField::H0, Allowed::FiniteAbove(0.0));
     /// `h_min` finite and ≥ 0 (`h_max` > `h_min` is a relation: [`crate::options::StepBounds::new`]).
     pub const H_MIN: Rule = Rule::new(OptionField::HMin, Allowed::FiniteAtLeast(0.0));
+    /// `h_max_near_events` > 0 (∞: the contact-aware step limit off).
+    pub const H_MAX_NEAR_EVENTS: Rule = Rule::new(OptionField::HMaxNearEvents, Allowed::Above(0.0));
     /// `max_steps` ≥ 1.
     pub const MAX_STEPS: Rule = Rule::new(OptionField::MaxSteps, Allowed::AtLeast(1.0));
     /// `max_wall_time` finite and > 0.

@@ -289,6 +289,9 @@ pub(crate) fn plan_run(p: &Prepared, req: &RunRequest, t0: f64, t_end: f64) -> R
     if o.h_max.is_finite() {
         need.push((o.h_max, "h_max".into()));
     }
+    if o.h_max_near_events.is_finite() && !o.method.is_fixed_step() {
+        need.push((o.h_max_near_events, "the step limit near contact".into()));
+    }
     if let Some(h) = o.step.filter(|_| o.method.is_fixed_step()) {
         need.push((h, "the RK4 step".into()));
     }

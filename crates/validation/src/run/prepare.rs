@@ -26,13 +26,19 @@
 //!                proportionality holds down to rtol = 1e-13.
 //!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
-//! h_max          T/100 (T the crank period; ∞ without a crank driver or without a clearance
-//!                joint, where nothing can be stepped over): with 4 samples an
-//!                interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot hide
-//!                inside a step, and the contacts and flights of the dry press are longer
+//! h_max          ∞
+//! step limit     h_max_near_events = T/100 (T the crank period; off without a crank driver
+//!  near contact  or without a clearance joint, where nothing can be stepped over): the
+//!                contact-aware step limit of lash_solver::integrator (docs/model.md §7):
+//!                a step is longer than T/100 only while no event function can reach zero
+//!                within it, predicted from its value, rate and the rate's change over the
+//!                last step; near a zero (and after an event) it is T/100, and with 4 samples
+//!                an interval of sign change longer than T/500 (0.8 ms at 150 rpm) cannot
+//!                hide inside a step; the contacts and flights of the dry press are longer
 //!                than that (BENCHMARKS.md, "Defaults of a run"); a step over a whole contact
-//!                would miss both its onset and its loss (run/tests/simulate.rs checks the onset
-//!                count against a reference).
+//!                would miss both its onset and its loss (run/tests/simulate.rs checks the
+//!                onset count against a reference). Away from every wall (a lubricated
+//!                journal on its film) the step is set by accuracy alone.
 //! max_steps      50 000 000
 //! divergence     1e6: a state component (m, rad, m/s, rad/s) beyond 1e6 in magnitude is
 //!  bound         divergence (NonFiniteState), not motion of a mechanism: 1000 km, 1000 km/s,
@@ -75,7 +81,8 @@ pub(crate) const DEFAULT_METHOD: Method = Method::Bdf;
 pub(crate) const DEFAULT_RTOL: f64 = 1e-8;
 /// Interior event samples per step of a mechanism run.
 pub(crate) const DEFAULT_EVENT_SAMPLES: usize = 4;
-/// h_max of a mechanism run with a crank driver, as a fraction of the crank period.
+/// The step limit near contact (`h_max_near_events`) of a mechanism run with a crank driver
+/// and a clearance joint, as a fraction of the crank period.
 pub(crate) const H_MAX_PER_PERIOD: f64 = 1.0 / 100.0;
 /// Step limit of a mechanism run.
 pub(crate) const DEFAULT_MAX_STEPS: usize = 50_000_000;
@@ -349,7 +356,7 @@ impl Prepared {
                 o.rtol = DEFAULT_RTOL;
                 o.atol = self.default_atol(DEFAULT_RTOL);
                 o.event_samples = DEFAULT_EVENT_SAMPLES;
-                o.h_max = match (i.period, i.clearance_min) {
+                o.h_max_near_events = match (i.period, i.clearance_min) {
                     (Some(t), Some(_)) => t * H_MAX_PER_PERIOD,
                     _ => f64::INFINITY,
                 };
