@@ -14,7 +14,13 @@
 //! (e) Rodas5P with the previous Jacobian (plain central differences of f) against the new one
 //! (f) lubricated 150 rpm, c = 0.1 mm, as (b): lash's cheapest run with error ≤ 1e-6 m/s²
 //!     against diffsol's BDF alone on the hand-written minimal-coordinate press
-//!     (`lash_benches::handwritten`), finite-difference Jacobians counted
+//!     (`lash_benches::handwritten`), finite-difference Jacobians counted; then the path
+//!     `lash run` takes (the engine's `lash_validation::run`: the scene read and assembled,
+//!     the case's defaults but method and rtol, trajectory.csv at 2000 rows per revolution,
+//!     events, metrics, figures, summary.json) against the same hand-written run, side by side,
+//!     with what the path costs beyond the integration; and the dry press through `lash run`
+//!     (first half revolution, rows at T/4000 so that they are the 2001-point grid): its
+//!     cheapest run with error ≤ 1e-6 by work (RHS + 12 per Jacobian)
 //! (g) dry 150 rpm, c = 0.1 mm, as (c) against a reference with kink events: every method with
 //!     and without the kink events of the force laws (`Mechanism::set_kink_events`), work in
 //!     RHS-equivalents (RHS + n per Jacobian, n = 12 the cost of a finite-difference one), the
@@ -24,15 +30,18 @@
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
 //! minimum over `--reps` runs
-//! (default 3; a run under 50 ms is repeated up to 10 times).
+//! (default 3; a run under 50 ms is repeated up to 10 times). `--formulation F` runs lash's
+//! side (the library scans and `lash run`) with formulation F instead of the scene's own; the
+//! references keep the scene's.
 
 use std::time::Instant;
 
 use lash_benches::{
     contact_and_free_states, crank_period, grid, max_abs_diff, options, press, sample, Sampled,
 };
-use lash_model::Mechanism;
-use lash_solver::{Method, OdeSystem, Output};
+use lash_model::{FormulationName, Mechanism};
+use lash_solver::{Atol, Method, OdeSystem, Output, SolverOptions};
+use lash_validation::{Case, NoProgress, RunOptions, SolverChoice};
 
 /// Grid points of a window (docs/outputs.md, "`metrics`").
 const N_GRID: usize = 2001;
@@ -41,6 +50,8 @@ const TARGET: f64 = 1e-6;
 
 struct Ctx {
     reps: usize,
+    /// `--formulation`: lash's side runs with it (None: the scene's own).
+    formulation: Option<FormulationName>,
 }
 
 /// One measured run.
@@ -244,7 +255,10 @@ fn rk4_search(
     mut k_lo: usize,
     mut k_hi: usize,
 ) -> Option<Run> {
-    let once = Ctx { reps: 1 };
+    let once = Ctx {
+        reps: 1,
+        formulation: None,
+    };
     let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
     let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
     if !ok(&first) {
@@ -380,7 +394,18 @@ fn section_b(ctx: &Ctx) {
     let delta = times[1] - times[0];
     println!("  rk4: largest h = Δ/k with error ≤ {TARGET:.0e} (Δ = {delta:.1e} s)");
     for k in [50, 100] {
-        rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, false);
+        rk4_run(
+            &Ctx {
+                reps: 1,
+                formulation: None,
+            },
+            &m,
+            t_end,
+            &times,
+            &reference,
+            k,
+            false,
+        );
     }
     let rk4 = rk4_search(ctx, &m, t_end, &times, &reference, 100, 800);
     println!("  cheapest run of each method with error ≤ {TARGET:.0e}:");
@@ -414,13 +439,35 @@ fn section_c(ctx: &Ctx) {
     );
     let mut rk4_runs = Vec::new();
     for k in [1, 2, 4, 8, 16, 32, 64, 128, 256] {
-        if let Some(r) = rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, false) {
+        if let Some(r) = rk4_run(
+            &Ctx {
+                reps: 1,
+                formulation: None,
+            },
+            &m,
+            t_end,
+            &times,
+            &reference,
+            k,
+            false,
+        ) {
             rk4_runs.push(r);
         }
     }
     println!("  rk4 with events (located contact onsets and losses), h = Δ/k:");
     for k in [1, 4, 16, 64] {
-        rk4_run(&Ctx { reps: 1 }, &m, t_end, &times, &reference, k, true);
+        rk4_run(
+            &Ctx {
+                reps: 1,
+                formulation: None,
+            },
+            &m,
+            t_end,
+            &times,
+            &reference,
+            k,
+            true,
+        );
     }
     println!("  cheapest run of each method with error ≤ {TARGET:.0e}:");
     best.sort_by(|a, b| a.wall.total_cmp(&b.wall));
@@ -626,9 +673,14 @@ fn section_f(ctx: &Ctx) {
             break;
         }
     }
-    println!("  lash on the general model (12 states), every adaptive method:");
+    let lm = press_as(stem, 2.0, ctx.formulation);
+    println!(
+        "  lash on the general model ({} states, {}), every adaptive method:",
+        lm.dim(),
+        formulation_label(ctx.formulation)
+    );
     print_header();
-    let mut best = cheapest_adaptive(ctx, &m, t_end, &times, &reference);
+    let mut best = cheapest_adaptive(ctx, &lm, t_end, &times, &reference);
     best.sort_by(|a, b| a.wall.total_cmp(&b.wall));
     let hand_best = cheapest(&hand_runs, TARGET);
     println!("  cheapest with error ≤ {TARGET:.0e}:");
@@ -655,7 +707,7 @@ fn section_f(ctx: &Ctx) {
         let (mut tl, mut th, mut t3) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut steps3 = 0;
         for _ in 0..rounds {
-            if let Ok(s) = sample(&m, t_end, &o, &times) {
+            if let Ok(s) = sample(&lm, t_end, &o, &times) {
                 tl = tl.min(s.wall);
             }
             let atol = [h.rtol * 1e-3; 4];
@@ -686,6 +738,344 @@ fn section_f(ctx: &Ctx) {
             t3 / th,
             tl / t3
         );
+    }
+    if let Some(h) = hand_best {
+        lubricated_through_lash_run(ctx, stem, &lm, &times, &reference, h);
+    }
+    dry_through_lash_run(ctx);
+}
+
+/// The press `stem` from `cases/press/` for `revolutions`, with `formulation` over the scene's
+/// own (None: the scene's).
+fn press_as(stem: &str, revolutions: f64, formulation: Option<FormulationName>) -> Mechanism {
+    let Some(f) = formulation else {
+        return press(stem, revolutions);
+    };
+    let path = lash_benches::cases_dir().join(format!("{stem}.json"));
+    let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
+    scene.t_end = None;
+    scene.revolutions = Some(revolutions);
+    scene.formulation = f;
+    Mechanism::from_scene(&scene).expect("the scene assembles")
+}
+
+fn formulation_label(f: Option<FormulationName>) -> String {
+    f.map_or("the scene's formulation".into(), |f| f.to_string())
+}
+
+/// What `lash run` does with a press case: the engine's `run` (to `out`, files written) and
+/// `run_in_memory` (the same run without the files) at `method` and `rtol`, the case's other
+/// defaults (atol following rtol, 4 event samples, the step limit near contact), end time
+/// `t_end`, `rows` trajectory rows per revolution.
+struct RunPath<'a> {
+    stem: &'a str,
+    t_end: f64,
+    rows: usize,
+    formulation: Option<FormulationName>,
+    out: std::path::PathBuf,
+}
+
+impl RunPath<'_> {
+    fn options(&self, method: Method, rtol: f64) -> RunOptions {
+        let case = lash_benches::cases_dir().join(format!("{}.json", self.stem));
+        RunOptions {
+            case: case.display().to_string(),
+            solver: SolverChoice {
+                method: Some(method),
+                rtol: Some(rtol),
+                ..Default::default()
+            },
+            t_end: Some(self.t_end),
+            samples_per_revolution: Some(self.rows),
+            out: Some(self.out.clone()),
+            formulation: self.formulation,
+            ..Default::default()
+        }
+    }
+
+    /// One run in memory: (wall s, the slider acceleration on the rows with t in `window`,
+    /// those rows' times, the run's counters), or the error.
+    fn in_memory(
+        &self,
+        method: Method,
+        rtol: f64,
+        window: (f64, f64),
+    ) -> Result<(f64, Vec<f64>, Vec<f64>, lash_solver::Stats), String> {
+        let o = self.options(method, rtol);
+        let start = Instant::now();
+        let case = Case::load(&o.case, None).map_err(|e| e.to_string())?;
+        let r = lash_validation::run_in_memory(case, &o).map_err(|e| e.to_string())?;
+        let wall = start.elapsed().as_secs_f64();
+        let t = r.trajectory.column("t").ok_or("no t column")?;
+        let a = r
+            .trajectory
+            .column("slider_a")
+            .ok_or("no slider_a column")?;
+        let slack = 1e-9 * (window.1 - window.0);
+        let keep: Vec<usize> = (0..t.len())
+            .filter(|&k| t[k] >= window.0 - slack && t[k] <= window.1 + slack)
+            .collect();
+        Ok((
+            wall,
+            keep.iter().map(|&k| a[k]).collect(),
+            keep.iter().map(|&k| t[k]).collect(),
+            r.summary.stats,
+        ))
+    }
+
+    /// One `lash run` with its files (wall s).
+    fn to_disk(&self, method: Method, rtol: f64) -> Result<f64, String> {
+        let o = self.options(method, rtol);
+        let start = Instant::now();
+        lash_validation::run(&o, &NoProgress).map_err(|e| e.to_string())?;
+        Ok(start.elapsed().as_secs_f64())
+    }
+
+    /// The run at (method, rtol) measured on `times` against `reference`: error, counters, the
+    /// minimum in-memory wall time over the repetitions (None when it fails; the rows must be
+    /// the grid's times).
+    fn measure(
+        &self,
+        ctx: &Ctx,
+        method: Method,
+        rtol: f64,
+        times: &[f64],
+        reference: &[f64],
+    ) -> Option<Run> {
+        let window = (times[0], times[times.len() - 1]);
+        let label = format!("lash run {} rtol {rtol:.1e}", method.name());
+        let (w0, a, t, stats) = match self.in_memory(method, rtol, window) {
+            Ok(v) => v,
+            Err(e) => {
+                println!("  {label:28} failed: {e}");
+                return None;
+            }
+        };
+        let on_grid = t.len() == times.len()
+            && t.iter()
+                .zip(times)
+                .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs().max(1.0));
+        assert!(
+            on_grid,
+            "the trajectory's rows are not the grid ({} rows)",
+            t.len()
+        );
+        let mut wall = w0;
+        let reps = if w0 < 0.05 {
+            ctx.reps.max(10)
+        } else {
+            ctx.reps
+        };
+        for _ in 1..reps {
+            if let Ok(v) = self.in_memory(method, rtol, window) {
+                wall = wall.min(v.0);
+            }
+        }
+        let r = Run {
+            label,
+            method: Some(method),
+            rtol,
+            error: max_abs_diff(&a, reference),
+            wall,
+            steps: stats.accepted,
+            rhs: stats.rhs_evals,
+            jac: stats.jac_evals,
+            lu: stats.lu_factorizations,
+            events: stats.events,
+        };
+        print_run(&r);
+        Some(r)
+    }
+
+    /// `methods` scanned over rtol 1e-5 … 1e-11 in half decades (each stops after its first
+    /// run below TARGET/30).
+    fn scan_all(
+        &self,
+        ctx: &Ctx,
+        methods: &[Method],
+        times: &[f64],
+        reference: &[f64],
+    ) -> Vec<Run> {
+        let mut runs = Vec::new();
+        for &method in methods {
+            for rtol in tolerances(5, 11) {
+                if let Some(r) = self.measure(ctx, method, rtol, times, reference) {
+                    let done = r.error < TARGET / 30.0;
+                    runs.push(r);
+                    if done {
+                        break;
+                    }
+                }
+            }
+        }
+        runs
+    }
+}
+
+/// The library options of a `lash run` of a press at (method, rtol) (the engine's defaults,
+/// `crates/validation/src/run/prepare.rs`): atol rtol·c for positions and rtol·c·ω for
+/// velocities, 4 event samples, the step limit near contact T/100.
+fn run_like_options(m: &Mechanism, method: Method, rtol: f64, c: f64) -> SolverOptions {
+    let w = m.crank_speed().expect("a press has a crank").abs();
+    let n = m.dim();
+    let mut o = SolverOptions::with_method(method);
+    o.rtol = rtol;
+    o.atol = Atol::Vector(
+        (0..n)
+            .map(|k| if k < n / 2 { rtol * c } else { rtol * c * w })
+            .collect(),
+    );
+    o.event_samples = 4;
+    o.h_max_near_events = crank_period(m) / 100.0;
+    o.max_steps = 50_000_000;
+    o
+}
+
+/// (f), continued: the lubricated press through `lash run` against the hand-written run `h`,
+/// and where the time of the path goes.
+fn lubricated_through_lash_run(
+    ctx: &Ctx,
+    stem: &str,
+    lm: &Mechanism,
+    times: &[f64],
+    reference: &[f64],
+    h: &Run,
+) {
+    use lash_benches::handwritten::{diffsol_bdf, HandPress};
+    let per = crank_period(lm);
+    let dir = std::env::temp_dir().join(format!("lash-targets-f-{}", std::process::id()));
+    let path = RunPath {
+        stem,
+        t_end: lm.t_start() + 2.0 * per,
+        rows: 2000,
+        formulation: ctx.formulation,
+        out: dir.join("run"),
+    };
+    // The explicit pairs are stability-bound on the film (10⁵ steps, above): only the
+    // implicit methods can be the cheapest.
+    println!(
+        "  `lash run` ({}; atol following rtol, the case's other defaults; in memory), the \
+         implicit methods:",
+        formulation_label(ctx.formulation)
+    );
+    print_header();
+    let implicit = [
+        Method::Bdf,
+        Method::Trbdf2,
+        Method::Esdirk34,
+        Method::Rodas5p,
+    ];
+    let runs = path.scan_all(ctx, &implicit, times, reference);
+    let Some(b) = cheapest(&runs, TARGET).cloned() else {
+        println!("  no `lash run` reaches {TARGET:.0e}");
+        return;
+    };
+    let method = b.method.expect("a lash run");
+    let hand = HandPress::paper(150.0, 1e-4, true);
+    let y0 = HandPress::minimal_state(&lm.initial_state());
+    let lib = |o: &SolverOptions| sample(lm, path.t_end, o, times).map(|s| s.wall).ok();
+    let o_run = run_like_options(lm, method, b.rtol, 1e-4);
+    let mut o_blanket = o_run.clone();
+    o_blanket.h_max_near_events = f64::INFINITY;
+    o_blanket.h_max = per / 100.0;
+    let mut o_free = o_run.clone();
+    o_free.h_max_near_events = f64::INFINITY;
+    let mut o_noev = o_free.clone();
+    o_noev.events = false;
+    let rounds = 10 * ctx.reps.max(2);
+    let mut best = [f64::INFINITY; 7];
+    for _ in 0..rounds {
+        let walls = [
+            path.to_disk(method, b.rtol).ok(),
+            path.in_memory(method, b.rtol, (times[0], times[times.len() - 1]))
+                .ok()
+                .map(|v| v.0),
+            lib(&o_run),
+            lib(&o_blanket),
+            lib(&o_free),
+            lib(&o_noev),
+            diffsol_bdf(&hand, lm.t_start(), y0, h.rtol, [h.rtol * 1e-3; 4], times)
+                .ok()
+                .map(|r| r.wall),
+        ];
+        for (b, w) in best.iter_mut().zip(walls) {
+            if let Some(w) = w {
+                *b = b.min(w);
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let hw = best[6];
+    println!(
+        "  => side by side, {rounds} alternating rounds, minimum of each (ms, and / the \
+         hand-written bdf rtol {:.1e}, {:.3} ms):",
+        h.rtol,
+        hw * 1e3
+    );
+    for (what, w) in [
+        ("`lash run`, files written", best[0]),
+        ("`lash run` in memory (run_in_memory)", best[1]),
+        ("library, the run's options", best[2]),
+        ("library, blanket h_max = T/100 instead", best[3]),
+        ("library, no step limit", best[4]),
+        ("library, no step limit, events off", best[5]),
+    ] {
+        println!("     {what:42} {:8.3} ms  {:6.2}×", w * 1e3, w / hw);
+    }
+    println!(
+        "  => best `lash run` ({}): {:.2}× the hand-written run in memory, {:.2}× with its files \
+         (target ≤ 1.2×)",
+        b.label,
+        best[1] / hw,
+        best[0] / hw
+    );
+}
+
+/// (f), the dry press: the first half revolution through `lash run`, error against the
+/// reference with kink events; the cheapest run by work (target ≤ 30 000 RHS-equivalents).
+fn dry_through_lash_run(ctx: &Ctx) {
+    let stem = "dry_150rpm_c0.1";
+    println!(
+        "\n(f) {stem}, first half revolution through `lash run` ({}): the cheapest run with \
+         error ≤ {TARGET:.0e} m/s² by work = RHS + n per Jacobian (target ≤ 30 000)",
+        formulation_label(ctx.formulation)
+    );
+    let mut kinked = press(stem, 0.5);
+    kinked.set_kink_events(true);
+    let half = 0.5 * crank_period(&kinked);
+    let times = grid(0.0, half, N_GRID);
+    println!("  reference with kink events:");
+    let reference = reference(&kinked, kinked.t_end(), &times);
+    let n = press_as(stem, 0.5, ctx.formulation).dim();
+    let dir = std::env::temp_dir().join(format!("lash-targets-fd-{}", std::process::id()));
+    let path = RunPath {
+        stem,
+        t_end: half,
+        rows: 2 * (N_GRID - 1),
+        formulation: ctx.formulation,
+        out: dir.join("run"),
+    };
+    print_header();
+    let adaptive: Vec<Method> = Method::ALL
+        .into_iter()
+        .filter(|m| !m.is_fixed_step())
+        .collect();
+    let runs = path.scan_all(ctx, &adaptive, &times, &reference);
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut ok: Vec<&Run> = runs.iter().filter(|r| r.error <= TARGET).collect();
+    ok.sort_by_key(|r| work(r, n));
+    println!("  the cheapest by work with error ≤ {TARGET:.0e} (n = {n}):");
+    for r in ok.iter().take(5) {
+        println!(
+            "  {:28} error {:.2e}  work {:>7}  wall {:.4} s",
+            r.label,
+            r.error,
+            work(r, n),
+            r.wall
+        );
+    }
+    if ok.is_empty() {
+        println!("  none within the scan");
     }
 }
 
@@ -772,6 +1162,7 @@ fn section_g(ctx: &Ctx) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut reps = 3;
+    let mut formulation = None;
     let mut sections = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -782,9 +1173,19 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--reps takes a number");
             }
+            "--formulation" => {
+                let f = it.next().expect("--formulation takes a name");
+                formulation = Some(f.parse::<FormulationName>().unwrap_or_else(|e| {
+                    eprintln!("{e}");
+                    std::process::exit(2)
+                }));
+            }
             s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g") => sections.push(s.to_string()),
             other => {
-                eprintln!("unknown argument {other}: expected a, b, c, d, e, f, g, --reps N");
+                eprintln!(
+                    "unknown argument {other}: expected a, b, c, d, e, f, g, --reps N, \
+                     --formulation F"
+                );
                 std::process::exit(2);
             }
         }
@@ -794,7 +1195,7 @@ fn main() {
             .map(String::from)
             .to_vec();
     }
-    let ctx = Ctx { reps };
+    let ctx = Ctx { reps, formulation };
     for s in sections {
         match s.as_str() {
             "a" => section_a(&ctx),
