@@ -389,6 +389,12 @@ pub struct CompareArgs {
     /// Output directory. Default `out/compare/CASE`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Formulations compared side by side, comma-separated (lagrange_baumgarte,
+    /// augmented_lagrangian; docs/model.md §12): every row (RK4 steps and adaptive settings)
+    /// with each, against one reference (the case's own formulation's), each row naming its
+    /// formulation. Default: the case's.
+    #[arg(long, value_name = "F,..", value_delimiter = ',', value_parser = parse_formulation)]
+    pub formulations: Option<Vec<lash_model::FormulationName>>,
 }
 
 impl CompareArgs {
@@ -402,6 +408,7 @@ impl CompareArgs {
             max_wall_time: self.max_wall_time,
             window: self.window,
             out: self.out.clone(),
+            formulations: self.formulations.clone(),
         }
     }
 }

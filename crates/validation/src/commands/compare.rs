@@ -69,14 +69,35 @@ pub struct CompareOptions {
     pub window: Option<lash_model::MetricsWindow>,
     /// Output directory; None = `out/compare/CASE`.
     pub out: Option<PathBuf>,
+    /// Formulations compared side by side (docs/model.md §12): every row of the comparison
+    /// (RK4 steps and adaptive settings) is run with each, against one reference (the case's
+    /// own formulation's), and names it. None = the case's own only.
+    pub formulations: Option<Vec<lash_model::FormulationName>>,
+}
+
+/// The passes of a comparison: one per listed formulation (the case with it, and its name
+/// for the rows), else the case as it is.
+fn formulation_passes(
+    p: &Prepared,
+    formulations: &Option<Vec<lash_model::FormulationName>>,
+) -> Result<Vec<(Prepared, Option<String>)>, Error> {
+    match formulations {
+        Some(fs) => fs
+            .iter()
+            .map(|&f| Ok((p.clone().with_formulation(f)?, Some(f.to_string()))))
+            .collect(),
+        None => Ok(vec![(p.clone(), None)]),
+    }
 }
 
 /// Compares the methods on one case: RK4 at several steps, every embedded pair and every stiff
 /// method at each tolerance, against the case's reference; writes compare.md and
-/// compare.json. Notes the reference and a derived RK4 step.
+/// compare.json. Notes the reference and a derived RK4 step. With `formulations`, the whole
+/// set of rows once per formulation, against the one reference.
 pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Comparison>, Error> {
     let mut p = Prepared::load_spec(&o.case, None)?;
     p.max_wall_time = o.max_wall_time;
+    let passes = formulation_passes(&p, &o.formulations)?;
     let out = o
         .out
         .clone()
@@ -93,7 +114,7 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
     let adaptive = Method::ALL.iter().filter(|m| !m.is_fixed_step()).count();
     progress.started(
         "runs",
-        1 + usize::from(derive) + n_steps + adaptive * tolerances.len(),
+        1 + usize::from(derive) + passes.len() * (n_steps + adaptive * tolerances.len()),
     );
     let clock = Instant::now();
     let reference = Reference::compute_in(&p, o.t_end, o.window)?;
@@ -107,16 +128,22 @@ pub fn compare(o: &CompareOptions, progress: &dyn Progress) -> Result<Written<Co
         progress.finished(&run_line(&c), secs);
         runs.push(c);
     };
-    for &h in &steps {
-        let t = Instant::now();
-        let c = compare::compare_one(&p, &reference, Method::Rk4, None, Some(h), None)?.0;
-        push(c, t.elapsed().as_secs_f64());
-    }
-    for m in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
-        for &r in &tolerances {
+    for (pf, tag) in &passes {
+        let named = |mut c: Compared| {
+            c.formulation = tag.clone();
+            c
+        };
+        for &h in &steps {
             let t = Instant::now();
-            let c = compare::compare_one(&p, &reference, m, Some(r), None, None)?.0;
-            push(c, t.elapsed().as_secs_f64());
+            let c = compare::compare_one(pf, &reference, Method::Rk4, None, Some(h), None)?.0;
+            push(named(c), t.elapsed().as_secs_f64());
+        }
+        for m in Method::ALL.into_iter().filter(|m| !m.is_fixed_step()) {
+            for &r in &tolerances {
+                let t = Instant::now();
+                let c = compare::compare_one(pf, &reference, m, Some(r), None, None)?.0;
+                push(named(c), t.elapsed().as_secs_f64());
+            }
         }
     }
     let c = Comparison {
@@ -398,5 +425,65 @@ mod tests {
         // below 1e-6 at rtol 1e-9 (B0 moves 1 m: a branch switch would be ~1).
         let (loose, tight) = (runs[2].error.unwrap(), runs[3].error.unwrap());
         assert!(tight < 1e-6 && tight < loose, "{loose:e} {tight:e}");
+    }
+
+    #[test]
+    fn compare_puts_formulations_side_by_side() {
+        // A02 N = 1 over 1 s, through its first horizontal position at t = 0.708 s: every row
+        // of `lash compare` (one RK4 step, every adaptive method at rtol 1e-8) once per
+        // formulation, against the case's own reference (augmented Lagrangian).
+        let out =
+            std::env::temp_dir().join(format!("lash-cmp-formulations-{}", std::process::id()));
+        let o = CompareOptions {
+            case: concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../cases/iftomm/a02_n1.json"
+            )
+            .into(),
+            tolerances: Some(vec![1e-8]),
+            steps: Some(vec![1e-3]),
+            t_end: Some(1.0),
+            out: Some(out.clone()),
+            formulations: Some(vec![
+                FormulationName::LagrangeBaumgarte,
+                FormulationName::AugmentedLagrangian,
+            ]),
+            ..Default::default()
+        };
+        let c = compare(&o, &NoProgress).unwrap().result;
+        let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
+        let js = std::fs::read_to_string(out.join("compare.json")).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        let adaptive = Method::ALL.iter().filter(|m| !m.is_fixed_step()).count();
+        assert_eq!(c.runs.len(), 2 * (1 + adaptive));
+        let (lb, al) = c.runs.split_at(1 + adaptive);
+        for r in lb {
+            assert_eq!(r.formulation.as_deref(), Some("lagrange_baumgarte"));
+        }
+        for r in al {
+            assert_eq!(r.formulation.as_deref(), Some("augmented_lagrangian"));
+        }
+        assert_eq!(lb[0].label(), "rk4 [lagrange_baumgarte]");
+        assert!(
+            md.contains("| rk4 [augmented_lagrangian] | h 1e-3 |"),
+            "{md}"
+        );
+        assert!(js.contains("\"formulation\": \"augmented_lagrangian\""));
+        // Lagrange–Baumgarte cannot pass the singular position with any method: its rows are
+        // failures naming it (issue 26), not numbers.
+        for r in lb {
+            let f = r.failure.as_deref().unwrap_or_default();
+            assert!(
+                r.error.is_none() && f.contains("singular configuration"),
+                "{r:?}"
+            );
+        }
+        // The augmented Lagrangian runs through it with every method; at rtol 1e-8 the error
+        // of B0 (which moves 1 m; a branch switch would be ~1) is far below 1e-4, and RK4 at
+        // 1 ms (error ~ h⁴) below 1e-6.
+        for r in al {
+            let e = r.error.unwrap_or_else(|| panic!("{r:?}"));
+            assert!(e < 1e-4, "{}: {e:e}", r.label());
+        }
     }
 }

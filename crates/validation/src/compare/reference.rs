@@ -443,6 +443,10 @@ pub struct Compared {
     pub contact_onsets: Option<usize>,
     /// The solver failure, if it failed.
     pub failure: Option<String>,
+    /// The formulation the run was made with, when formulations are compared
+    /// (`--formulations`); None: the case's own (and not written).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<String>,
 }
 
 impl Compared {
@@ -455,11 +459,15 @@ impl Compared {
         }
     }
 
-    /// `method` or `method/controller`.
+    /// `method` or `method/controller`, then ` [formulation]` when formulations are compared.
     pub(crate) fn label(&self) -> String {
-        match self.controller {
+        let m = match self.controller {
             Some(c) => format!("{}/{}", self.method, c),
             None => self.method.to_string(),
+        };
+        match &self.formulation {
+            Some(f) => format!("{m} [{f}]"),
+            None => m,
         }
     }
 }
@@ -488,6 +496,7 @@ pub(crate) fn compare_one(
         events: 0,
         contact_onsets: None,
         failure: None,
+        formulation: None,
     };
     match timed(|| run_on_window(p, opts.clone(), t_end, &reference.window, false, false)) {
         Ok(r) => {
@@ -824,6 +833,7 @@ mod tests {
                 events: 0,
                 contact_onsets: None,
                 failure: Some("non-finite | state".into()),
+                formulation: None,
             }],
         };
         let md = c.to_markdown();
