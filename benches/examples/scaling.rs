@@ -9,7 +9,7 @@
 //!              released horizontal under gravity: 2N revolute equations; --t-end 1e-3
 //! free N       N free bodies (1 kg, 0.1 kg m²) moving up under gravity, no joint; t_end 0.01
 //! clearance N  a chain of N links whose N − 1 elbows are dry revolute clearance joints (the
-//!              README pendulum's elbow: c = 1 mm, impact law, Coulomb friction); --t-end 1e-2
+//!              README pendulum's elbow: c = 1 mm, impact law, Coulomb friction); --t-end 0.1
 //! ```
 //! Without arguments: chain 30 100 200 300, free 100 300 1000, clearance 10 25 50. Each case
 //! is one `lash run` at default settings (method bdf) in a child process, its scene written to
@@ -185,7 +185,7 @@ fn main() {
         let (scene, t_end) = match k.as_str() {
             "chain" => (chain(n, false), Some("1e-3")),
             "free" => (free(n), None),
-            _ => (chain(n, true), Some("1e-2")),
+            _ => (chain(n, true), Some("0.1")),
         };
         measure(&lash, &dir, &format!("{k}{n}"), &scene, t_end);
     }
