@@ -196,6 +196,17 @@ pub(crate) fn check_rank(mech: &Mechanism, rows: &[Row], jac: &Mat<f64>) -> Resu
     if m == 0 {
         return Ok(());
     }
+    // Full row rank of the whole Jacobian implies it for every leading block of rows (the
+    // smallest singular value of a subset of the rows is at least the whole's, Cauchy
+    // interlacing on Φ_q Φ_qᵀ, and the largest at most the whole's): one SVD when the rows
+    // are independent, the search for the first dependent row only when they are not.
+    if m <= nq {
+        let sv = jac.singular_values().unwrap_or_default();
+        let tol = RANK_TOL * sv.first().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
+        if sv.iter().filter(|&&s| s > tol).count() == m {
+            return Ok(());
+        }
+    }
     let mut sigma_max: f64 = 0.0;
     for r in 1..=m {
         let sub = jac.subrows(0, r).to_owned();

@@ -76,8 +76,8 @@ use std::cell::RefCell;
 
 use diffsol::ode_solver::state::StateCommon;
 use diffsol::{
-    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraLU, NalgebraMat, NalgebraVec,
-    NonLinearOp, NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
+    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraMat, NalgebraVec, NonLinearOp,
+    NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
     OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk,
     Tableau, UnitCallable, Vector, VectorCommon,
 };
@@ -94,7 +94,8 @@ use crate::system::OdeSystem;
 type Vd = NalgebraVec<f64>;
 type Md = NalgebraMat<f64>;
 type Cx = NalgebraContext;
-type Lu = NalgebraLU<f64>;
+/// nalgebra's LU below crate::auto_lu::FAER_LU_FROM unknowns, faer's above.
+type Lu = crate::auto_lu::AutoLu;
 
 /// Scratch of [`SysRhs`]: f(t, y), f(t, y + εv) and y + εv for finite differences; the dense
 /// J for products.

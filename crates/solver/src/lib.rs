@@ -111,6 +111,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+mod auto_lu;
 pub mod controller;
 pub mod diffsol_backend;
 pub mod erk;

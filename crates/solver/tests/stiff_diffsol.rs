@@ -252,3 +252,87 @@ fn a_stop_time_within_round_off_is_bridged() {
         assert!(err < 1e-6, "{method}: {err:.3e}");
     }
 }
+
+/// The heat equation u_t = u_xx on (0, 1), u = 0 at both ends, by central differences on n
+/// interior points: y' = A y, A = tridiag(1, −2, 1)/h², h = 1/(n + 1), stiff (|λ_max| ≈ 4/h²).
+/// From the first eigenvector y_j(0) = sin(π j h) the exact solution of the discrete system is
+/// y(t) = e^{λ₁ t} y(0), λ₁ = −4 sin²(π h/2)/h².
+struct Heat(usize);
+
+impl Heat {
+    fn h(&self) -> f64 {
+        1.0 / (self.0 as f64 + 1.0)
+    }
+    fn y0(&self) -> Vec<f64> {
+        let h = self.h();
+        (1..=self.0)
+            .map(|j| (std::f64::consts::PI * j as f64 * h).sin())
+            .collect()
+    }
+    fn lambda1(&self) -> f64 {
+        let h = self.h();
+        let s = (std::f64::consts::PI * h / 2.0).sin();
+        -4.0 * s * s / (h * h)
+    }
+}
+
+impl OdeSystem for Heat {
+    fn dim(&self) -> usize {
+        self.0
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
+        let n = self.0;
+        let k = 1.0 / (self.h() * self.h());
+        for j in 0..n {
+            let l = if j > 0 { y[j - 1] } else { 0.0 };
+            let r = if j + 1 < n { y[j + 1] } else { 0.0 };
+            dy[j] = k * (l - 2.0 * y[j] + r);
+        }
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], mut jac: faer::MatMut<'_, f64>) {
+        let n = self.0;
+        let k = 1.0 / (self.h() * self.h());
+        for j in 0..n {
+            jac[(j, j)] = -2.0 * k;
+            if j > 0 {
+                jac[(j, j - 1)] = k;
+                jac[(j - 1, j)] = k;
+            }
+        }
+    }
+    fn is_autonomous(&self) -> bool {
+        true
+    }
+}
+
+#[test]
+fn newton_matrices_on_both_sides_of_the_lu_crossover_solve_the_heat_equation() {
+    // n = 60 is factored by nalgebra's LU, n = 150 by faer's (crate::auto_lu, from 100
+    // unknowns): both follow the exact decay of the first mode to the tolerance.
+    for n in [60, 150] {
+        let sys = Heat(n);
+        let t_end = 0.05;
+        let want = (sys.lambda1() * t_end).exp();
+        for method in DIFFSOL {
+            let o = opts(method, 1e-8, 1e-10);
+            let problem = Problem::new(&sys, &o).unwrap();
+            let mut st =
+                DiffsolStepper::new(problem.diffsol().unwrap(), 0.0, &sys.y0(), &o).unwrap();
+            while st.t() < t_end {
+                st.step(t_end).unwrap();
+            }
+            let err = st
+                .y()
+                .iter()
+                .zip(sys.y0())
+                .map(|(y, y0)| (y - want * y0).abs())
+                .fold(0.0f64, f64::max);
+            // e^{λ₁ t} ≈ 0.61: rtol 1e-8 per step, a few hundred steps at most.
+            assert!(err < 1e-6, "{method} n = {n}: error {err:.3e}");
+            assert!(st.stats().lu_factorizations > 0, "{method} n = {n}");
+        }
+    }
+}

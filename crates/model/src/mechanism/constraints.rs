@@ -86,9 +86,22 @@ impl Constraints {
         &self,
         sc: &Scratch,
         body: usize,
+        f: impl FnMut(usize, f64, f64, f64),
+    ) {
+        self.for_point_terms_in(0..self.rows.len(), sc, body, f);
+    }
+
+    /// [`Constraints::for_point_terms_on`] over the rows `rows` only (increasing; the rows that
+    /// act on the body, for a cost independent of the number of rows).
+    pub(crate) fn for_point_terms_in(
+        &self,
+        rows: impl IntoIterator<Item = usize>,
+        sc: &Scratch,
+        body: usize,
         mut f: impl FnMut(usize, f64, f64, f64),
     ) {
-        for (a, (row, ints)) in self.rows.iter().zip(&self.row_int).enumerate() {
+        for a in rows {
+            let (row, ints) = (&self.rows[a], &self.row_int[a]);
             for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
                 if ints[ti] != Some(body) {
                     continue;

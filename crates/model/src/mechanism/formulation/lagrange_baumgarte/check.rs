@@ -26,7 +26,6 @@
 //! Source: docs/model.md §1 (the KKT system and its Schur complement); docs/scene-format.md,
 //! "Errors".
 
-use crate::linalg::cholesky_in_place;
 use crate::mechanism::bodies::{BodyInfo, Owner};
 use crate::mechanism::constraints::{describe, Constraints, TermKind};
 use crate::mechanism::formulation::lagrange_baumgarte::{LagrangeBaumgarte, Work};
@@ -98,11 +97,27 @@ impl LagrangeBaumgarte {
         sc: &Scratch,
     ) -> Result<(), SceneError> {
         let mut w = self.work.borrow_mut();
-        self.constraint_rows(t, cons, info, sc, &mut w, true);
+        self.constraint_rows(t, cons, info, sc, &mut w);
         let nq = self.nq;
         for (r, row) in cons.rows.iter().enumerate() {
-            let jr = &w.jac[r * nq..(r + 1) * nq];
-            if !(finite(&[w.phi[r], w.phid[r], w.rc[r]]) && finite(jr)) {
+            // Row r of Φ_q: its terms' blocks, summed per integrated body.
+            let mut jr: Vec<(usize, [f64; 3])> = Vec::with_capacity(2);
+            for (ti, bi) in cons.row_int[r].iter().enumerate() {
+                let Some(i) = *bi else { continue };
+                let k = jr.iter().position(|e| e.0 == i).unwrap_or_else(|| {
+                    jr.push((i, [0.0; 3]));
+                    jr.len() - 1
+                });
+                for c in 0..3 {
+                    jr[k].1[c] += w.term_jac[r][ti][c];
+                }
+            }
+            if !(finite(&[w.phi[r], w.phid[r], w.rc[r]]) && jr.iter().all(|e| finite(&e.1))) {
+                let mut dense = vec![0.0; nq];
+                for (i, v) in &jr {
+                    dense[3 * i..3 * i + 3].copy_from_slice(v);
+                }
+                let jr = dense;
                 return Err(fail(
                     format!("joints[{}]", row.joint),
                     format!(
@@ -141,8 +156,8 @@ impl LagrangeBaumgarte {
     }
 
     /// The first equation j whose Cholesky pivot of S = Φ_q M⁻¹ Φ_qᵀ is at most PIVOT_TOL · S_jj
-    /// (or not a number), with d_j / S_jj; None when every pivot is above it. Needs Φ_q in
-    /// `w.jac` (after `constraint_rows` in full).
+    /// (or not a number), with d_j / S_jj; None when every pivot is above it. Needs the term
+    /// blocks in `w` (after `constraint_rows`).
     fn weak_pivot(&self, w: &Work) -> Option<(usize, f64)> {
         let ratios = self.pivot_ratios(w);
         let j = ratios.iter().position(|r| !(*r > PIVOT_TOL))?;
@@ -150,28 +165,22 @@ impl LagrangeBaumgarte {
     }
 
     /// d_j / S_jj of the Cholesky factorisation S = Φ_q M⁻¹ Φ_qᵀ = L Lᵀ, d_j = L_jj², up to and
-    /// including the first that is not a positive number (the factorisation stops there).
+    /// including the first that is not a positive number (the factorisation stops there). S
+    /// is formed and factored in its envelope (linalg.rs, `Envelope`), in row order.
     fn pivot_ratios(&self, w: &Work) -> Vec<f64> {
-        let nq = self.nq;
         let m = w.phi.len();
-        let minv = &self.minv;
-        let mut l = vec![0.0; m * m];
-        for a in 0..m {
-            let ja = &w.jac[a * nq..(a + 1) * nq];
-            for b in 0..=a {
-                let jb = &w.jac[b * nq..(b + 1) * nq];
-                l[a * m + b] = (0..nq).map(|j| ja[j] * minv[j] * jb[j]).sum();
-            }
-        }
-        let diag: Vec<f64> = (0..m).map(|j| l[j * m + j]).collect();
-        match cholesky_in_place(&mut l, m) {
-            Ok(()) => (0..m).map(|j| l[j * m + j].powi(2) / diag[j]).collect(),
+        let env = &self.env;
+        let mut l = vec![0.0; env.len()];
+        self.assemble_schur(&w.term_jac[..m], &mut l);
+        let diag: Vec<f64> = (0..m).map(|j| l[env.diag(j)]).collect();
+        match env.factor::<false>(&mut l) {
+            Ok(()) => (0..m).map(|j| l[env.diag(j)].powi(2) / diag[j]).collect(),
             Err(k) => (0..=k)
                 .map(|j| {
                     let d = if j == k {
-                        l[j * m + j]
+                        l[env.diag(j)]
                     } else {
-                        l[j * m + j].powi(2)
+                        l[env.diag(j)].powi(2)
                     };
                     d / diag[j]
                 })
@@ -192,8 +201,8 @@ mod tests {
             unreachable!("the default formulation")
         };
         let sc = mech.evaluated(0.0, &mech.initial_state()).unwrap();
-        let mut w = Work::new(mech.constraints().len(), f.nq);
-        f.constraint_rows(0.0, mech.constraints(), mech.body_info(), &sc, &mut w, true);
+        let mut w = Work::new(mech.constraints().len(), f.env.len());
+        f.constraint_rows(0.0, mech.constraints(), mech.body_info(), &sc, &mut w);
         (f.pivot_ratios(&w), f.weak_pivot(&w))
     }
 

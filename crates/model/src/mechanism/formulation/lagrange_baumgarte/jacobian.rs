@@ -14,10 +14,17 @@
 //! ```
 //! docs/model.md §1 (1.7) allows finite differences for the constraint part; the closed forms
 //! are exact, and cost no KKT solve beyond one back substitution per column.
+//!
+//! Φ_q is sparse (a row acts on at most two bodies) and so are ∂r/∂q̇, ∂g/∂y (a force couples
+//! few bodies) and the right-hand sides of ∂λ: every product with them runs over the rows
+//! that act on the bodies involved (`rows_of_body`), in increasing order, so that the
+//! Jacobian costs O(n²) (its size; P and the result are dense) instead of O(n² m), with the
+//! numbers of the dense products (only products with an exact zero are skipped; a column of
+//! ∂g/∂y that is not finite takes the dense products, which spread its NaN as before).
 
 use faer::MatMut;
 
-use crate::linalg::{cholesky_solve, first_order_jacobian_frame, zeroed};
+use crate::linalg::{first_order_jacobian_frame, zeroed};
 use crate::mechanism::constraints::{Constraints, TermKind};
 use crate::mechanism::formulation::lagrange_baumgarte::{JacWork, LagrangeBaumgarte, Work};
 use crate::mechanism::scratch::Scratch;
@@ -72,9 +79,39 @@ impl LagrangeBaumgarte {
         // film, where ∂g/∂y reaches 1e18 near the centred start, that was enough to change BDF's
         // path from 76 000 steps to more than 300 000 over the first 20 µs.)
         let w = zeroed(w, m);
+        let mut rows: Vec<usize> = Vec::new();
         for j in 0..n {
             let dgj = &dg[j * nq..(j + 1) * nq];
             if dgj.iter().all(|&v| v == 0.0) {
+                continue;
+            }
+            let lj = &mut low[j * nq..(j + 1) * nq];
+            if dgj.iter().all(|v| v.is_finite()) {
+                // w is nonzero only on the rows acting on the bodies ∂g/∂y_j moves.
+                rows.clear();
+                for (b, rb) in self.rows_of_body.iter().enumerate() {
+                    if dgj[3 * b..3 * b + 3].iter().any(|&v| v != 0.0) {
+                        rows.extend_from_slice(rb);
+                    }
+                }
+                rows.sort_unstable();
+                rows.dedup();
+                for &a in &rows {
+                    let mut s = 0.0;
+                    for c in self.row_columns(cons, a) {
+                        s += w0.jac[a * nq + c] * self.minv[c] * dgj[c];
+                    }
+                    w[a] = s;
+                }
+                for (i, x) in lj.iter_mut().enumerate() {
+                    *x = self.minv[i] * dgj[i];
+                }
+                for &a in &rows {
+                    let (wa, pa) = (w[a], &pmat[a * nq..(a + 1) * nq]);
+                    for (x, p) in lj.iter_mut().zip(pa) {
+                        *x -= p * wa;
+                    }
+                }
                 continue;
             }
             for (a, wa) in w.iter_mut().enumerate() {
@@ -85,7 +122,6 @@ impl LagrangeBaumgarte {
                 }
                 *wa = s;
             }
-            let lj = &mut low[j * nq..(j + 1) * nq];
             for (i, x) in lj.iter_mut().enumerate() {
                 let mut s = self.minv[i] * dgj[i];
                 for (a, wa) in w.iter().enumerate() {
@@ -97,13 +133,18 @@ impl LagrangeBaumgarte {
         // ∂K/∂q̇ at fixed g: P ∂r/∂q̇, column by column.
         let drdv = zeroed(drdv, m * nq);
         self.constraint_rhs_velocity_jacobian(cons, sc, drdv);
+        let acc = zeroed(w2, nq);
         for j in 0..nq {
-            let lj = &mut low[(nq + j) * nq..(nq + j + 1) * nq];
-            for (i, x) in lj.iter_mut().enumerate() {
-                let mut s = 0.0;
-                for a in 0..m {
-                    s += pmat[a * nq + i] * drdv[a * nq + j];
+            // ∂r/∂q̇_j is nonzero only on the rows acting on body j/3.
+            acc.fill(0.0);
+            for &a in &self.rows_of_body[j / 3] {
+                let (d, pa) = (drdv[a * nq + j], &pmat[a * nq..(a + 1) * nq]);
+                for (s, p) in acc.iter_mut().zip(pa) {
+                    *s += p * d;
                 }
+            }
+            let lj = &mut low[(nq + j) * nq..(nq + j + 1) * nq];
+            for (x, s) in lj.iter_mut().zip(acc.iter()) {
                 *x += s;
             }
         }
@@ -133,17 +174,32 @@ impl LagrangeBaumgarte {
             // S⁻¹ is symmetric: row a = column a, the solve of S x = e_a in place.
             let e = &mut sinv[a * m..(a + 1) * m];
             e[a] = 1.0;
-            cholesky_solve(&w0.smat, m, e);
+            self.env.solve(&w0.smat, e);
         }
+        // Column i of Φ_q is nonzero only on the rows acting on body i/3.
         for i in 0..nq {
+            let rows = &self.rows_of_body[i / 3];
             for a in 0..m {
                 let mut s = 0.0;
-                for b in 0..m {
+                for &b in rows {
                     s += w0.jac[b * nq + i] * sinv[b * m + a];
                 }
                 p[a * nq + i] = self.minv[i] * s;
             }
         }
+    }
+
+    /// The columns of row `a` of Φ_q on integrated bodies, increasing (three per body).
+    fn row_columns(&self, cons: &Constraints, a: usize) -> impl Iterator<Item = usize> {
+        let mut b = cons.row_int[a];
+        if let [Some(x), Some(y)] = b {
+            if x == y {
+                b[1] = None;
+            } else if y < x {
+                b = [Some(y), Some(x)];
+            }
+        }
+        b.into_iter().flatten().flat_map(|i| 3 * i..3 * i + 3)
     }
 
     /// Adds ∂K/∂q at fixed g to the lower-left block of `jac` (after an evaluation: q̈, λ, Φ_q,
@@ -178,35 +234,44 @@ impl LagrangeBaumgarte {
             return;
         }
         let (a2, b2) = (2.0 * self.alpha, self.beta * self.beta);
-        // dphiq: ∂Φ_q[:, j]/∂q_j (the only nonzero column).
+        let mut v = vec![0.0; nq];
+        // dphiq: ∂Φ_q[:, j]/∂q_j (the only nonzero column). Both it and ∂r/∂q_j are nonzero
+        // only on the rows acting on body j/3.
         for j in 0..nq {
             let (body_i, comp) = (j / 3, j % 3);
-            dphiq.iter_mut().for_each(|v| *v = 0.0);
+            let rows = &self.rows_of_body[body_i];
+            for &a in rows {
+                dphiq[a] = 0.0;
+            }
             // ∂r/∂q_j, with the sign of −∂r in `rhs`.
-            for a in 0..m {
+            for &a in rows {
                 rhs[a] = b2 * w0.jac[a * nq + j];
             }
             if comp == 2 {
-                cons.for_point_terms_on(sc, body_i, |a, wa, wb, om| {
+                cons.for_point_terms_in(rows.iter().copied(), sc, body_i, |a, wa, wb, om| {
                     dphiq[a] -= wa;
                     // −∂γ/∂φ + 2α ∂Φ̇/∂φ = −φ̇² (w · b) − 2α (w · A s) φ̇.
                     rhs[a] -= om * om * wb + a2 * wa * om;
                 });
             }
             // u = (∂Φ_q/∂q_j)ᵀ λ has the single entry u_j.
-            let u: f64 = (0..m).map(|a| dphiq[a] * w0.lam[a]).sum();
+            let u: f64 = rows.iter().map(|&a| dphiq[a] * w0.lam[a]).sum();
             let mj = self.minv[j];
-            for a in 0..m {
+            for &a in rows {
                 rhs[a] += dphiq[a] * sc.qdd[j] - w0.jac[a * nq + j] * mj * u;
             }
             // ∂q̈/∂q_j = −M⁻¹ u e_j − P (S ∂λ).
-            let lj = &mut low[j * nq..(j + 1) * nq];
-            for (i, x) in lj.iter_mut().enumerate() {
-                let mut v = if i == j { self.minv[i] * u } else { 0.0 };
-                for a in 0..m {
-                    v += pmat[a * nq + i] * rhs[a];
+            v.fill(0.0);
+            v[j] = self.minv[j] * u;
+            for &a in rows {
+                let (ra, pa) = (rhs[a], &pmat[a * nq..(a + 1) * nq]);
+                for (x, p) in v.iter_mut().zip(pa) {
+                    *x += p * ra;
                 }
-                *x -= v;
+            }
+            let lj = &mut low[j * nq..(j + 1) * nq];
+            for (x, vi) in lj.iter_mut().zip(&v) {
+                *x -= vi;
             }
         }
     }

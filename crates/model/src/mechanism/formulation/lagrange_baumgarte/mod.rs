@@ -13,7 +13,9 @@
 //!   q̈ = M⁻¹ (g − Φ_qᵀ λ)
 //! ```
 //! S has a fixed structure (which rows share a body) built once, and is block diagonal up to
-//! the order of its rows: each block is factored on its own (linalg.rs). The Jacobian of this
+//! the order of its rows; it is stored and factored in its envelope (linalg.rs, `Envelope`:
+//! a chain's S is banded, so the solve costs O(m), with the numbers of the dense factor).
+//! Φ_q itself is formed densely only for the Jacobian (m × n_q, on demand). The Jacobian of this
 //! formulation is in jacobian.rs, its checks at the initial state in check.rs.
 //!
 //! Sources: docs/model.md §1 (Nikravesh, Computer-Aided Analysis of Mechanical Systems, 1988;
@@ -24,7 +26,7 @@ mod jacobian;
 
 use std::cell::RefCell;
 
-use crate::linalg::{block_cholesky_inv, block_cholesky_solve};
+use crate::linalg::Envelope;
 use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::{eval_row, Constraints};
 use crate::mechanism::scratch::Scratch;
@@ -32,8 +34,9 @@ use crate::scene::format::Baumgarte;
 
 /// One block product of the Schur complement S = Φ_q M⁻¹ Φ_qᵀ: term `ta` of row `a` and term
 /// `tb` of row `b` (a ≥ b) act on the same integrated body `i`, and add
-/// J_{a,ta} M_i⁻¹ J_{b,tb}ᵀ (3-vectors, M_i⁻¹ = diag(1/m, 1/m, 1/I)) to S_ab. Built once per
-/// scene: the rows of bodies that share no term give S_ab = 0 and cost nothing.
+/// J_{a,ta} M_i⁻¹ J_{b,tb}ᵀ (3-vectors, M_i⁻¹ = diag(1/m, 1/m, 1/I)) to S_ab, stored at `at`
+/// in the envelope of S. Built once per scene: the rows of bodies that share no term give
+/// S_ab = 0 and cost nothing.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct SchurTerm {
     pub a: usize,
@@ -41,18 +44,20 @@ pub(crate) struct SchurTerm {
     pub ta: usize,
     pub tb: usize,
     pub i: usize,
+    pub at: usize,
 }
 
 /// The buffers of one evaluation of the constraint side (m equations, n_q coordinates).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
-    /// Φ_q, m × n_q row-major (full evaluations and the Jacobian).
+    /// Φ_q, m × n_q row-major (the Jacobian and the tests only: empty until
+    /// `dense_constraint_jacobian` forms it).
     pub jac: Vec<f64>,
     pub phi: Vec<f64>,
     pub phid: Vec<f64>,
     /// r = γ − 2αΦ̇ − β²Φ.
     pub rc: Vec<f64>,
-    /// S, then its factor (lower triangle, 1/L_jj on the diagonal).
+    /// S, then its factor (its envelope, 1/L_jj on the diagonal).
     pub smat: Vec<f64>,
     pub lam: Vec<f64>,
     /// Jacobian blocks of every row with respect to each of its terms' bodies.
@@ -60,13 +65,13 @@ pub(crate) struct Work {
 }
 
 impl Work {
-    fn new(m: usize, nq: usize) -> Work {
+    fn new(m: usize, envelope: usize) -> Work {
         Work {
-            jac: vec![0.0; m * nq],
+            jac: Vec::new(),
             phi: vec![0.0; m],
             phid: vec![0.0; m],
             rc: vec![0.0; m],
-            smat: vec![0.0; m * m],
+            smat: vec![0.0; envelope],
             lam: vec![0.0; m],
             term_jac: vec![[[0.0; 3]; 2]; m],
         }
@@ -100,9 +105,12 @@ pub(crate) struct LagrangeBaumgarte {
     beta: f64,
     /// The nonzero block products of S (fixed structure, built once).
     schur: Vec<SchurTerm>,
-    /// The rows of each diagonal block of S (rows that share no body, directly or through
-    /// other rows, are in different blocks), each in increasing order.
-    kkt_blocks: Vec<Vec<usize>>,
+    /// The rows acting on each integrated body, increasing: the nonzero rows of Φ_q's three
+    /// columns of that body (the Jacobian's sparse products).
+    rows_of_body: Vec<Vec<usize>>,
+    /// The envelope of S in its diagonal blocks (rows that share no body, directly or
+    /// through other rows, are in different blocks).
+    env: Envelope,
     work: RefCell<Work>,
     jac_work: RefCell<JacWork>,
     /// S of the accepted-state check (mechanism/accepted.rs), kept apart from `work`, which
@@ -114,20 +122,42 @@ impl LagrangeBaumgarte {
     /// The structure of S for the constraint equations `cons` on `bodies`.
     pub(crate) fn new(cons: &Constraints, bodies: &Bodies, baumgarte: Baumgarte) -> Self {
         let (rows, row_int) = (&cons.rows, &cons.row_int);
+        // The terms on each integrated body, then every pair of them: O(Σ_i deg_i²), in the
+        // order (a, b, ta, tb) of the products' sums.
+        let mut on_body: Vec<Vec<(usize, usize)>> = vec![Vec::new(); bodies.nq() / 3];
+        for (a, ints) in row_int.iter().enumerate() {
+            for (ta, bi) in ints.iter().enumerate() {
+                if let Some(i) = *bi {
+                    on_body[i].push((a, ta));
+                }
+            }
+        }
         let mut schur = Vec::new();
-        for a in 0..rows.len() {
-            for b in 0..=a {
-                for ta in 0..2 {
-                    for tb in 0..2 {
-                        if let (Some(i), Some(j)) = (row_int[a][ta], row_int[b][tb]) {
-                            if i == j {
-                                schur.push(SchurTerm { a, b, ta, tb, i });
-                            }
-                        }
+        for (i, terms) in on_body.iter().enumerate() {
+            for &(a, ta) in terms {
+                for &(b, tb) in terms {
+                    if b <= a {
+                        schur.push(SchurTerm {
+                            a,
+                            b,
+                            ta,
+                            tb,
+                            i,
+                            at: 0,
+                        });
                     }
                 }
             }
         }
+        schur.sort_unstable_by_key(|p| (p.a, p.b, p.ta, p.tb));
+        let rows_of_body: Vec<Vec<usize>> = on_body
+            .iter()
+            .map(|terms| {
+                let mut r: Vec<usize> = terms.iter().map(|t| t.0).collect();
+                r.dedup();
+                r
+            })
+            .collect();
         // Diagonal blocks of S: connected components of the rows under "share a body".
         let mut comp: Vec<usize> = (0..rows.len()).collect();
         fn root(c: &mut [usize], mut a: usize) -> usize {
@@ -151,38 +181,50 @@ impl LagrangeBaumgarte {
             }
             kkt_blocks[block_of[c]].push(r);
         }
+        let m = rows.len();
+        let diagonal = (0..m).map(|a| (a, a));
+        let env = Envelope::new(
+            m,
+            kkt_blocks,
+            schur.iter().map(|p| (p.a, p.b)).chain(diagonal),
+        );
+        for p in &mut schur {
+            p.at = env.at(p.a, p.b);
+        }
         let nq = bodies.nq();
         LagrangeBaumgarte {
             nq,
             minv: bodies.inverse_masses(),
             alpha: baumgarte.alpha,
             beta: baumgarte.beta,
-            schur,
-            kkt_blocks,
-            work: RefCell::new(Work::new(rows.len(), nq)),
+            work: RefCell::new(Work::new(m, env.len())),
             jac_work: RefCell::default(),
-            check_s: RefCell::new(vec![0.0; rows.len() * rows.len()]),
+            check_s: RefCell::new(vec![0.0; env.len()]),
+            schur,
+            rows_of_body,
+            env,
         }
     }
 
     /// q̈ into `sc.qdd` from the applied forces `sc.g` (after the kinematics): the constraint
     /// rows, then the KKT system by its Schur complement. False if S is not positive definite.
+    /// A full evaluation (`_full`) needs nothing more of this formulation (the reactions come
+    /// from the term blocks).
     pub(crate) fn accelerations(
         &self,
         t: f64,
         cons: &Constraints,
         info: &[BodyInfo],
         sc: &mut Scratch,
-        full: bool,
+        _full: bool,
     ) -> bool {
         let mut w = self.work.borrow_mut();
-        self.constraint_rows(t, cons, info, sc, &mut w, full);
+        self.constraint_rows(t, cons, info, sc, &mut w);
         self.solve_kkt(cons, sc, &mut w)
     }
 
     /// Constraint values, Φ̇, the Baumgarte right-hand side and the Jacobian blocks of every
-    /// term (for the Schur complement and, in full mode, the reactions on any body); in full
-    /// mode also the dense Φ_q of the integrated columns (`sc.jac`).
+    /// term (for the Schur complement and the reactions on any body).
     pub(crate) fn constraint_rows(
         &self,
         t: f64,
@@ -190,7 +232,6 @@ impl LagrangeBaumgarte {
         info: &[BodyInfo],
         sc: &Scratch,
         w: &mut Work,
-        full: bool,
     ) {
         let (a2, b2) = (2.0 * self.alpha, self.beta * self.beta);
         for (r, row) in cons.rows.iter().enumerate() {
@@ -200,15 +241,13 @@ impl LagrangeBaumgarte {
             w.phid[r] = ev.phid;
             w.rc[r] = ev.gamma - a2 * ev.phid - b2 * ev.phi;
         }
-        if full {
-            self.dense_constraint_jacobian(cons, w);
-        }
     }
 
     /// Φ_q (m × n_q, row-major) into `w.jac` from the term blocks (after `constraint_rows`).
     pub(crate) fn dense_constraint_jacobian(&self, cons: &Constraints, w: &mut Work) {
         let nq = self.nq;
-        w.jac.iter_mut().for_each(|v| *v = 0.0);
+        w.jac.clear();
+        w.jac.resize(cons.rows.len() * nq, 0.0);
         for (r, (row, jr)) in cons.row_int.iter().zip(&w.term_jac).enumerate() {
             for (ti, bi) in row.iter().enumerate() {
                 if let Some(i) = *bi {
@@ -253,7 +292,6 @@ impl LagrangeBaumgarte {
             qdd[j] = minv[j] * g[j];
         }
         let term_jac = &term_jac[..m];
-        let smat = &mut smat[..m * m];
         for (a, (row, jr)) in cons.row_int.iter().zip(term_jac).enumerate() {
             let mut ba = -rc[a];
             for (ti, bi) in row.iter().enumerate() {
@@ -264,23 +302,14 @@ impl LagrangeBaumgarte {
                 }
             }
             lam[a] = ba;
-            smat[a * m..a * m + a + 1].fill(0.0);
         }
-        for p in &self.schur {
-            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
-            let w = &minv[3 * p.i..3 * p.i + 3];
-            smat[p.a * m + p.b] +=
-                ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
+        self.assemble_schur(term_jac, smat);
+        // S in its envelope (block diagonal up to the order of the rows, banded for a chain):
+        // the factor, stored in place, holds the numbers of the dense factor of S.
+        if self.env.factor::<true>(smat).is_err() {
+            return false;
         }
-        // S is block diagonal (up to the order of the rows): each block is factored and solved
-        // on its own, so the square roots and divisions of different blocks do not wait for
-        // each other. The factor, stored in place, is the dense factor of S.
-        for blk in &self.kkt_blocks {
-            if block_cholesky_inv(smat, m, blk).is_err() {
-                return false;
-            }
-            block_cholesky_solve(smat, m, blk, lam);
-        }
+        self.env.solve(smat, lam);
         // q̈ = M⁻¹ g − M⁻¹ Φ_qᵀ λ.
         for (a, (row, jr)) in cons.row_int.iter().zip(term_jac).enumerate() {
             let la = lam[a];
@@ -302,6 +331,7 @@ impl LagrangeBaumgarte {
     /// S = Φ_q M⁻¹ Φ_qᵀ from the term blocks of every row (the blocks and order of the
     /// acceleration solve), and its row; ρ ≤ 0 when a pivot is not positive (mechanism/
     /// accepted.rs).
+    /// (The first non-positive pivot in row order when there are several.)
     pub(crate) fn smallest_relative_pivot(
         &self,
         cons: &Constraints,
@@ -309,25 +339,18 @@ impl LagrangeBaumgarte {
     ) -> (f64, usize) {
         let m = cons.rows.len();
         let mut smat = self.check_s.borrow_mut();
-        let smat = &mut smat[..m * m];
-        for a in 0..m {
-            smat[a * m..a * m + a + 1].fill(0.0);
+        self.assemble_schur(term_jac, &mut smat);
+        let env = &self.env;
+        let diag: Vec<f64> = (0..m).map(|j| smat[env.diag(j)]).collect();
+        if let Err(j) = env.factor::<true>(&mut smat) {
+            return (smat[env.diag(j)] / diag[j], j);
         }
-        for p in &self.schur {
-            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
-            let w = &self.minv[3 * p.i..3 * p.i + 3];
-            smat[p.a * m + p.b] +=
-                ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
-        }
-        let diag: Vec<f64> = (0..m).map(|j| smat[j * m + j]).collect();
         let mut best = (f64::INFINITY, 0);
-        for blk in &self.kkt_blocks {
-            if let Err(j) = block_cholesky_inv(smat, m, blk) {
-                return (smat[j * m + j] / diag[j], j);
-            }
+        for blk in env.blocks() {
             for &j in blk {
                 // The factor holds 1/√d_j on its diagonal.
-                let d = 1.0 / (smat[j * m + j] * smat[j * m + j]);
+                let r = smat[env.diag(j)];
+                let d = 1.0 / (r * r);
                 let rho = d / diag[j];
                 if rho < best.0 {
                     best = (rho, j);
@@ -335,6 +358,17 @@ impl LagrangeBaumgarte {
             }
         }
         best
+    }
+
+    /// S = Φ_q M⁻¹ Φ_qᵀ into its envelope `smat` from the term blocks of every row (the
+    /// products in `schur`'s order, each entry's from 0).
+    fn assemble_schur(&self, term_jac: &[[[f64; 3]; 2]], smat: &mut [f64]) {
+        smat.fill(0.0);
+        for p in &self.schur {
+            let (ja, jb) = (&term_jac[p.a][p.ta], &term_jac[p.b][p.tb]);
+            let w = &self.minv[3 * p.i..3 * p.i + 3];
+            smat[p.at] += ja[0] * w[0] * jb[0] + ja[1] * w[1] * jb[1] + ja[2] * w[2] * jb[2];
+        }
     }
 
     /// The constraint forces −Σ J_r,kᵀ λ_r of the last evaluation on every body, added to `cf`

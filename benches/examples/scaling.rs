@@ -1,0 +1,193 @@
+//! Wall time and peak memory of `lash run` against the size of the mechanism (issue 23, "a
+//! cost that grows linearly with the mechanism"; BENCHMARKS.md, "Scaling with the number of
+//! bodies").
+//!
+//! ```text
+//! cargo build --release -p lash-cli
+//! cargo run --release -p lash-benches --example scaling -- [chain N…] [free N…] [clearance N…]
+//! chain N      N pendulum links (0.1 m, 1 kg) pinned end to end, the first to the ground,
+//!              released horizontal under gravity: 2N revolute equations; --t-end 1e-3
+//! free N       N free bodies (1 kg, 0.1 kg m²) moving up under gravity, no joint; t_end 0.01
+//! clearance N  a chain of N links whose N − 1 elbows are dry revolute clearance joints (the
+//!              README pendulum's elbow: c = 1 mm, impact law, Coulomb friction); --t-end 0.1
+//! ```
+//! Without arguments: chain 30 100 200 300, free 100 300 1000, clearance 10 25 50. Each case
+//! is one `lash run` at default settings (method bdf) in a child process, its scene written to
+//! a temporary directory; the table gives its exit code, the wall time of the whole process,
+//! the time the run itself reports (summary.json `wall_time_s`: set-up is the difference) and
+//! the peak resident memory (VmHWM of /proc/<pid>/status, polled every 5 ms until the child
+//! exits: a peak in its last 5 ms may be missed). The `lash` binary is the one next to this
+//! example's directory (target/release/lash).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+/// A chain of `n` links; `clearance`: every joint but the ground pin is a clearance joint.
+fn chain(n: usize, clearance: bool) -> String {
+    let l = 0.1;
+    let mut bodies = Vec::new();
+    let mut joints = vec![
+        r#"{"type": "revolute", "name": "j0", "a": {"body": "l0", "point": "A"},
+            "b": {"body": "ground", "at": [0.0, 0.0]}}"#
+            .to_string(),
+    ];
+    for i in 0..n {
+        bodies.push(format!(
+            r#"{{"name": "l{i}", "mass": 1.0, "inertia": {}, "position": [{}, 0.0],
+                "points": {{"A": [{}, 0.0], "B": [{}, 0.0]}}}}"#,
+            l * l / 12.0,
+            l * i as f64 + l / 2.0,
+            -l / 2.0,
+            l / 2.0
+        ));
+        if i == 0 {
+            continue;
+        }
+        joints.push(if clearance {
+            format!(
+                r#"{{"type": "clearance", "name": "j{i}",
+                    "bearing": {{"body": "l{}", "point": "B", "radius": 0.01}},
+                    "journal": {{"body": "l{i}", "point": "A", "radius": 0.009}},
+                    "normal": {{"law": "impact", "k": 1e9, "c_max": 2000.0, "d_max": 1e-5}},
+                    "friction": {{"law": "coulomb", "mu": 0.1, "v0": 1e-4, "v1": 2e-4}}}}"#,
+                i - 1
+            )
+        } else {
+            format!(
+                r#"{{"type": "revolute", "name": "j{i}", "a": {{"body": "l{}", "point": "B"}},
+                    "b": {{"body": "l{i}", "point": "A"}}}}"#,
+                i - 1
+            )
+        });
+    }
+    format!(
+        r#"{{"bodies": [{}], "joints": [{}], "gravity": [0.0, -9.81], "t_end": 1.0}}"#,
+        bodies.join(", "),
+        joints.join(", ")
+    )
+}
+
+/// `n` free bodies under gravity.
+fn free(n: usize) -> String {
+    let bodies: Vec<String> = (0..n)
+        .map(|i| {
+            format!(
+                r#"{{"name": "b{i}", "mass": 1.0, "inertia": 0.1, "position": [{i}.0, 0.0],
+                    "velocity": [0.0, 1.0]}}"#
+            )
+        })
+        .collect();
+    format!(
+        r#"{{"bodies": [{}], "gravity": [0.0, -9.81], "t_end": 0.01}}"#,
+        bodies.join(", ")
+    )
+}
+
+/// Peak resident memory of a live process (kB), from /proc/<pid>/status.
+fn vm_hwm(pid: u32) -> Option<u64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// One case: exit code, wall time of the process (s), the run's own wall time (s), peak
+/// memory (MB).
+fn measure(lash: &PathBuf, dir: &std::path::Path, name: &str, scene: &str, t_end: Option<&str>) {
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, scene).expect("write the scene");
+    let out = dir.join(name);
+    let mut cmd = Command::new(lash);
+    cmd.arg("run").arg(&path).arg("--out").arg(&out);
+    if let Some(t) = t_end {
+        cmd.args(["--t-end", t]);
+    }
+    let start = Instant::now();
+    let mut child = cmd
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn lash");
+    let mut peak = 0;
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait for lash") {
+            break s;
+        }
+        peak = peak.max(vm_hwm(child.id()).unwrap_or(0));
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let wall = start.elapsed().as_secs_f64();
+    let run = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|s| {
+            let k = s.find("\"wall_time_s\":")?;
+            let rest = s[k + 14..].trim_start();
+            let end = rest.find([',', '\n', '}'])?;
+            rest[..end].trim().parse::<f64>().ok()
+        });
+    let run = run.map_or_else(|| "—".to_string(), |v| format!("{v:.2}"));
+    println!(
+        "| {name} | {} | {wall:.2} | {run} | {:.0} |",
+        status
+            .code()
+            .map_or_else(|| "signal".into(), |c| c.to_string()),
+        peak as f64 / 1024.0
+    );
+    std::io::stdout().flush().ok();
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut cases: Vec<(String, usize)> = Vec::new();
+    let mut kind = None;
+    for a in &args {
+        match a.as_str() {
+            "chain" | "free" | "clearance" => kind = Some(a.clone()),
+            n => match (kind.clone(), n.parse::<usize>()) {
+                (Some(k), Ok(n)) if n >= 1 => cases.push((k, n)),
+                _ => {
+                    eprintln!("usage: scaling [chain N…] [free N…] [clearance N…] (N ≥ 1)");
+                    std::process::exit(2);
+                }
+            },
+        }
+    }
+    if cases.is_empty() {
+        for n in [30, 100, 200, 300] {
+            cases.push(("chain".into(), n));
+        }
+        for n in [100, 300, 1000] {
+            cases.push(("free".into(), n));
+        }
+        for n in [10, 25, 50] {
+            cases.push(("clearance".into(), n));
+        }
+    }
+    let exe = std::env::current_exe().expect("the example's path");
+    let lash = exe
+        .parent()
+        .and_then(|p| p.parent())
+        .map(|p| p.join("lash"))
+        .expect("target/release");
+    if !lash.exists() {
+        eprintln!(
+            "{} not found: cargo build --release -p lash-cli first",
+            lash.display()
+        );
+        std::process::exit(2);
+    }
+    let dir = std::env::temp_dir().join(format!("lash-scaling-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    println!("| case | exit | wall (s) | run (s) | peak RSS (MB) |");
+    println!("|---|---|---|---|---|");
+    for (k, n) in cases {
+        let (scene, t_end) = match k.as_str() {
+            "chain" => (chain(n, false), Some("1e-3")),
+            "free" => (free(n), None),
+            _ => (chain(n, true), Some("0.1")),
+        };
+        measure(&lash, &dir, &format!("{k}{n}"), &scene, t_end);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
