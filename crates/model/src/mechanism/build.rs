@@ -20,7 +20,7 @@ use crate::mechanism::bodies::Bodies;
 use crate::mechanism::constraints::Constraints;
 use crate::mechanism::events::event_list;
 use crate::mechanism::forces::Forces;
-use crate::mechanism::formulation::{AugmentedLagrangian, Formulation, LagrangeBaumgarte};
+use crate::mechanism::formulation::{AugmentedLagrangian, Formulation, LagrangeBaumgarte, Minimal};
 use crate::mechanism::scratch::Scratch;
 use crate::mechanism::Mechanism;
 use crate::roles::Roles;
@@ -46,6 +46,9 @@ impl Mechanism {
             FormulationName::AugmentedLagrangian => Formulation::AugmentedLagrangian(
                 AugmentedLagrangian::new(&constraints, &bodies, scene.augmented_lagrangian),
             ),
+            FormulationName::Minimal => {
+                Formulation::Minimal(Box::new(Minimal::new(scene, &constraints, &bodies)?))
+            }
         };
         let mut mech = Mechanism::laid_out(scene, bodies, constraints, forces, formulation);
         mech.assemble()?;

@@ -90,6 +90,10 @@ pub enum FormulationName {
     /// (docs/model.md §12): its leading matrix M + Φ_qᵀαΦ_q stays positive definite through
     /// singular configurations and with redundant constraints.
     AugmentedLagrangian,
+    /// Joint coordinates on the spanning tree of the ideal joints (docs/model.md §12): the
+    /// state is the degrees of freedom only; a scene whose ideal joints close a loop is
+    /// refused.
+    Minimal,
 }
 
 impl FormulationName {
@@ -98,13 +102,15 @@ impl FormulationName {
         match self {
             FormulationName::LagrangeBaumgarte => "lagrange_baumgarte",
             FormulationName::AugmentedLagrangian => "augmented_lagrangian",
+            FormulationName::Minimal => "minimal",
         }
     }
 
     /// Every formulation, in the order of the docs.
-    pub const ALL: [FormulationName; 2] = [
+    pub const ALL: [FormulationName; 3] = [
         FormulationName::LagrangeBaumgarte,
         FormulationName::AugmentedLagrangian,
+        FormulationName::Minimal,
     ];
 
     fn is_default(&self) -> bool {

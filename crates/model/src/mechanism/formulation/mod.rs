@@ -48,12 +48,14 @@
 //! `state_of`, its `jacobian` chaining dg through ∂(q, q̇)/∂(θ, θ̇). Neither touches the
 //! clearance joints, the force elements or the outputs.
 //!
-//! `lagrange_baumgarte` (the default) and `augmented_lagrangian` exist today; the latter's
-//! core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a reduced system's
-//! included.
+//! `lagrange_baumgarte` (the default), `augmented_lagrangian` and `minimal` (minimal/: joint
+//! coordinates on the spanning tree of the ideal joints, trees only) exist today; the
+//! augmented Lagrangian's core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a
+//! reduced system's included (the door for minimal's loop closures, not built).
 
 pub(crate) mod augmented_lagrangian;
 pub(crate) mod lagrange_baumgarte;
+pub(crate) mod minimal;
 
 use faer::MatMut;
 
@@ -65,6 +67,7 @@ use crate::scene::format::Scene;
 
 pub(crate) use augmented_lagrangian::{AugmentedLagrangian, FormulationStats};
 pub(crate) use lagrange_baumgarte::LagrangeBaumgarte;
+pub(crate) use minimal::Minimal;
 
 /// The formulation of a mechanism (module doc).
 #[derive(Debug)]
@@ -73,6 +76,9 @@ pub(crate) enum Formulation {
     LagrangeBaumgarte(LagrangeBaumgarte),
     /// The augmented Lagrangian (augmented_lagrangian/, docs/model.md §12).
     AugmentedLagrangian(AugmentedLagrangian),
+    /// Joint coordinates on the spanning tree of the ideal joints (minimal/, docs/model.md
+    /// §12).
+    Minimal(Box<Minimal>),
 }
 
 impl Formulation {
@@ -81,6 +87,7 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(_) => "lagrange_baumgarte",
             Formulation::AugmentedLagrangian(_) => "augmented_lagrangian",
+            Formulation::Minimal(_) => "minimal",
         }
     }
 
@@ -90,6 +97,7 @@ impl Formulation {
             Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
                 2 * bodies.nq()
             }
+            Formulation::Minimal(f) => 2 * f.n(),
         }
     }
 
@@ -100,6 +108,7 @@ impl Formulation {
             Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
                 bodies.kinematics(t, y, sc)
             }
+            Formulation::Minimal(f) => f.kinematics(t, y, bodies, sc),
         }
     }
 
@@ -109,6 +118,7 @@ impl Formulation {
             Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
                 y_abs.to_vec()
             }
+            Formulation::Minimal(f) => f.state_of(y_abs),
         }
     }
 
@@ -125,6 +135,7 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.accelerations(t, cons, info, sc, full),
             Formulation::AugmentedLagrangian(f) => f.accelerations(t, cons, info, sc),
+            Formulation::Minimal(f) => f.accelerations(t, cons, info, sc, full),
         }
     }
 
@@ -141,6 +152,7 @@ impl Formulation {
                     dy[nq..].iter_mut().for_each(|v| *v = f64::NAN);
                 }
             }
+            Formulation::Minimal(f) => f.derivative(y, ok, dy),
         }
     }
 
@@ -155,6 +167,7 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.jacobian(cons, sc, dg, jac),
             Formulation::AugmentedLagrangian(f) => f.jacobian(cons, sc, dg, jac),
+            Formulation::Minimal(f) => f.jacobian(sc, dg, jac),
         }
     }
 
@@ -169,6 +182,7 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.reactions(cons, cf, torques),
             Formulation::AugmentedLagrangian(f) => f.reactions(cons, cf, torques),
+            Formulation::Minimal(f) => f.reactions(cons, cf, torques),
         }
     }
 
@@ -177,13 +191,16 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.constraint_violation(),
             Formulation::AugmentedLagrangian(f) => f.constraint_violation(),
+            Formulation::Minimal(f) => f.constraint_violation(),
         }
     }
 
     /// Whether Φ_q must have full row rank (checked by the assembly).
     pub(crate) fn needs_full_rank(&self) -> bool {
         match self {
-            Formulation::LagrangeBaumgarte(_) => true,
+            // The tree's rows have full rank by construction (each link's rows hold the
+            // identity in its own body's coordinates); the reactions' normal equations need it.
+            Formulation::LagrangeBaumgarte(_) | Formulation::Minimal(_) => true,
             Formulation::AugmentedLagrangian(_) => false,
         }
     }
@@ -191,7 +208,7 @@ impl Formulation {
     /// Iteration statistics (None for a formulation that does not iterate).
     pub(crate) fn stats(&self) -> Option<FormulationStats> {
         match self {
-            Formulation::LagrangeBaumgarte(_) => None,
+            Formulation::LagrangeBaumgarte(_) | Formulation::Minimal(_) => None,
             Formulation::AugmentedLagrangian(f) => Some(f.stats()),
         }
     }
@@ -214,6 +231,8 @@ impl Formulation {
             Formulation::LagrangeBaumgarte(f) => f.check_point_mobility(scene, cons, info),
             // M + Φ_qᵀαΦ_q is positive definite at every angle: no mobility bound.
             Formulation::AugmentedLagrangian(_) => Ok(()),
+            // Rᵀ M R is positive definite whatever the angles: no mobility bound.
+            Formulation::Minimal(_) => Ok(()),
         }
     }
 
@@ -230,6 +249,7 @@ impl Formulation {
         match self {
             Formulation::LagrangeBaumgarte(f) => f.check_equations(t, scene, cons, info, sc),
             Formulation::AugmentedLagrangian(f) => f.check_equations(t, scene, cons, info, sc),
+            Formulation::Minimal(f) => f.check_equations(t, scene, cons, info, sc),
         }
     }
 }
