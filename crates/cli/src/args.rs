@@ -251,8 +251,8 @@ pub struct RunArgs {
     #[arg(long)]
     pub animate: bool,
     /// How the constraints are enforced, over the scene's `formulation`:
-    /// lagrange_baumgarte, augmented_lagrangian or minimal (docs/model.md §12). Default: the
-    /// scene's.
+    /// lagrange_baumgarte, augmented_lagrangian, minimal or auto (docs/model.md §12). Default:
+    /// the scene's (whose default is auto).
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
     pub formulation: Option<lash_model::FormulationName>,
     /// The window the metrics of summary.json cover: last-revolution (of the crank:

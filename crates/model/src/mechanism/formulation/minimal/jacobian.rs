@@ -16,23 +16,8 @@
 use faer::MatMut;
 
 use crate::linalg::{cholesky_solve, first_order_jacobian_frame, zeroed};
-use crate::mechanism::formulation::minimal::Minimal;
+use crate::mechanism::formulation::minimal::{JacWork, Minimal};
 use crate::mechanism::scratch::Scratch;
-
-/// The Jacobian's buffers (kept between calls: no allocation once sized).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct JacWork {
-    /// The kinematics at a perturbed state (the prescribed bodies' copied in).
-    sc: Option<Scratch>,
-    yp: Vec<f64>,
-    rp: Vec<f64>,
-    qddp: Vec<f64>,
-    rho: [Vec<f64>; 2],
-    qd: [Vec<f64>; 2],
-    dq: Vec<f64>,
-    dgq: Vec<f64>,
-    col: Vec<f64>,
-}
 
 impl Minimal {
     /// ∂f/∂y (module doc) into `jac` (2n × 2n) after an evaluation; `dg` = None: the

@@ -57,6 +57,21 @@ pub(crate) struct Work {
     pub term_jac: Vec<[[f64; 3]; 2]>,
 }
 
+/// The Jacobian's buffers (kept between calls: no allocation once sized).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JacWork {
+    /// The kinematics at a perturbed state (the prescribed bodies' copied in).
+    pub sc: Option<Scratch>,
+    pub yp: Vec<f64>,
+    pub rp: Vec<f64>,
+    pub qddp: Vec<f64>,
+    pub rho: [Vec<f64>; 2],
+    pub qd: [Vec<f64>; 2],
+    pub dq: Vec<f64>,
+    pub dgq: Vec<f64>,
+    pub col: Vec<f64>,
+}
+
 /// The formulation (module doc).
 #[derive(Debug)]
 pub(crate) struct Minimal {
@@ -65,7 +80,7 @@ pub(crate) struct Minimal {
     /// m, m, I of every integrated body.
     mass: Vec<f64>,
     work: RefCell<Work>,
-    jac_work: RefCell<jacobian::JacWork>,
+    jac_work: RefCell<JacWork>,
 }
 
 impl Minimal {
