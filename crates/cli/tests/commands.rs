@@ -984,7 +984,7 @@ fn bad_sample_sweeps_fail_before_any_point_runs() {
 }
 
 /// The fields of one line of merged.csv (RFC 4180: a field in double quotes may hold commas,
-/// as the JSON of `law_range` and `metrics_window` do); quoted fields keep their quotes.
+/// as the JSON of `metrics_window` does); quoted fields keep their quotes.
 fn csv_row(line: &str) -> Vec<&str> {
     let (mut fields, mut start, mut quoted) = (Vec::new(), 0, false);
     for (i, c) in line.char_indices() {

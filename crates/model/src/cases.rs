@@ -241,6 +241,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         kink_events: false,
         formulation: Default::default(),
         augmented_lagrangian: Default::default(),
+        solver: Default::default(),
     }
 }
 

@@ -529,3 +529,32 @@ fn names_that_would_break_a_csv_header_are_rejected() {
         assert!(e.contains("bodies[1].name") && e.contains(shown), "{e}");
     }
 }
+
+/// The `solver` section (docs/scene-format.md, "Top level"): an adaptive method, rtol in the
+/// solver's range [1e-14, 1), atol > 0; errors name `solver.FIELD`; unknown fields and
+/// method names are schema errors with their path.
+#[test]
+fn the_solver_section_is_checked_field_by_field() {
+    let mut v = dry_press_value();
+    v["solver"] = json!({"method": "rodas5p", "rtol": 1e-10, "atol": 1e-12});
+    build(&v).expect("a full solver section is valid");
+    let s = Scene::from_json_str(&v.to_string()).unwrap();
+    assert_eq!(s.solver.method, Some(lash_solver::Method::Rodas5p));
+    assert_eq!((s.solver.rtol, s.solver.atol), (Some(1e-10), Some(1e-12)));
+    v["solver"] = json!({"method": "rk4"});
+    let (p, m) = invalid(&v);
+    assert_eq!(p, "solver.method");
+    assert!(m.contains("rk4 is a fixed-step method"), "{m}");
+    v["solver"] = json!({"rtol": 1e-15});
+    let (p, m) = invalid(&v);
+    assert_eq!(p, "solver.rtol");
+    assert!(m.contains("1e-14"), "{m}");
+    v["solver"] = json!({"rtol": 1.0});
+    assert_eq!(invalid(&v).0, "solver.rtol");
+    v["solver"] = json!({"atol": 0.0});
+    assert_eq!(invalid(&v).0, "solver.atol");
+    v["solver"] = json!({"rtoll": 1e-9});
+    assert_eq!(schema(&v).0, "solver.rtoll");
+    v["solver"] = json!({"method": "radau"});
+    assert_eq!(schema(&v).0, "solver.method");
+}

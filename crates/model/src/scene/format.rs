@@ -11,6 +11,7 @@ use crate::elements::input::{Input, Pt};
 use crate::elements::ForceElementSpec;
 use crate::scene::de::{object, object_opt, objects, tagged_kinds};
 use crate::scene::refs::{body_or_ground, Attachment, Lookup, SceneRefs};
+use crate::scene::solver::SolverSpec;
 
 // ---------------------------------------------------------------------------------------------
 // Types
@@ -76,6 +77,14 @@ pub struct Scene {
         deserialize_with = "object"
     )]
     pub augmented_lagrangian: AugmentedLagrangianParams,
+    /// The integration settings the scene asks for where a run gives none
+    /// (crate::scene::solver; docs/scene-format.md). Default: none.
+    #[serde(
+        default,
+        skip_serializing_if = "SolverSpec::is_empty",
+        deserialize_with = "object"
+    )]
+    pub solver: SolverSpec,
 }
 
 /// The formulations a scene (or `--formulation`) can choose (docs/model.md §12).

@@ -20,6 +20,7 @@ pub(crate) mod format;
 mod parse;
 pub(crate) mod refs;
 mod resolution;
+pub(crate) mod solver;
 mod validate;
 
 pub use crate::clearance::contact::{
@@ -36,3 +37,4 @@ pub use format::{
     JointSpec, RevoluteSpec, RoleNames, Scene, TranslationalSpec,
 };
 pub use refs::{Attachment, GROUND};
+pub use solver::SolverSpec;

@@ -156,6 +156,7 @@ impl Scene {
                 "at least one iteration",
             ));
         }
+        self.solver.check()?;
         C::finite("t_start", self.t_start)
     }
 

@@ -298,6 +298,30 @@ pub(crate) fn singular_or(
     }
 }
 
+/// A right-hand side that is not finite at a finite state where the accelerations have no
+/// unique value (`SolveError::NonFiniteState` from a method that evaluates f at an accepted
+/// state, RK4's stages, a start) is the singular configuration it is, with the same kind as
+/// [`singular_or`]; any other error is returned unchanged.
+pub(crate) fn singular_rhs(mech: &Mechanism, e: Error) -> Error {
+    match e {
+        Error::Solver(SolveError::NonFiniteState { t, y })
+            if y.iter().all(|v| v.is_finite()) && !mech.acceleration_solvable(t, &y) =>
+        {
+            Error::Solver(SolveError::StateRejected {
+                t,
+                y,
+                kind: "singular_configuration",
+                reason: format!(
+                    "singular configuration at t = {t:e} (rank of Φ_q drops at the state the \
+                     integration reached: the accelerations and the constraint forces have no \
+                     unique value there)"
+                ),
+            })
+        }
+        e => e,
+    }
+}
+
 /// The solver failure of a state outside the range of a clearance joint's law (exit 3).
 fn law_out_of_range(t: f64, y: &[f64], v: &lash_model::LawRangeViolation) -> Error {
     Error::Solver(SolveError::LawOutOfRange {
@@ -470,7 +494,7 @@ fn pass(
     {
         tr.push(t0, phi, rate);
     }
-    let d = drive(&mech, t0, t_end, &y0, opts, &mut obs)?;
+    let d = drive(&mech, t0, t_end, &y0, opts, &mut obs).map_err(|e| singular_rhs(&mech, e))?;
     // The window's grid samples are samples of the extrema too.
     let mut dense = obs.dense_extremes(scene);
     for s in &obs.window {

@@ -50,6 +50,9 @@
 //!                the step ends
 //! ```
 //!
+//! A scene's `solver` section (lash_model::scene::SolverSpec) replaces the method, rtol and
+//! atol above where it gives them; a request's choice replaces both.
+//!
 //! A built-in test problem runs rodas5p at rtol 1e-6 with the problem's own atol (its
 //! reference_error threshold) and records every accepted step as its trajectory.
 //!
@@ -345,9 +348,14 @@ impl Prepared {
     pub(crate) fn default_options(&self) -> SolverOptions {
         match &self.info {
             Some(i) => {
-                let mut o = SolverOptions::with_method(DEFAULT_METHOD);
-                o.rtol = DEFAULT_RTOL;
-                o.atol = self.default_atol(DEFAULT_RTOL);
+                // The scene's own solver section, where it has one (lash_model::scene::SolverSpec).
+                let own = self.scene().map(|s| s.solver).unwrap_or_default();
+                let rtol = own.rtol.unwrap_or(DEFAULT_RTOL);
+                let mut o = SolverOptions::with_method(own.method.unwrap_or(DEFAULT_METHOD));
+                o.rtol = rtol;
+                o.atol = own
+                    .atol
+                    .map_or_else(|| self.default_atol(rtol), Atol::Scalar);
                 o.event_samples = DEFAULT_EVENT_SAMPLES;
                 o.h_max = match (i.period, i.clearance_min) {
                     (Some(t), Some(_)) => t * H_MAX_PER_PERIOD,
@@ -399,7 +407,8 @@ impl Prepared {
     }
 
     fn finish_options(&self, o: &mut SolverOptions, atol_given: bool) -> Result<(), Error> {
-        if !o.method.is_fixed_step() && !atol_given {
+        let scene_atol = self.scene().is_some_and(|s| s.solver.atol.is_some());
+        if !o.method.is_fixed_step() && !atol_given && !scene_atol {
             o.atol = self.default_atol(o.rtol);
         }
         if self.info.is_some() {

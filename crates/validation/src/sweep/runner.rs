@@ -26,7 +26,11 @@ pub(crate) const RESULT_FILE: &str = "result.json";
 /// What a point runner returns: named scalar values for the merged table.
 ///
 /// ```text
-/// values = flatten(object): {"a": {"b": 1}} → {"a.b": 1}; arrays kept as JSON text
+/// values = flatten(object): {"a": {"b": 1}} → {"a.b": 1};
+///          an array of per-joint records → one column per joint and field:
+///          {"law_range": [{"joint": "j1", "depth_max": 1}]} → {"law_range[j1].joint": "j1",
+///          "law_range[j1].depth_max": 1} (the scene-path notation of a named element);
+///          other arrays kept as JSON text
 /// ```
 ///
 /// Source: docs/outputs.md ("Sweeps": point files, merge).
@@ -45,6 +49,11 @@ impl PointResult {
     }
 }
 
+/// The name of an array entry that is a record of one joint (`law_range`): its `joint` field.
+fn named(v: &Value) -> Option<&str> {
+    v.as_object()?.get("joint")?.as_str()
+}
+
 fn flatten_into(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
     match v {
         Value::Object(m) => {
@@ -55,6 +64,12 @@ fn flatten_into(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
                     format!("{prefix}.{k}")
                 };
                 flatten_into(&key, x, out);
+            }
+        }
+        Value::Array(items) if !items.is_empty() && items.iter().all(|x| named(x).is_some()) => {
+            for x in items {
+                let name = named(x).unwrap_or_default();
+                flatten_into(&format!("{prefix}[{name}]"), x, out);
             }
         }
         Value::Array(_) => {

@@ -505,4 +505,22 @@ fn flatten_uses_dotted_names() {
     let keys: Vec<&String> = r.values.keys().collect();
     assert_eq!(keys, ["a.b", "a.c", "d", "e"]);
     assert_eq!(r.values["d"], Value::String("[1,2]".into()));
+    // Per-joint records (summary.json's law_range) become one column per joint and field;
+    // an array that is not all records stays JSON text.
+    let r = PointResult::flatten(&serde_json::json!({
+        "law_range": [{"joint": "j1", "depth_max": -1e-5}, {"joint": "pj", "depth_max": 2e-6}],
+        "mixed": [{"joint": "j1"}, 3]
+    }));
+    let keys: Vec<&String> = r.values.keys().collect();
+    assert_eq!(
+        keys,
+        [
+            "law_range[j1].depth_max",
+            "law_range[j1].joint",
+            "law_range[pj].depth_max",
+            "law_range[pj].joint",
+            "mixed"
+        ]
+    );
+    assert_eq!(r.values["law_range[pj].depth_max"], serde_json::json!(2e-6));
 }

@@ -239,6 +239,25 @@ fn a_singular_configuration_inside_a_step_is_a_typed_error() {
         }
         other => panic!("expected a singular configuration, got {other}"),
     }
+    // A right-hand side that is not finite at such a state (the solver's NonFiniteState)
+    // is the same typed error; at a state the model can evaluate it stays NonFiniteState.
+    let nf = |y: &[f64]| {
+        Error::Solver(SolveError::NonFiniteState {
+            t: 0.25,
+            y: y.to_vec(),
+        })
+    };
+    match crate::run::mechanism::singular_rhs(&mech, nf(&y)) {
+        Error::Solver(SolveError::StateRejected { kind, reason, .. }) => {
+            assert_eq!(kind, "singular_configuration");
+            assert!(reason.contains("rank of Φ_q drops"), "{reason}");
+        }
+        other => panic!("expected a singular configuration, got {other}"),
+    }
+    match crate::run::mechanism::singular_rhs(&mech, nf(&y0)) {
+        Error::Solver(SolveError::NonFiniteState { .. }) => {}
+        other => panic!("expected NonFiniteState, got {other}"),
+    }
     // At a state the model can evaluate, a non-finite output stays what it is: a bug.
     let e = crate::run::mechanism::singular_or(&mech, bug(), 0.0, &y0, (0.0, 0.5));
     assert_eq!(e.kind(), crate::error::ErrorKind::Bug);

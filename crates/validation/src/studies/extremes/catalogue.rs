@@ -6,8 +6,9 @@
 use std::path::PathBuf;
 
 use lash_model::cases::{press_scene, PressJoint};
-use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec};
+use lash_model::scene::{FrictionSpec, JointSpec, NormalSpec, SolverSpec};
 use lash_model::Scene;
+use lash_solver::Method;
 
 use crate::error::Error;
 use crate::run::case::{sha256_hex, Case, CaseSource};
@@ -61,6 +62,10 @@ impl ExtremeScene {
     }
 }
 
+/// The note of a scene whose solver section tightens rtol.
+const TIGHT_NOTE: &str = "solver: rtol 1e-10 (the default run: at the press's rtol 1e-8 the \
+     energy balance is integration error, BENCHMARKS.md \"Energy balance of every case\").";
+
 /// What is changed from the press, for [`catalogue`].
 #[derive(Clone, Copy, Default)]
 struct Corner {
@@ -75,6 +80,8 @@ struct Corner {
     t_end: Option<f64>,
     /// Revolutions (replaces the press's two).
     revolutions: Option<f64>,
+    /// The scene's own solver section (`lash run`'s defaults for it): (method, rtol).
+    solver: Option<(Option<Method>, f64)>,
 }
 
 fn corner_scene(stem: &str, stresses: &str, c: Corner, notes: &[&str]) -> Scene {
@@ -108,6 +115,13 @@ fn corner_scene(stem: &str, stresses: &str, c: Corner, notes: &[&str]) -> Scene 
         s.revolutions = None;
     } else if let Some(r) = c.revolutions {
         s.revolutions = Some(r);
+    }
+    if let Some((method, rtol)) = c.solver {
+        s.solver = SolverSpec {
+            method,
+            rtol: Some(rtol),
+            atol: None,
+        };
     }
     s.description = format!(
         "Extreme scene '{stem}' ({stresses}): cases/press/{}_150rpm_c0.1.json with one \
@@ -201,6 +215,7 @@ pub fn catalogue() -> Vec<ExtremeScene> {
             lubricated: true,
             clearance: Some(1e-6),
             t_end: Some(0.1),
+            solver: Some((Some(Method::Rodas5p), 1e-10)),
             ..Default::default()
         },
         &[
@@ -210,6 +225,11 @@ pub fn catalogue() -> Vec<ExtremeScene> {
              diverges at every step down to 2e-12 s).",
             "t_end = 0.1 s (a quarter revolution): long enough for the load to swing, short \
              enough for the stiff methods' references.",
+            "solver: rodas5p at rtol 1e-10 (the default run): the driver's torque is the \
+             multiplier of a film 1e6 times stiffer than the press's, so its power amplifies \
+             any state error; bdf's dense output misplaces it by 3e-2 J at every rtol, rodas5p \
+             at 1e-10 closes the balance to its quadrature error (BENCHMARKS.md, \"Energy \
+             balance of every case\").",
         ],
         1e-12,
         1e-9,
@@ -281,11 +301,13 @@ pub fn catalogue() -> Vec<ExtremeScene> {
         Corner {
             rpm: Some(2000.0),
             revolutions: one_rev,
+            solver: Some((None, 1e-10)),
             ..Default::default()
         },
         &[
             "2000 rpm: slider inertia forces ~2 MN, penetration ~30 c; one revolution \
              (0.03 s).",
+            TIGHT_NOTE,
         ],
         5e-4,
         2e-3,
@@ -297,9 +319,13 @@ pub fn catalogue() -> Vec<ExtremeScene> {
             lubricated: true,
             rpm: Some(2000.0),
             revolutions: Some(2.0),
+            solver: Some((None, 1e-10)),
             ..Default::default()
         },
-        &["2000 rpm with the film of cases/press: ε up to 0.94; two revolutions (0.06 s)."],
+        &[
+            "2000 rpm with the film of cases/press: ε up to 0.94; two revolutions (0.06 s).",
+            TIGHT_NOTE,
+        ],
         5e-7,
         5e-6,
     );
@@ -326,11 +352,13 @@ pub fn catalogue() -> Vec<ExtremeScene> {
             lubricated: true,
             viscosity: Some(10.0),
             revolutions: one_rev,
+            solver: Some((None, 1e-10)),
             ..Default::default()
         },
         &[
             "viscosity 10 Pa s, 25 times the paper's oil: ε stays below 0.02, and the squeeze \
              damping makes the problem 25 times stiffer; one crank revolution.",
+            TIGHT_NOTE,
         ],
         2e-8,
         2e-7,
@@ -343,12 +371,14 @@ pub fn catalogue() -> Vec<ExtremeScene> {
             viscosity: Some(0.065),
             eps_cap: Some(0.9999),
             revolutions: one_rev,
+            solver: Some((None, 1e-10)),
             ..Default::default()
         },
         &[
             "viscosity 0.065 Pa s and eps_cap = 0.9999 (the default cap 0.99 would hold the \
              film force at ε = 0.99): the load drives the journal to ε_max = 0.99925 without \
              contact, where (1 - ε^2)^(-3/2) = 1.1e4; one crank revolution.",
+            TIGHT_NOTE,
         ],
         2e-8,
         5e-6,
