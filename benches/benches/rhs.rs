@@ -8,7 +8,8 @@
 //! Also the mechanism's Jacobian ∂f/∂y at the contact state (what Rodas5P and BDF call), and
 //! group `formulation`: the right-hand side and the Jacobian of each formulation
 //! (docs/model.md §12) on the dry press at its contact state and on IFToMM A02 (N = 1, 40) at
-//! its initial state: the Jacobian's cost in right-hand sides is the ratio of the two.
+//! its initial state (`minimal` refuses A02's loops): the Jacobian's cost in right-hand sides
+//! is the ratio of the two.
 
 // criterion_group! defines an undocumented public function.
 #![allow(missing_docs)]
@@ -78,6 +79,8 @@ fn formulation(c: &mut Criterion) {
             let Ok(m) = Mechanism::from_scene(&s) else {
                 continue;
             };
+            // The same state in the formulation's coordinates (minimal: joint coordinates).
+            let y = m.state_of_absolute(&y);
             let n = m.dim();
             let mut dy = vec![0.0; n];
             let mut jac = Mat::<f64>::zeros(n, n);
@@ -92,5 +95,71 @@ fn formulation(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, rhs, jacobian, formulation);
+/// A chain of `n` uniform links (1 m, 1 kg), the first pinned to the ground, each pinned to
+/// the one before, released from the horizontal under gravity: a tree of n degrees of
+/// freedom.
+fn chain(n: usize) -> lash_model::Scene {
+    let bodies: Vec<String> = (0..n)
+        .map(|i| {
+            format!(
+                r#"{{"name": "l{i}", "mass": 1.0, "inertia": 0.0833333333333333,
+                "position": [{}, 0.0], "points": {{"O": [-0.5, 0.0], "P": [0.5, 0.0]}}}}"#,
+                i as f64 + 0.5
+            )
+        })
+        .collect();
+    let joints: Vec<String> = (0..n)
+        .map(|i| {
+            let b = if i == 0 {
+                r#"{"body": "ground", "at": [0.0, 0.0]}"#.to_string()
+            } else {
+                format!(r#"{{"body": "l{}", "point": "P"}}"#, i - 1)
+            };
+            format!(
+                r#"{{"type": "revolute", "name": "j{i}", "a": {{"body": "l{i}", "point": "O"}},
+                "b": {b}}}"#
+            )
+        })
+        .collect();
+    let text = format!(
+        r#"{{"bodies": [{}], "joints": [{}], "gravity": [0.0, -9.81], "t_end": 1.0}}"#,
+        bodies.join(", "),
+        joints.join(", ")
+    );
+    lash_model::Scene::from_json_str(&text).expect("a valid chain")
+}
+
+/// Group `formulation_chain`: one right-hand side of `minimal` (dense RᵀMR: O(n³)) and of
+/// `augmented_lagrangian` (banded: O(n)) on a chain of n links (`chain`), at a moving state:
+/// where they cross is where `auto` switches (docs/model.md §12).
+fn formulation_chain(c: &mut Criterion) {
+    use lash_model::{FormulationName, Mechanism};
+    let mut group = c.benchmark_group("formulation_chain");
+    group.measurement_time(Duration::from_secs(2));
+    group.warm_up_time(Duration::from_millis(300));
+    group.sample_size(20);
+    for n in [4, 8, 16, 32, 64, 128, 300] {
+        let scene = chain(n);
+        for f in [
+            FormulationName::Minimal,
+            FormulationName::AugmentedLagrangian,
+        ] {
+            let mut s = scene.clone();
+            s.formulation = f;
+            let m = Mechanism::from_scene(&s).unwrap();
+            let mut y = m.initial_state();
+            let half = y.len() / 2;
+            for (i, v) in y[half..].iter_mut().enumerate() {
+                *v += 0.1 * (i as f64).sin();
+            }
+            let mut dy = vec![0.0; y.len()];
+            group.bench_function(format!("{f}/{n}"), |b| {
+                b.iter(|| m.rhs(black_box(0.0), black_box(&y), black_box(&mut dy)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, rhs, jacobian, formulation, formulation_chain);
 criterion_main!(benches);

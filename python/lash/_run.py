@@ -269,7 +269,8 @@ def run(
         ``--output-every``: time between trajectory rows, s (any scene); not together with
         ``samples_per_revolution``. Keyword only.
     formulation : str, optional
-        ``--formulation``: ``"lagrange_baumgarte"`` or ``"augmented_lagrangian"``
+        ``--formulation``: ``"lagrange_baumgarte"``, ``"augmented_lagrangian"``, ``"minimal"``
+        or ``"auto"``
         (docs/model.md §12), over the scene's own ``formulation``. Recorded in
         ``summary["formulation"]``. Keyword only.
     name : str, optional
@@ -378,9 +379,10 @@ def run(
                          "one")
 
     if formulation is not None and formulation not in ("lagrange_baumgarte",
-                                                       "augmented_lagrangian"):
+                                                       "augmented_lagrangian", "minimal",
+                                                       "auto"):
         raise UsageError(f"unknown formulation {formulation!r}; lash's formulations are "
-                         "lagrange_baumgarte, augmented_lagrangian")
+                         "lagrange_baumgarte, augmented_lagrangian, minimal, auto")
     raw = _lash.run_core(dict(
         path=path, text=text, name=name, method=method, rtol=rtol, atol=atol_list,
         controller=controller, step=step, t_end=t_end,

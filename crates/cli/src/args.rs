@@ -251,7 +251,8 @@ pub struct RunArgs {
     #[arg(long)]
     pub animate: bool,
     /// How the constraints are enforced, over the scene's `formulation`:
-    /// lagrange_baumgarte or augmented_lagrangian (docs/model.md §12). Default: the scene's.
+    /// lagrange_baumgarte, augmented_lagrangian, minimal or auto (docs/model.md §12). Default:
+    /// the scene's (whose default is lagrange_baumgarte).
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
     pub formulation: Option<lash_model::FormulationName>,
     /// The window the metrics of summary.json cover: last-revolution (of the crank:
@@ -455,7 +456,7 @@ pub struct WorkPrecisionArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Formulations compared side by side, comma-separated (lagrange_baumgarte,
-    /// augmented_lagrangian; docs/model.md §12): every run with each, against one reference
+    /// augmented_lagrangian, minimal; docs/model.md §12): every run with each, against one reference
     /// (the case's own formulation's), each row naming its formulation. Default: the case's.
     #[arg(long, value_name = "F,..", value_delimiter = ',', value_parser = parse_formulation)]
     pub formulations: Option<Vec<lash_model::FormulationName>>,

@@ -28,6 +28,7 @@
 
 use lash_solver::OdeSystem;
 
+use crate::mechanism::formulation::Formulation;
 use crate::mechanism::scratch::Scratch;
 use crate::mechanism::Mechanism;
 use crate::scene::error::SceneError;
@@ -43,6 +44,21 @@ fn finite(v: &[f64]) -> bool {
 /// Scene body and name of state component `i` of q (`x`, `y`, `φ`) or, with `dot`, of its
 /// time derivative order 1 or 2.
 fn component(mech: &Mechanism, i: usize, names: [&str; 3]) -> (usize, String) {
+    if let Formulation::Minimal(f) = mech.formulation() {
+        let (k, name) = f.coordinate(i);
+        let order = match names[0] {
+            "ẋ" => "rate of ",
+            "ẍ" => "acceleration of ",
+            _ => "",
+        };
+        return (
+            k,
+            format!(
+                "{order}joint coordinate {name} of body '{}'",
+                mech.body_info()[k].name
+            ),
+        );
+    }
     let k = mech.bodies().int_bodies[i / 3];
     (
         k,
@@ -56,7 +72,8 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
         .check_point_mobility(mech.scene(), mech.constraints(), mech.body_info())?;
     let t = mech.t_start();
     let y = mech.initial_state();
-    let nq = mech.nq();
+    // The first half of y: q (n_q) or the minimal formulation's θ.
+    let nq = y.len() / 2;
     check_evaluation(mech, t, &y, &mut mech.scratch())?;
     // The right-hand side itself, as the solvers call it.
     let mut dy = vec![0.0; y.len()];

@@ -18,7 +18,9 @@ use lash_solver::{
 use serde_json::{json, Value};
 
 fn build(v: &Value) -> Mechanism {
-    let s = Scene::from_json_str(&v.to_string()).unwrap();
+    // Lagrange–Baumgarte: the tests read the absolute state y = (q, q̇).
+    let mut s = Scene::from_json_str(&v.to_string()).unwrap();
+    s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
     Mechanism::from_scene(&s).unwrap()
 }
 

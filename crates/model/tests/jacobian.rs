@@ -205,7 +205,11 @@ fn press_jacobian_matches_differences_of_f() {
         (PressJoint::Dry, 9.0e-5, -8.0e-5),
         (PressJoint::Lubricated, 3.0e-5, -4.0e-5),
     ] {
-        let m = Mechanism::from_scene(&press_scene(joint, 150.0, 1e-4)).unwrap();
+        // Lagrange–Baumgarte's Jacobian, in the absolute coordinates perturbed below
+        // (minimal's: tests/minimal.rs).
+        let mut scene = press_scene(joint, 150.0, 1e-4);
+        scene.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+        let m = Mechanism::from_scene(&scene).unwrap();
         let mut y = m.initial_state();
         let pert = [
             dx, dy, 0.0, 0.0, 0.0, 0.0, 0.02, -0.01, 0.3, -0.05, 0.0, 0.0,

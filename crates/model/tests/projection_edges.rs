@@ -13,7 +13,10 @@ fn pendulum() -> Value {
 }
 
 fn build(v: &Value) -> Result<Mechanism, SceneError> {
-    Mechanism::from_scene(&Scene::from_json_str(&v.to_string()).unwrap())
+    // Lagrange–Baumgarte: the tests read the absolute initial state y = (q, q̇).
+    let mut s = Scene::from_json_str(&v.to_string()).unwrap();
+    s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+    Mechanism::from_scene(&s)
 }
 
 #[test]

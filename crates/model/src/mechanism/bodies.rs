@@ -205,6 +205,12 @@ impl Bodies {
             let (s, c) = q[2].sin_cos();
             sc.cs[k] = [c, s];
         }
+        self.prescribed_kinematics(t, sc);
+    }
+
+    /// Poses, velocities and accelerations of the prescribed bodies at t (they depend on t
+    /// alone: a prescribed body's parent is the ground or another prescribed body).
+    pub(crate) fn prescribed_kinematics(&self, t: f64, sc: &mut Scratch) {
         for p in &self.pres {
             let phi = p.theta0 + p.omega * t;
             let (s, c) = phi.sin_cos();

@@ -7,7 +7,8 @@
 //!                   only on prescribed bodies is an error)
 //! 4 forces          Forces::build: clearance joints and force elements, compiled
 //! 5 formulate       the scene's formulation and its structure (Lagrange–Baumgarte: the
-//!                   shape of S; augmented Lagrangian: the envelope of M + Φ_qᵀαΦ_q)
+//!                   shape of S; augmented Lagrangian: the envelope of M + Φ_qᵀαΦ_q;
+//!                   minimal: the spanning tree); `auto` resolved here
 //! 6 lay out         events, buffers, roles, the end time
 //! 7 assemble        assembly.rs: a consistent initial state, the rank check; then the
 //!                   elements' defaults of that state (a spring's free length)
@@ -20,7 +21,8 @@ use crate::mechanism::bodies::Bodies;
 use crate::mechanism::constraints::Constraints;
 use crate::mechanism::events::event_list;
 use crate::mechanism::forces::Forces;
-use crate::mechanism::formulation::{AugmentedLagrangian, Formulation, LagrangeBaumgarte};
+use crate::mechanism::formulation::minimal::tree::Tree;
+use crate::mechanism::formulation::{AugmentedLagrangian, Formulation, LagrangeBaumgarte, Minimal};
 use crate::mechanism::scratch::Scratch;
 use crate::mechanism::Mechanism;
 use crate::roles::Roles;
@@ -46,6 +48,22 @@ impl Mechanism {
             FormulationName::AugmentedLagrangian => Formulation::AugmentedLagrangian(
                 AugmentedLagrangian::new(&constraints, &bodies, scene.augmented_lagrangian),
             ),
+            FormulationName::Minimal => {
+                Formulation::Minimal(Box::new(Minimal::new(scene, &constraints, &bodies)?))
+            }
+            // The cheapest that is correct (docs/model.md §12): minimal on a small tree.
+            FormulationName::Auto => {
+                let tree = Tree::build(scene, &bodies);
+                if tree.closing.is_empty() && tree.n <= FormulationName::AUTO_MINIMAL_MAX_DOF {
+                    Formulation::Minimal(Box::new(Minimal::on_tree(tree, &constraints, &bodies)))
+                } else {
+                    Formulation::AugmentedLagrangian(AugmentedLagrangian::new(
+                        &constraints,
+                        &bodies,
+                        scene.augmented_lagrangian,
+                    ))
+                }
+            }
         };
         let mut mech = Mechanism::laid_out(scene, bodies, constraints, forces, formulation);
         mech.assemble()?;

@@ -108,6 +108,15 @@ impl Mechanism {
         self.y0.clone()
     }
 
+    /// The state y of this mechanism's formulation for an absolute state (q, q̇) of the
+    /// integrated bodies (as [`Mechanism::integrated_bodies`] orders them, (x, y, φ) each):
+    /// itself for `lagrange_baumgarte` and `augmented_lagrangian`, the joint coordinates and
+    /// their rates for `minimal` (exact on the constraint manifold). For comparing
+    /// formulations at one state.
+    pub fn state_of_absolute(&self, y_abs: &[f64]) -> Vec<f64> {
+        self.formulation.state_of(y_abs)
+    }
+
     /// Start time (s).
     pub fn t_start(&self) -> f64 {
         self.t_start
@@ -128,8 +137,8 @@ impl Mechanism {
         &self.roles
     }
 
-    /// The name of the formulation (mechanism/formulation): `lagrange_baumgarte` or
-    /// `augmented_lagrangian`.
+    /// The name of the formulation (mechanism/formulation): `lagrange_baumgarte`,
+    /// `augmented_lagrangian` or `minimal`.
     pub fn formulation_name(&self) -> &'static str {
         self.formulation.name()
     }

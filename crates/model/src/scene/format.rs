@@ -66,7 +66,7 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub kink_events: bool,
     /// How the constraint equations are enforced (the state layout and the acceleration
-    /// solve: crates/model/src/mechanism/formulation). Default `lagrange_baumgarte`.
+    /// solve: crates/model/src/mechanism/formulation). Default `auto`.
     #[serde(default, skip_serializing_if = "FormulationName::is_default")]
     pub formulation: FormulationName,
     /// The augmented Lagrangian's parameters (read when `formulation` is
@@ -92,13 +92,22 @@ pub struct Scene {
 #[serde(rename_all = "snake_case")]
 pub enum FormulationName {
     /// Lagrange multipliers with Baumgarte stabilisation (the paper's; docs/model.md §1).
-    /// Needs a constraint Jacobian of full row rank.
+    /// Needs a constraint Jacobian of full row rank. The default (docs/model.md §12: `auto`
+    /// becomes the default once it is measured on every case).
     #[default]
     LagrangeBaumgarte,
     /// The augmented Lagrangian of Bayo & Ledesma (1996) in the same absolute coordinates
     /// (docs/model.md §12): its leading matrix M + Φ_qᵀαΦ_q stays positive definite through
     /// singular configurations and with redundant constraints.
     AugmentedLagrangian,
+    /// Joint coordinates on the spanning tree of the ideal joints (docs/model.md §12): the
+    /// state is the degrees of freedom only; a scene whose ideal joints close a loop is
+    /// refused.
+    Minimal,
+    /// The cheapest formulation that is correct for the scene (docs/model.md §12): `minimal`
+    /// for a tree of at most [`FormulationName::AUTO_MINIMAL_MAX_DOF`] degrees of freedom,
+    /// `augmented_lagrangian` otherwise.
+    Auto,
 }
 
 impl FormulationName {
@@ -107,14 +116,25 @@ impl FormulationName {
         match self {
             FormulationName::LagrangeBaumgarte => "lagrange_baumgarte",
             FormulationName::AugmentedLagrangian => "augmented_lagrangian",
+            FormulationName::Minimal => "minimal",
+            FormulationName::Auto => "auto",
         }
     }
 
     /// Every formulation, in the order of the docs.
-    pub const ALL: [FormulationName; 2] = [
+    pub const ALL: [FormulationName; 4] = [
         FormulationName::LagrangeBaumgarte,
         FormulationName::AugmentedLagrangian,
+        FormulationName::Minimal,
+        FormulationName::Auto,
     ];
+
+    /// The most degrees of freedom of a tree that `auto` gives to `minimal`. Measured
+    /// (`cargo bench -p lash-benches --bench rhs -- formulation_chain`: a chain of n links, one
+    /// right-hand side): minimal costs 0.58, 1.5, 10, 74, 504 µs at n = 4, 8, 16, 32, 64 (its
+    /// dense Rᵀ M R grows like n³), the augmented Lagrangian 2.8, 7.0, 23, 75, 138 µs (banded);
+    /// they cross at n ≈ 32, and 24 keeps minimal where it is clearly the cheaper.
+    pub const AUTO_MINIMAL_MAX_DOF: usize = 24;
 
     fn is_default(&self) -> bool {
         *self == FormulationName::default()

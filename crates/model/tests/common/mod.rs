@@ -10,9 +10,15 @@ pub fn dry_press_value() -> serde_json::Value {
     serde_json::from_str(&press_scene(PressJoint::Dry, 150.0, 1e-4).to_json_pretty()).unwrap()
 }
 
-/// Parses a JSON value and builds the mechanism.
+/// Parses a JSON value and builds the mechanism. A scene that names no formulation is built
+/// with `lagrange_baumgarte`: the tests that use this are about elements, laws, scene errors
+/// and the absolute state y = (q, q̇), which was the default before `auto` (docs/model.md
+/// §12); the formulations' own tests (minimal.rs, iftomm.rs) choose theirs.
 pub fn build(v: &serde_json::Value) -> Result<Mechanism, SceneError> {
-    let scene = Scene::from_json_str(&v.to_string())?;
+    let mut scene = Scene::from_json_str(&v.to_string())?;
+    if v.get("formulation").is_none() {
+        scene.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+    }
     Mechanism::from_scene(&scene)
 }
 

@@ -518,7 +518,9 @@ fn film_components(
         for (v, c) in y.iter_mut().zip(&cols) {
             *v = c[i];
         }
-        let o = m.outputs(t[i], &y);
+        // The trajectory holds the absolute (q, q̇); the mechanism's state is its
+        // formulation's (joint coordinates under minimal).
+        let o = m.outputs(t[i], &m.state_of_absolute(&y));
         for &(k, name, ex, film) in &checks {
             let c = o.clearance.iter().find(|c| c.name == name).ok_or_else(|| {
                 Error::Internal(format!("animation: no outputs of clearance joint {name}"))

@@ -100,6 +100,9 @@ fn lyapunov_exponent_of_the_baumgarte_modes() {
     let mut scene = press_scene(PressJoint::Ideal, 150.0, 0.0);
     scene.baumgarte.alpha = 5.0;
     scene.baumgarte.beta = 4.0;
+    // The Baumgarte modes are Lagrange–Baumgarte's (`auto` would take the augmented
+    // Lagrangian for the ideal press's loop).
+    scene.formulation = lash_model::FormulationName::LagrangeBaumgarte;
     let path = d.path().join("ideal_beta4.json");
     std::fs::write(&path, scene.to_json_pretty()).unwrap();
     let p = Prepared::load_spec(path.to_str().unwrap(), None).unwrap();

@@ -61,7 +61,10 @@ struct MechanismRun<'a> {
     track: Option<CrankTrack>,
     window: Vec<Sample>,
     extra: Vec<Sample>,
+    // The absolute state (q, q̇) of the integrated bodies at the extra times (the same for
+    // every formulation: docs/model.md §12), and the scene indices of those bodies.
     extra_states: Solution,
+    int_bodies: Vec<usize>,
     rows: usize,
     // Extrema over the window's dense output [w0, w1].
     w0: f64,
@@ -176,7 +179,18 @@ impl Observer for MechanismRun<'_> {
             }
             List::Extra => {
                 self.extra_states.t.push(t_req);
-                self.extra_states.y.extend_from_slice(y);
+                let b = &o.bodies;
+                let st = &mut self.extra_states.y;
+                st.extend(
+                    self.int_bodies
+                        .iter()
+                        .flat_map(|&k| [b[k].x, b[k].y, b[k].theta]),
+                );
+                st.extend(
+                    self.int_bodies
+                        .iter()
+                        .flat_map(|&k| [b[k].vx, b[k].vy, b[k].omega]),
+                );
                 self.extra.push(s);
                 self.idx[2] += 1;
             }
@@ -358,6 +372,17 @@ pub(crate) fn simulate_mechanism(
     Ok(pass(p, scene, req, t0, t_end, (window, false), sink)?.0)
 }
 
+/// The scene a run with `method` builds: the paper's method stays the paper's
+/// (docs/model.md §12) — fixed-step RK4 on a scene whose formulation is `auto` runs
+/// `lagrange_baumgarte`, as Peng et al. did; every other choice is the scene's.
+pub(crate) fn paper_formulation(scene: &Scene, method: lash_solver::Method) -> Scene {
+    let mut s = scene.clone();
+    if method == lash_solver::Method::Rk4 && s.formulation == lash_model::FormulationName::Auto {
+        s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+    }
+    s
+}
+
 /// One pass of a mechanism run over [t0, t_end] with its metrics window; `track`: keep the
 /// crank's last turn (crate::run::window).
 fn pass(
@@ -376,7 +401,8 @@ fn pass(
     check_times(&req.extra_times, t0, t_end)?;
     let tgrid = plan_run(p, req, t0, t_end)?;
     options_within(req, t0, &[])?;
-    let mech = Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e))?;
+    let mech = Mechanism::from_scene(&paper_formulation(scene, req.opts.method))
+        .map_err(|e| scene_error(&p.case, e))?;
     mech.reset_formulation_stats();
     let opts = &options_within(req, t0, &mech.initial_state())?;
     let sampler = Sampler::new(&mech, scene);
@@ -421,6 +447,12 @@ fn pass(
     let n_clr = clr_names.len();
     let n_q = if has_slider { 2 } else { 0 } + 4 * n_clr;
     let w0 = window.t_end - window.period;
+    let int_bodies: Vec<usize> = mech
+        .integrated_bodies()
+        .iter()
+        .filter_map(|name| scene.bodies.iter().position(|b| b.name == *name))
+        .collect();
+    let n_abs = 6 * int_bodies.len();
     let mut obs = MechanismRun {
         mech: &mech,
         sampler,
@@ -436,7 +468,8 @@ fn pass(
         track: track.then(CrankTrack::default),
         window: Vec::with_capacity(GRID_POINTS),
         extra: Vec::with_capacity(req.extra_times.len()),
-        extra_states: empty_solution(n),
+        extra_states: empty_solution(n_abs),
+        int_bodies,
         rows: 0,
         w0,
         w1: window.t_end,
@@ -470,7 +503,7 @@ fn pass(
             *hi = hi.max(a);
         }
     }
-    let mut extra_states = std::mem::replace(&mut obs.extra_states, empty_solution(n));
+    let mut extra_states = std::mem::replace(&mut obs.extra_states, empty_solution(n_abs));
     extra_states.stats = d.stats;
     extra_states.t_final = d.t_final;
     extra_states.y_final = d.y_final.clone();

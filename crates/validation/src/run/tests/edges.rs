@@ -210,7 +210,11 @@ fn a_singular_configuration_inside_a_step_is_a_typed_error() {
     // three x-equations of the pins read x1 − 0.5 = 0, (x1 + 0.5) − (x2 − 0.5) = 0,
     // x2 + 0.5 = 1.4: their rows e1, e1 − e4, e4 are dependent (row O − row P − row Q = 0,
     // exactly in f64), so Φ_q has lost rank and S = Φ_q M⁻¹ Φ_qᵀ is singular.
-    let p = prepared("truss", &truss());
+    // Lagrange–Baumgarte's singularity (`auto` gives this loop to the augmented Lagrangian,
+    // which solves through it).
+    let mut scene = truss();
+    scene["formulation"] = json!("lagrange_baumgarte");
+    let p = prepared("truss", &scene);
     let mech = Mechanism::from_scene(p.scene().unwrap()).unwrap();
     let y0 = mech.initial_state();
     assert_eq!(y0.len(), 12);

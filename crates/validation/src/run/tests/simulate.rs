@@ -117,7 +117,13 @@ fn ideal_press_follows_the_closed_form_and_conserves_energy() {
 
 #[test]
 fn lubricated_press_film_carries_the_load() {
-    let p = case("lubricated_150rpm_c0.1");
+    // Lagrange–Baumgarte, as before `auto`: at BDF rtol 1e-8 its energy balance closes to
+    // 1.2e-5 J of the film's 0.93 J; `auto` (minimal) closes it to 2.2e-4 J at 1e-8 and 1.5e-6
+    // J at 1e-10 (the balance converges with rtol, the error is the integration's, not the
+    // formulation's: tests/minimal.rs in lash-model), over this test's 1e-4 bound.
+    let p = case("lubricated_150rpm_c0.1")
+        .with_formulation(lash_model::FormulationName::LagrangeBaumgarte)
+        .unwrap();
     let r = run(&p, Method::Bdf, 1e-8, None);
     let m = r.summary.metrics.as_ref().unwrap();
     // docs/model.md §9: the journal never touches the bearing; the slider stays within about

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use lash_model::scene::JointSpec;
-use lash_model::{IdealSliderCrank, Scene};
+use lash_model::{FormulationName, IdealSliderCrank, Scene};
 use lash_solver::{SolverOptions, Stats};
 use rayon::prelude::*;
 
@@ -87,7 +87,12 @@ pub(crate) fn run_case(
     until: Option<&UntilPeriodic>,
 ) -> Result<Run, Error> {
     let name = case;
-    let p = Prepared::with_scene(Case::press(case), scene.clone())?;
+    // The paper's method stays the paper's (docs/model.md §12): `auto` runs Lagrange–Baumgarte.
+    let mut scene = scene.clone();
+    if scene.formulation == FormulationName::Auto {
+        scene.formulation = FormulationName::LagrangeBaumgarte;
+    }
+    let p = Prepared::with_scene(Case::press(case), scene)?;
     let info = p
         .info
         .as_ref()

@@ -198,7 +198,7 @@ mod tests {
     /// The pivot ratios of S at the mechanism's initial state, and its first weak pivot.
     fn pivots(mech: &Mechanism) -> (Vec<f64>, Option<(usize, f64)>) {
         let Formulation::LagrangeBaumgarte(f) = mech.formulation() else {
-            unreachable!("the default formulation")
+            unreachable!("chosen by the scenes below")
         };
         let sc = mech.evaluated(0.0, &mech.initial_state()).unwrap();
         let mut w = Work::new(mech.constraints().len(), f.env.len());
@@ -219,7 +219,10 @@ mod tests {
             x = -phi.cos(),
             y = -phi.sin()
         );
-        Mechanism::from_scene(&Scene::from_json_str(&text).unwrap()).unwrap()
+        // Lagrange–Baumgarte's pivots (`auto` would take minimal).
+        let mut scene = Scene::from_json_str(&text).unwrap();
+        scene.formulation = crate::FormulationName::LagrangeBaumgarte;
+        Mechanism::from_scene(&scene).unwrap()
     }
 
     #[test]

@@ -1,0 +1,367 @@
+//! The minimal (joint-coordinate) formulation on a spanning tree of the ideal joints
+//! (docs/model.md §12).
+//!
+//! ```text
+//! y = (θ, θ̇), θ the coordinates of the tree's links (tree.rs): one angle per revolute link,
+//!   one distance per translational link, (x, y, φ) per free body
+//! q̇ = R(θ) θ̇ + b(t),   q̈ = R θ̈ + a_c(t, θ, θ̇)      (b, a_c: prescribed parents, Ṙθ̇)
+//! (Rᵀ M R) θ̈ = Rᵀ (Q − M a_c)                         (the virtual work of the tree)
+//! ```
+//! Clearance joints and force elements are forces (Q), so the press, the pendulum and the
+//! clearance four-bar are trees: their ideal joints are satisfied by construction (the
+//! constraint violation is rounding), and the state holds the degrees of freedom only. A joint
+//! that closes a loop (or a driver of an integrated body) is refused with a scene error
+//! naming it; `auto` sends such a scene to the augmented Lagrangian.
+//!
+//! The constraint forces (outputs: the driver torques of prescribed bodies) are the
+//! multipliers of the ideal joints, Φ_qᵀ λ = Q − M q̈, solved by the normal equations in full
+//! evaluations only (Φ_q has full row rank on a tree).
+//!
+//! R is dense (n_q × n) and Rᵀ M R is factored densely: O(n_q n²) per right-hand side, which
+//! is why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
+
+mod jacobian;
+pub(crate) mod tree;
+
+use std::cell::RefCell;
+
+use crate::linalg::{block_cholesky_inv, cholesky_solve};
+use crate::mechanism::bodies::{Bodies, BodyInfo};
+use crate::mechanism::constraints::{describe, eval_row, Constraints};
+use crate::mechanism::scratch::Scratch;
+use crate::scene::error::SceneError;
+use crate::scene::format::Scene;
+
+use self::tree::{Link, Tree};
+
+/// The buffers of one evaluation.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Work {
+    /// (t, y) of the last kinematics.
+    pub t: f64,
+    pub y: Vec<f64>,
+    /// R (n_q × n, column-major).
+    pub r: Vec<f64>,
+    /// a_c (n_q), then Q − M q̈.
+    pub ac: Vec<f64>,
+    /// Rᵀ M R, then its factor (n × n, row-major).
+    pub mr: Vec<f64>,
+    /// θ̈.
+    pub thdd: Vec<f64>,
+    /// 0..n (the blocks of the factorisation).
+    pub all: Vec<usize>,
+    /// Φ and the multipliers of every row (full evaluations).
+    pub phi: Vec<f64>,
+    pub lam: Vec<f64>,
+    /// Jacobian blocks of every row (full evaluations).
+    pub term_jac: Vec<[[f64; 3]; 2]>,
+}
+
+/// The Jacobian's buffers (kept between calls: no allocation once sized).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JacWork {
+    /// The kinematics at a perturbed state (the prescribed bodies' copied in).
+    pub sc: Option<Scratch>,
+    pub yp: Vec<f64>,
+    pub rp: Vec<f64>,
+    pub qddp: Vec<f64>,
+    pub rho: [Vec<f64>; 2],
+    pub qd: [Vec<f64>; 2],
+    pub dq: Vec<f64>,
+    pub dgq: Vec<f64>,
+    pub col: Vec<f64>,
+}
+
+/// The formulation (module doc).
+#[derive(Debug)]
+pub(crate) struct Minimal {
+    tree: Tree,
+    nq: usize,
+    /// m, m, I of every integrated body.
+    mass: Vec<f64>,
+    work: RefCell<Work>,
+    jac_work: RefCell<JacWork>,
+}
+
+impl Minimal {
+    /// The tree of `scene`'s ideal joints; an error naming the joints that close a loop.
+    pub(crate) fn new(
+        scene: &Scene,
+        cons: &Constraints,
+        bodies: &Bodies,
+    ) -> Result<Self, SceneError> {
+        let tree = Tree::build(scene, bodies);
+        if let Some(&first) = tree.closing.first() {
+            let names: Vec<String> = tree
+                .closing
+                .iter()
+                .map(|&j| format!("'{}'", scene.joints[j].name()))
+                .collect();
+            return Err(SceneError::Invalid {
+                path: format!("joints[{first}]"),
+                reason: format!(
+                    "{} closes a kinematic loop (joints outside the spanning tree of the ideal \
+                     joints: {}): the minimal formulation takes trees only; use \
+                     \"augmented_lagrangian\" or \"auto\"",
+                    scene.joints[first],
+                    names.join(", ")
+                ),
+            });
+        }
+        Ok(Minimal::on_tree(tree, cons, bodies))
+    }
+
+    /// The formulation on a tree without closing joints.
+    pub(crate) fn on_tree(tree: Tree, cons: &Constraints, bodies: &Bodies) -> Self {
+        let nq = bodies.nq();
+        let n = tree.n;
+        let m = cons.len();
+        let mass = bodies.inverse_masses().iter().map(|v| 1.0 / v).collect();
+        Minimal {
+            tree,
+            nq,
+            mass,
+            work: RefCell::new(Work {
+                t: 0.0,
+                y: vec![0.0; 2 * n],
+                r: vec![0.0; nq * n],
+                ac: vec![0.0; nq],
+                mr: vec![0.0; n * n],
+                thdd: vec![0.0; n],
+                all: (0..n).collect(),
+                phi: vec![0.0; m],
+                lam: vec![0.0; m],
+                term_jac: vec![[[0.0; 3]; 2]; m],
+            }),
+            jac_work: RefCell::default(),
+        }
+    }
+
+    /// Number of coordinates θ.
+    pub(crate) fn n(&self) -> usize {
+        self.tree.n
+    }
+
+    /// The scene body and name of coordinate `i` of θ (for messages).
+    pub(crate) fn coordinate(&self, i: usize) -> (usize, &'static str) {
+        let tb = self
+            .tree
+            .bodies
+            .iter()
+            .rev()
+            .find(|b| b.col <= i)
+            .expect("i < n");
+        let name = match tb.link {
+            Link::Free => ["x", "y", "φ"][i - tb.col],
+            Link::Revolute { .. } => "φ",
+            Link::Slider { .. } => "σ (along its translational joint)",
+        };
+        (tb.body, name)
+    }
+
+    /// The kinematics of every body at (t, y) into `sc`.
+    #[inline]
+    pub(crate) fn kinematics(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
+        let n = self.tree.n;
+        bodies.prescribed_kinematics(t, sc);
+        self.tree.positions(&y[..n], &y[n..2 * n], sc);
+        let mut w = self.work.borrow_mut();
+        w.t = t;
+        w.y.copy_from_slice(&y[..2 * n]);
+    }
+
+    /// θ of an absolute (q, q̇).
+    pub(crate) fn state_of(&self, y_abs: &[f64]) -> Vec<f64> {
+        self.tree.state_of(y_abs)
+    }
+
+    /// R, a_c and Rᵀ M R (factored) at the kinematics of `sc`; Err(j): pivot j not positive.
+    fn factor(&self, w: &mut Work, sc: &Scratch) -> Result<(), usize> {
+        let (nq, n) = (self.nq, self.tree.n);
+        self.tree.velocity_matrix(sc, nq, &mut w.r);
+        self.tree.accelerations(sc, None, &mut w.ac);
+        for i in 0..n {
+            let ri = &w.r[i * nq..(i + 1) * nq];
+            for j in 0..=i {
+                let rj = &w.r[j * nq..(j + 1) * nq];
+                let mut s = 0.0;
+                for ((a, b), m) in ri.iter().zip(rj).zip(&self.mass) {
+                    s += a * m * b;
+                }
+                w.mr[i * n + j] = s;
+            }
+        }
+        block_cholesky_inv(&mut w.mr, n, &w.all)
+    }
+
+    /// θ̈ (kept) and q̈ = R θ̈ + a_c into `sc.qdd` from the applied forces `sc.g`; in full
+    /// evaluations also Φ and the multipliers of every row. False if Rᵀ M R is not positive
+    /// definite in f64 or θ̈ is not finite.
+    pub(crate) fn accelerations(
+        &self,
+        t: f64,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &mut Scratch,
+        full: bool,
+    ) -> bool {
+        let (nq, n) = (self.nq, self.tree.n);
+        let mut guard = self.work.borrow_mut();
+        let w = &mut *guard;
+        if self.factor(w, sc).is_err() {
+            return false;
+        }
+        // Rᵀ (Q − M a_c).
+        for j in 0..n {
+            let rj = &w.r[j * nq..(j + 1) * nq];
+            let mut s = 0.0;
+            for i in 0..nq {
+                s += rj[i] * (sc.g[i] - self.mass[i] * w.ac[i]);
+            }
+            w.thdd[j] = s;
+        }
+        cholesky_solve(&w.mr, n, &mut w.thdd);
+        let qdd = &mut sc.qdd[..nq];
+        qdd.copy_from_slice(&w.ac);
+        for (j, &a) in w.thdd.iter().enumerate() {
+            for (q, r) in qdd.iter_mut().zip(&w.r[j * nq..(j + 1) * nq]) {
+                *q += r * a;
+            }
+        }
+        let ok = w.thdd.iter().all(|v| v.is_finite());
+        if full {
+            self.multipliers(w, t, cons, info, sc);
+        }
+        ok
+    }
+
+    /// Φ, the Jacobian blocks and the multipliers of every row: Φ_qᵀ λ = Q − M q̈ by the
+    /// normal equations (Φ_q Φ_qᵀ) λ = Φ_q (Q − M q̈); NaN if they are singular.
+    fn multipliers(
+        &self,
+        w: &mut Work,
+        t: f64,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &Scratch,
+    ) {
+        let (nq, m) = (self.nq, cons.len());
+        if m == 0 {
+            return;
+        }
+        let mut jd = vec![0.0; m * nq];
+        for (r, (row, ints)) in cons.rows.iter().zip(&cons.row_int).enumerate() {
+            let ev = eval_row(row, info, t, sc);
+            w.phi[r] = ev.phi;
+            w.term_jac[r] = ev.jrows;
+            for (ti, bi) in ints.iter().enumerate() {
+                if let Some(i) = *bi {
+                    for c in 0..3 {
+                        jd[r * nq + 3 * i + c] += ev.jrows[ti][c];
+                    }
+                }
+            }
+        }
+        let fc: Vec<f64> = (0..nq)
+            .map(|i| sc.g[i] - self.mass[i] * sc.qdd[i])
+            .collect();
+        let mut nm = vec![0.0; m * m];
+        for a in 0..m {
+            let ja = &jd[a * nq..(a + 1) * nq];
+            w.lam[a] = ja.iter().zip(&fc).map(|(x, y)| x * y).sum();
+            for b in 0..=a {
+                let jb = &jd[b * nq..(b + 1) * nq];
+                nm[a * m + b] = ja.iter().zip(jb).map(|(x, y)| x * y).sum();
+            }
+        }
+        let all: Vec<usize> = (0..m).collect();
+        if block_cholesky_inv(&mut nm, m, &all).is_ok() {
+            cholesky_solve(&nm, m, &mut w.lam);
+        } else {
+            w.lam.iter_mut().for_each(|v| *v = f64::NAN);
+        }
+    }
+
+    /// ẏ = (θ̇, θ̈) (NaN θ̈ when the solve failed).
+    #[inline]
+    pub(crate) fn derivative(&self, y: &[f64], ok: bool, dy: &mut [f64]) {
+        let n = self.tree.n;
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        if ok {
+            dy[n..2 * n].copy_from_slice(&self.work.borrow().thdd);
+        } else {
+            dy[n..2 * n].iter_mut().for_each(|v| *v = f64::NAN);
+        }
+    }
+
+    /// The constraint forces −Σ J_r,kᵀ λ_r of the last full evaluation on every body, added
+    /// to `cf`, and the torques −λ of the driver rows: (joint index, τ).
+    pub(crate) fn reactions(
+        &self,
+        cons: &Constraints,
+        cf: &mut [[f64; 3]],
+        torques: &mut Vec<(usize, f64)>,
+    ) {
+        let w = self.work.borrow();
+        for (r, row) in cons.rows.iter().enumerate() {
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                let j = w.term_jac[r][ti];
+                for c in 0..3 {
+                    cf[term.body][c] -= j[c] * w.lam[r];
+                }
+            }
+            if row.driver {
+                torques.push((row.joint, -w.lam[r]));
+            }
+        }
+    }
+
+    /// ‖Φ(q, t)‖₂ of the last full evaluation (rounding on a tree).
+    pub(crate) fn constraint_violation(&self) -> f64 {
+        let w = self.work.borrow();
+        w.phi.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
+    /// The checks at the initial state (after the kinematics in `sc`): every constraint row
+    /// finite (→ the joint), then Rᵀ M R positive definite in f64 (→ the body of the failing
+    /// coordinate).
+    pub(crate) fn check_equations(
+        &self,
+        t: f64,
+        scene: &Scene,
+        cons: &Constraints,
+        info: &[BodyInfo],
+        sc: &Scratch,
+    ) -> Result<(), SceneError> {
+        for row in &cons.rows {
+            let ev = eval_row(row, info, t, sc);
+            if !([ev.phi, ev.phid, ev.gamma].iter().all(|v| v.is_finite())
+                && ev.jrows.iter().flatten().all(|v| v.is_finite()))
+            {
+                return Err(SceneError::Dynamics {
+                    path: format!("joints[{}]", row.joint),
+                    reason: format!(
+                        "{}: Φ = {:e}, Φ̇ = {:e}, γ = {:e}: not finite",
+                        describe(row, scene),
+                        ev.phi,
+                        ev.phid,
+                        ev.gamma
+                    ),
+                });
+            }
+        }
+        let mut w = self.work.borrow_mut();
+        if let Err(j) = self.factor(&mut w, sc) {
+            let (k, what) = self.coordinate(j);
+            return Err(SceneError::Dynamics {
+                path: format!("bodies[{k}]"),
+                reason: format!(
+                    "the reduced mass matrix Rᵀ M R of the minimal formulation is not positive \
+                     definite in f64 at coordinate {what} of {}",
+                    info[k].describe()
+                ),
+            });
+        }
+        Ok(())
+    }
+}
