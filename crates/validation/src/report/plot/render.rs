@@ -101,9 +101,24 @@ pub(super) fn render<F: Figure>(stem: &Path, size: (u32, u32), fig: &F) -> Resul
 /// Encodes an RGB image as an 8-bit palette PNG (module doc).
 pub(crate) fn palette_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, String> {
     use std::collections::HashMap;
+    // Runs of one colour (the background, a filled band) are counted with one lookup each:
+    // a plot is mostly runs, and a lookup per pixel was most of a run's figure time.
     let mut counts: HashMap<[u8; 3], u32> = HashMap::new();
+    let mut run: Option<([u8; 3], u32)> = None;
     for px in rgb.chunks_exact(3) {
-        *counts.entry([px[0], px[1], px[2]]).or_default() += 1;
+        let c = [px[0], px[1], px[2]];
+        match run.as_mut() {
+            Some((rc, n)) if *rc == c => *n += 1,
+            _ => {
+                if let Some((rc, n)) = run {
+                    *counts.entry(rc).or_default() += n;
+                }
+                run = Some((c, 1));
+            }
+        }
+    }
+    if let Some((rc, n)) = run {
+        *counts.entry(rc).or_default() += n;
     }
     let mut colours: Vec<([u8; 3], u32)> = counts.into_iter().collect();
     colours.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
@@ -122,9 +137,20 @@ pub(crate) fn palette_png(rgb: &[u8], size: (u32, u32)) -> Result<Vec<u8>, Strin
             (c, i as u8)
         })
         .collect();
+    let mut last = ([0u8; 3], None::<u8>);
     let data: Vec<u8> = rgb
         .chunks_exact(3)
-        .map(|px| index[&[px[0], px[1], px[2]]])
+        .map(|px| {
+            let c = [px[0], px[1], px[2]];
+            match last {
+                (lc, Some(i)) if lc == c => i,
+                _ => {
+                    let i = index[&c];
+                    last = (c, Some(i));
+                    i
+                }
+            }
+        })
         .collect();
     let mut out = Vec::new();
     {
