@@ -1,6 +1,8 @@
 //! The minimal (joint-coordinate) formulation (docs/model.md §12): the same motion as
 //! Lagrange–Baumgarte on the trees of the examples, the energy of a conservative scene kept,
 //! the Jacobian against differences of f, and a loop refused with the joints named.
+mod common;
+use common::{richardson, worst_row_error};
 use faer::Mat;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::{FormulationName, Mechanism, Scene, SceneError};
@@ -196,43 +198,6 @@ fn a_conservative_scene_keeps_its_energy_in_joint_coordinates() {
     assert!(drift < 1e-7 * t_max, "drift {drift:e} of T_max {t_max}");
 }
 
-/// Central differences of f in y, Richardson-extrapolated (tests/jacobian.rs).
-fn richardson(m: &Mechanism, t: f64, y: &[f64], h: f64) -> Mat<f64> {
-    let n = y.len();
-    let mut out = Mat::<f64>::zeros(n, n);
-    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-    let mut yp = y.to_vec();
-    let mut d = |j: usize, h: f64, yp: &mut Vec<f64>| -> Vec<f64> {
-        yp[j] = y[j] + h;
-        m.rhs(t, yp, &mut fp);
-        yp[j] = y[j] - h;
-        m.rhs(t, yp, &mut fm);
-        yp[j] = y[j];
-        (0..n).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect()
-    };
-    for j in 0..n {
-        let d1 = d(j, h, &mut yp);
-        let d2 = d(j, 0.5 * h, &mut yp);
-        for i in 0..n {
-            out[(i, j)] = (4.0 * d2[i] - d1[i]) / 3.0;
-        }
-    }
-    out
-}
-
-/// Largest |J − R| over the lower block, relative to the largest |R| of the same row.
-fn worst_row_error(jac: &Mat<f64>, reference: &Mat<f64>) -> f64 {
-    let n = jac.nrows();
-    let mut worst: f64 = 0.0;
-    for i in n / 2..n {
-        let scale = (0..n).fold(0.0f64, |a, j| a.max(reference[(i, j)].abs()));
-        for j in 0..n {
-            worst = worst.max((jac[(i, j)] - reference[(i, j)]).abs() / scale);
-        }
-    }
-    worst
-}
-
 /// The Jacobian (forces' closed forms chained through R, the tree's geometry by central
 /// differences: module doc of minimal/jacobian.rs) against Richardson differences of f:
 /// - the press with the slider moved 1.2e-4 m off the centred journal (dry: in contact, δ =
@@ -250,7 +215,7 @@ fn minimal_jacobian_matches_differences_of_f() {
         let n = m.dim();
         let mut jac = Mat::<f64>::zeros(n, n);
         m.jacobian(t, y, jac.as_mut());
-        let reference = richardson(m, t, y, h);
+        let reference = richardson(m, t, y, |_| h);
         let err = worst_row_error(&jac, &reference);
         eprintln!("{what}: worst relative error {err:.2e}");
         assert!(err < 1e-6, "{what}: worst relative error {err:e}");

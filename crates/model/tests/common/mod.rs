@@ -1,9 +1,10 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use faer::Mat;
 use lash_model::cases::{press_scene, PressJoint};
 use lash_model::{Mechanism, Scene, SceneError};
-use lash_solver::{solve, Method, Output, Solution, SolverOptions};
+use lash_solver::{solve, Method, OdeSystem, Output, Solution, SolverOptions};
 
 /// The dry press at 150 rpm, c = 0.1 mm, as a JSON value to mutate.
 pub fn dry_press_value() -> serde_json::Value {
@@ -89,4 +90,43 @@ pub fn case_stems() -> Vec<String> {
         .collect();
     stems.sort();
     stems
+}
+
+/// Central differences of f in y, Richardson-extrapolated: (4 D(h/2) − D(h)) / 3, truncation
+/// O(h⁴). Valid where f is smooth on the scale h.
+pub fn richardson(m: &Mechanism, t: f64, y: &[f64], h_of: impl Fn(usize) -> f64) -> Mat<f64> {
+    let n = y.len();
+    let mut out = Mat::<f64>::zeros(n, n);
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    let mut yp = y.to_vec();
+    let mut d = |j: usize, h: f64, yp: &mut Vec<f64>| -> Vec<f64> {
+        yp[j] = y[j] + h;
+        m.rhs(t, yp, &mut fp);
+        yp[j] = y[j] - h;
+        m.rhs(t, yp, &mut fm);
+        yp[j] = y[j];
+        (0..n).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect()
+    };
+    for j in 0..n {
+        let h = h_of(j);
+        let d1 = d(j, h, &mut yp);
+        let d2 = d(j, 0.5 * h, &mut yp);
+        for i in 0..n {
+            out[(i, j)] = (4.0 * d2[i] - d1[i]) / 3.0;
+        }
+    }
+    out
+}
+
+/// Largest |J − R| over the lower block, relative to the largest |R| of the same row.
+pub fn worst_row_error(jac: &Mat<f64>, reference: &Mat<f64>) -> f64 {
+    let n = jac.nrows();
+    let mut worst: f64 = 0.0;
+    for i in n / 2..n {
+        let scale = (0..n).fold(0.0f64, |a, j| a.max(reference[(i, j)].abs()));
+        for j in 0..n {
+            worst = worst.max((jac[(i, j)] - reference[(i, j)]).abs() / scale);
+        }
+    }
+    worst
 }
