@@ -77,6 +77,29 @@ pub(crate) struct Constraints {
 }
 
 impl Constraints {
+    /// The constraint forces −Σ J_r,kᵀ λ_r on every body, added to `cf` in row order, and
+    /// the torques −λ of the driver rows: (joint index, τ), from the term Jacobians and the
+    /// multipliers of an evaluation (every formulation's `reactions`).
+    pub(crate) fn reactions(
+        &self,
+        term_jac: &[[[f64; 3]; 2]],
+        lam: &[f64],
+        cf: &mut [[f64; 3]],
+        torques: &mut Vec<(usize, f64)>,
+    ) {
+        for (r, row) in self.rows.iter().enumerate() {
+            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
+                let j = term_jac[r][ti];
+                for c in 0..3 {
+                    cf[term.body][c] -= j[c] * lam[r];
+                }
+            }
+            if row.driver {
+                torques.push((row.joint, -lam[r]));
+            }
+        }
+    }
+
     /// Every point term on integrated body `body` and the row it belongs to, with what the
     /// closed-form Jacobians of both formulations need of it: `f(a, w · A s, w · b, φ̇)` for
     /// row a (b = ∂(A s)/∂φ = perp(A s), φ̇ the body's angular velocity in `sc`). A point term

@@ -380,19 +380,7 @@ impl LagrangeBaumgarte {
         torques: &mut Vec<(usize, f64)>,
     ) {
         let w = self.work.borrow();
-        for (r, row) in cons.rows.iter().enumerate() {
-            for (ti, term) in row.terms[..row.n_terms].iter().enumerate() {
-                let j = w.term_jac[r][ti];
-                for c in 0..3 {
-                    cf[term.body][c] -= j[c] * w.lam[r];
-                }
-            }
-        }
-        for (r, row) in cons.rows.iter().enumerate() {
-            if row.driver {
-                torques.push((row.joint, -w.lam[r]));
-            }
-        }
+        cons.reactions(&w.term_jac, &w.lam, cf, torques);
     }
 
     /// ‖Φ(q, t)‖₂ of the last evaluation.
