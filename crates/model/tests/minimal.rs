@@ -150,28 +150,11 @@ fn minimal_follows_lagrange_baumgarte_on_trees() {
 /// contacts (the same bar as energy.rs's conservative pendulum under RK4).
 #[test]
 fn a_conservative_scene_keeps_its_energy_in_joint_coordinates() {
-    let i = 1.0 * 0.5 * 0.5 / 12.0;
-    let v = json!({
-        "bodies": [
-            {"name": "link1", "mass": 1.0, "inertia": i, "position": [0.25, 0.0],
-             "points": {"O": [-0.25, 0.0], "P": [0.25, 0.0]}},
-            {"name": "link2", "mass": 1.0, "inertia": i, "position": [0.75, 0.0],
-             "points": {"P": [-0.25, 0.0], "E": [0.25, 0.0]}}
-        ],
-        "joints": [
-            {"type": "revolute", "name": "pivot", "a": {"body": "link1", "point": "O"},
-             "b": {"body": "ground", "at": [0.0, 0.0]}},
-            {"type": "clearance", "name": "elbow",
-             "bearing": {"body": "link1", "point": "P", "radius": 0.010},
-             "journal": {"body": "link2", "point": "P", "radius": 0.009},
-             "normal": {"law": "impact", "k": 1e9, "c_max": 0.0, "d_max": 1e-5},
-             "friction": {"law": "none"},
-             "initial_eccentricity": [0.0, -0.0005]}
-        ],
-        "gravity": [0.0, -9.81],
-        "t_end": 1.0,
-        "formulation": "minimal"
-    });
+    let mut v = common::clearance_double_pendulum(
+        json!({"law": "impact", "k": 1e9, "c_max": 0.0, "d_max": 1e-5}),
+        json!({"law": "none"}),
+    );
+    v["formulation"] = json!("minimal");
     let m = Mechanism::from_scene(&Scene::from_json_str(&v.to_string()).unwrap()).unwrap();
     assert_eq!(m.formulation_name(), "minimal");
     assert_eq!(m.dim(), 8);

@@ -130,3 +130,32 @@ pub fn worst_row_error(jac: &Mat<f64>, reference: &Mat<f64>) -> f64 {
     }
     worst
 }
+
+/// Two 0.5 m links of 1 kg, the first pinned to the ground, the second hanging from the first
+/// through a clearance joint (c = 1 mm) with the given normal and friction laws, released from
+/// the horizontal under gravity, t_end 1 s: the conservative scene of energy.rs and minimal.rs.
+pub fn clearance_double_pendulum(
+    normal: serde_json::Value,
+    friction: serde_json::Value,
+) -> serde_json::Value {
+    let i = 1.0 * 0.5 * 0.5 / 12.0;
+    serde_json::json!({
+        "bodies": [
+            {"name": "link1", "mass": 1.0, "inertia": i, "position": [0.25, 0.0],
+             "points": {"O": [-0.25, 0.0], "P": [0.25, 0.0]}},
+            {"name": "link2", "mass": 1.0, "inertia": i, "position": [0.75, 0.0],
+             "points": {"P": [-0.25, 0.0], "E": [0.25, 0.0]}}
+        ],
+        "joints": [
+            {"type": "revolute", "name": "pivot", "a": {"body": "link1", "point": "O"},
+             "b": {"body": "ground", "at": [0.0, 0.0]}},
+            {"type": "clearance", "name": "elbow",
+             "bearing": {"body": "link1", "point": "P", "radius": 0.010},
+             "journal": {"body": "link2", "point": "P", "radius": 0.009},
+             "normal": normal, "friction": friction,
+             "initial_eccentricity": [0.0, -0.0005]}
+        ],
+        "gravity": [0.0, -9.81],
+        "t_end": 1.0
+    })
+}
