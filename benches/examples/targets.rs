@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [g] [p]
-//!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R]
+//!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R] [--methods M,..]
 //! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
 //!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
@@ -30,6 +30,8 @@
 //! (p) (f)'s lubricated press through `lash run` at one run, `--at METHOD:RTOL` (default
 //!     bdf:1e-10, (f)'s cheapest), side by side with the hand-written bdf at `--hand-rtol`
 //!     (default 3.2e-10, (f)'s cheapest), without (f)'s scans: not among the defaults
+//! (q) (f)'s last part alone: the dry press through `lash run`, every adaptive method or
+//!     `--methods` (not among the defaults)
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -56,6 +58,8 @@ struct Ctx {
     reps: usize,
     /// `--formulation`: lash's side runs with it (None: the scene's own).
     formulation: Option<FormulationName>,
+    /// `--methods a,b`: (q) scans only these (None: every adaptive method).
+    methods: Option<Vec<Method>>,
 }
 
 /// One measured run.
@@ -262,6 +266,7 @@ fn rk4_search(
     let once = Ctx {
         reps: 1,
         formulation: None,
+        methods: None,
     };
     let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
     let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
@@ -402,6 +407,7 @@ fn section_b(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -447,6 +453,7 @@ fn section_c(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -464,6 +471,7 @@ fn section_c(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -639,7 +647,7 @@ fn section_f(ctx: &Ctx) {
     );
     let (m, times, t_end, reference) = second_revolution(stem);
     let hand = HandPress::paper(150.0, 1e-4, true);
-    let y0 = HandPress::minimal_state(&m.initial_state());
+    let y0 = HandPress::minimal_state(&absolute_initial_state(stem));
     println!("  diffsol bdf on the hand-written press (4 states), atol = rtol·1e-3:");
     print_header();
     let mut hand_runs = Vec::new();
@@ -747,6 +755,12 @@ fn section_f(ctx: &Ctx) {
         lubricated_through_lash_run(ctx, stem, &lm, &times, &reference, h);
     }
     dry_through_lash_run(ctx);
+}
+
+/// The assembled absolute initial state (q, q̇) of the press `stem`, whatever the scene's
+/// formulation: what the hand-written press starts from.
+fn absolute_initial_state(stem: &str) -> Vec<f64> {
+    press_as(stem, 2.0, Some(FormulationName::LagrangeBaumgarte)).initial_state()
 }
 
 /// The press `stem` from `cases/press/` for `revolutions`, with `formulation` over the scene's
@@ -1021,7 +1035,8 @@ fn path_side_by_side(
     use lash_benches::handwritten::{diffsol_bdf, HandPress};
     let per = crank_period(lm);
     let hand = HandPress::paper(150.0, 1e-4, true);
-    let y0 = HandPress::minimal_state(&lm.initial_state());
+    // The hand-written press starts from the absolute state (lash's side may be minimal).
+    let y0 = HandPress::minimal_state(&absolute_initial_state(path.stem));
     let lib = |o: &SolverOptions| sample(lm, path.t_end, o, times).map(|s| s.wall).ok();
     let o_run = run_like_options(lm, method, rtol, 1e-4);
     let mut o_blanket = o_run.clone();
@@ -1114,6 +1129,7 @@ fn dry_through_lash_run(ctx: &Ctx) {
     let adaptive: Vec<Method> = Method::ALL
         .into_iter()
         .filter(|m| !m.is_fixed_step())
+        .filter(|m| ctx.methods.as_ref().is_none_or(|ms| ms.contains(m)))
         .collect();
     let runs = path.scan_all(ctx, &adaptive, &times, &reference);
     let _ = std::fs::remove_dir_all(&dir);
@@ -1220,6 +1236,7 @@ fn main() {
     let mut formulation = None;
     let mut at = (Method::Bdf, 1e-10);
     let mut hand_rtol = 3.2e-10;
+    let mut methods = None;
     let mut sections = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -1247,16 +1264,26 @@ fn main() {
                         std::process::exit(2)
                     });
             }
+            "--methods" => {
+                let v = it.next().expect("--methods takes a,b,…");
+                methods = Some(
+                    v.split(',')
+                        .map(|m| Method::from_name(m).expect("a method name"))
+                        .collect(),
+                );
+            }
             "--hand-rtol" => {
                 hand_rtol = it
                     .next()
                     .and_then(|v| v.parse().ok())
                     .expect("--hand-rtol takes a number");
             }
-            s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g" | "p") => sections.push(s.to_string()),
+            s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g" | "p" | "q") => {
+                sections.push(s.to_string())
+            }
             other => {
                 eprintln!(
-                    "unknown argument {other}: expected a, b, c, d, e, f, g, p, --reps N, \
+                    "unknown argument {other}: expected a, b, c, d, e, f, g, p, q, --reps N, \
                      --formulation F, --at METHOD:RTOL, --hand-rtol R"
                 );
                 std::process::exit(2);
@@ -1268,7 +1295,11 @@ fn main() {
             .map(String::from)
             .to_vec();
     }
-    let ctx = Ctx { reps, formulation };
+    let ctx = Ctx {
+        reps,
+        formulation,
+        methods,
+    };
     for s in sections {
         match s.as_str() {
             "a" => section_a(&ctx),
@@ -1278,6 +1309,7 @@ fn main() {
             "e" => section_e(&ctx),
             "f" => section_f(&ctx),
             "p" => section_p(&ctx, at, hand_rtol),
+            "q" => dry_through_lash_run(&ctx),
             _ => section_g(&ctx),
         }
     }

@@ -20,16 +20,15 @@ use lash_model::{Mechanism, Scene};
 use crate::error::Error;
 use crate::report::metrics::Sample;
 
+/// An exact reference on a grid: its samples and the states of the integrated bodies.
+pub(crate) type Exact = (Vec<Sample>, Vec<f64>);
+
 /// The reference on `times` of a scene that is A02: its samples (time and a zero constraint
 /// violation; no slider, no clearance joint) and the states of its integrated bodies; None
 /// for any other scene, or one that does not start at t = 0.
-pub(crate) fn a02_reference(
-    scene: &Scene,
-    t0: f64,
-    times: &[f64],
-) -> Result<Option<(Vec<Sample>, Vec<f64>)>, Error> {
+pub(crate) fn a02_reference(scene: &Scene, t0: f64, times: &[f64]) -> Result<Option<Exact>, Error> {
     let nb = scene.bodies.len();
-    if t0 != 0.0 || nb < 3 || nb % 2 == 0 {
+    if t0 != 0.0 || nb < 3 || nb.is_multiple_of(2) {
         return Ok(None);
     }
     let n = (nb - 1) / 2;
@@ -39,7 +38,7 @@ pub(crate) fn a02_reference(
     let (generated, dof) = n_four_bar(n, t_end);
     let mut s = scene.clone();
     s.formulation = generated.formulation;
-    s.augmented_lagrangian = generated.augmented_lagrangian.clone();
+    s.augmented_lagrangian = generated.augmented_lagrangian;
     if s != generated {
         return Ok(None);
     }

@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use lash_model::MetricsWindow;
 use lash_solver::{ControllerKind, Method};
 
-use crate::compare::one_dof::a02_reference;
+use crate::compare::one_dof::{a02_reference, Exact};
 use crate::compare::workprecision::fmt_num;
 use crate::error::{Error, OptionError};
 use crate::report::metrics::{EventQuantity, Sample, GRID_POINTS};
@@ -269,7 +269,7 @@ pub(crate) struct Reference {
     /// The reference run (None for test problems and A02).
     pub run: Option<RunResult>,
     /// A02's exact reference: its samples and states on the window's grid (None otherwise).
-    pub exact: Option<(Vec<Sample>, Vec<f64>)>,
+    pub exact: Option<Exact>,
     /// The check's error norms against the reference (None for test problems).
     pub agreement: Option<ErrorNorms>,
     /// Wall time of the reference and its check, s.
