@@ -25,7 +25,7 @@
 
 pub(crate) mod accepted;
 pub(crate) mod bodies;
-pub(crate) mod build;
+mod build;
 pub(crate) mod constraints;
 pub(crate) mod events;
 pub(crate) mod forces;

@@ -109,3 +109,18 @@ pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Sce
         reason: reason.into(),
     }
 }
+
+/// A point where set-up may stop: after `phase`, the call's deadline passed
+/// ([`lash_solver::interrupt::deadline_passed`]) → [`SceneError::Budget`], a stop requested →
+/// [`SceneError::Interrupted`]. Between the phases of `Mechanism::from_scene` and inside its
+/// long loops (assembly's iterations, the initial Jacobian's check), so that a budget is
+/// overrun by at most one phase's step, not the whole set-up.
+pub(crate) fn checkpoint(phase: &'static str, t: f64) -> Result<(), SceneError> {
+    if lash_solver::interrupt::stop_requested() {
+        return Err(SceneError::Interrupted { phase, t });
+    }
+    if let Some(budget) = lash_solver::interrupt::deadline_passed() {
+        return Err(SceneError::Budget { phase, t, budget });
+    }
+    Ok(())
+}
