@@ -14,6 +14,9 @@
 //!                   elements' defaults of that state (a spring's free length)
 //! 8 check           initial_check.rs: the equations of motion at the initial state
 //! ```
+//!
+//! Between the phases, in assembly's iterations and around the initial Jacobian, set-up
+//! stops at the call's deadline or a stop request ([`checkpoint`]).
 
 use std::cell::RefCell;
 
@@ -37,9 +40,12 @@ impl Mechanism {
     /// finite, or a KKT system singular in f64, is a [`SceneError::Dynamics`] naming the body
     /// or joint (docs/scene-format.md, "Initial check").
     pub fn from_scene(scene: &Scene) -> Result<Mechanism, SceneError> {
+        let t0 = scene.t_start;
         scene.validate()?;
+        checkpoint("checking the scene", t0)?;
         let bodies = Bodies::prescribe(scene);
         let constraints = Constraints::build(scene, &bodies)?;
+        checkpoint("building the constraints", t0)?;
         let forces = Forces::build(scene);
         let formulation = match scene.formulation {
             FormulationName::LagrangeBaumgarte => Formulation::LagrangeBaumgarte(
@@ -65,9 +71,12 @@ impl Mechanism {
                 }
             }
         };
+        checkpoint("setting up the formulation", t0)?;
         let mut mech = Mechanism::laid_out(scene, bodies, constraints, forces, formulation);
         mech.assemble()?;
+        checkpoint("assembly", t0)?;
         crate::initial_check::check(&mech)?;
+        checkpoint("the initial checks", t0)?;
         Ok(mech)
     }
 
@@ -135,4 +144,19 @@ impl Mechanism {
         }
         Ok(())
     }
+}
+
+/// A point where set-up may stop: after `phase`, the call's deadline passed
+/// ([`lash_solver::interrupt::deadline_passed`]) → [`SceneError::Budget`], a stop requested →
+/// [`SceneError::Interrupted`]. Between the phases of [`Mechanism::from_scene`] and inside its
+/// long loops (assembly's iterations, the initial Jacobian's check), so that a budget is
+/// overrun by at most one phase's step, not the whole set-up.
+pub(crate) fn checkpoint(phase: &'static str, t: f64) -> Result<(), SceneError> {
+    if lash_solver::interrupt::stop_requested() {
+        return Err(SceneError::Interrupted { phase, t });
+    }
+    if let Some(budget) = lash_solver::interrupt::deadline_passed() {
+        return Err(SceneError::Budget { phase, t, budget });
+    }
+    Ok(())
 }
