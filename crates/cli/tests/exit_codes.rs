@@ -197,14 +197,24 @@ fn exhausted_budgets_exit_3_and_name_the_budget() {
         "b",
         "too many steps: 10 steps taken, reached t = 2",
     );
-    // One microsecond of wall time: the integration (thousands of steps, milliseconds) cannot
-    // finish inside it; the budget is checked before every step.
-    budget_error(
+    // One microsecond of wall time runs out before set-up's first check (after the scene's
+    // validation): exit 3 naming set-up's phase, no state, and nothing written: no output
+    // directory, since the run never started.
+    let o = lash(
         &["run", case, "--max-wall-time", "1e-6", "--out", "c"],
         d.path(),
-        "c",
-        "wall-clock budget of 0.000001 s used before the integration started",
     );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert_eq!(
+        err.lines().collect::<Vec<_>>(),
+        [
+            "error: solver failed: budget exhausted at t = 0e0: wall-clock budget of 0.000001 s \
+             used during set-up (checking the scene)",
+            "  at t = 0e0 (no state yet: the run stopped during its set-up)"
+        ]
+    );
+    assert!(!d.path().join("c").exists());
 }
 
 /// A wall-clock budget longer than the clock holds (`--max-wall-time 1e300`: finite and > 0,

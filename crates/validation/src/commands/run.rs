@@ -76,7 +76,8 @@ pub struct RunOptions {
 /// never mixes two runs; an error other than the solver's (I/O, a bug, an interruption)
 /// leaves DIR as it was
 /// solver failure (exit 3): DIR = failure.json + partial_trajectory.csv (the rows up to the
-/// failure), never summary.json; `progress` notes what was written
+/// failure), never summary.json; `progress` notes what was written; a budget that runs out
+/// during set-up (no state yet) writes nothing
 /// budget: solver.max_wall_time counts from this call; past it the run fails with
 /// BudgetExhausted: in set-up at the next of its checks (lash_model's build phases; nothing
 /// written), at the next step attempt, or after the integration (before the figures)
