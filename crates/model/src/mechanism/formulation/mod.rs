@@ -52,7 +52,7 @@
 //! coordinates on the spanning tree of the ideal joints, trees only) exist today; the
 //! augmented Lagrangian's core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a
 //! reduced system's included (the door for minimal's loop closures, not built). The scene's
-//! `auto` (opt-in; the default is `lagrange_baumgarte`) is resolved to one of them in
+//! `auto` (the default) is resolved to one of them in
 //! `Mechanism::from_scene`.
 
 pub(crate) mod augmented_lagrangian;
