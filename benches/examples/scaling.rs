@@ -5,6 +5,7 @@
 //! ```text
 //! cargo build --release -p lash-cli
 //! cargo run --release -p lash-benches --example scaling -- [chain N…] [free N…] [clearance N…]
+//!     [--lash PATH]…
 //! chain N      N pendulum links (0.1 m, 1 kg) pinned end to end, the first to the ground,
 //!              released horizontal under gravity: 2N revolute equations; --t-end 1e-3
 //! free N       N free bodies (1 kg, 0.1 kg m²) moving up under gravity, no joint; t_end 0.01
@@ -17,7 +18,9 @@
 //! the time the run itself reports (summary.json `wall_time_s`: set-up is the difference) and
 //! the peak resident memory (VmHWM of /proc/<pid>/status, polled every 5 ms until the child
 //! exits: a peak in its last 5 ms may be missed). The `lash` binary is the one next to this
-//! example's directory (target/release/lash).
+//! example's directory (target/release/lash), or each `--lash PATH` given: with several, every
+//! case runs with each binary in turn (old and new side by side in one session), one row each,
+//! the binary's path in a column of its own.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -94,7 +97,14 @@ fn vm_hwm(pid: u32) -> Option<u64> {
 
 /// One case: exit code, wall time of the process (s), the run's own wall time (s), peak
 /// memory (MB).
-fn measure(lash: &PathBuf, dir: &std::path::Path, name: &str, scene: &str, t_end: Option<&str>) {
+fn measure(
+    lash: &PathBuf,
+    label: Option<&str>,
+    dir: &std::path::Path,
+    name: &str,
+    scene: &str,
+    t_end: Option<&str>,
+) {
     let path = dir.join(format!("{name}.json"));
     std::fs::write(&path, scene).expect("write the scene");
     let out = dir.join(name);
@@ -127,8 +137,9 @@ fn measure(lash: &PathBuf, dir: &std::path::Path, name: &str, scene: &str, t_end
             rest[..end].trim().parse::<f64>().ok()
         });
     let run = run.map_or_else(|| "—".to_string(), |v| format!("{v:.2}"));
+    let label = label.map_or_else(String::new, |l| format!(" {l} |"));
     println!(
-        "| {name} | {} | {wall:.2} | {run} | {:.0} |",
+        "| {name} |{label} {} | {wall:.2} | {run} | {:.0} |",
         status
             .code()
             .map_or_else(|| "signal".into(), |c| c.to_string()),
@@ -141,13 +152,25 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut cases: Vec<(String, usize)> = Vec::new();
     let mut kind = None;
-    for a in &args {
+    let mut lashes: Vec<PathBuf> = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
         match a.as_str() {
+            "--lash" => match it.next() {
+                Some(p) => lashes.push(PathBuf::from(p)),
+                None => {
+                    eprintln!("--lash needs the path of a lash binary");
+                    std::process::exit(2);
+                }
+            },
             "chain" | "free" | "clearance" => kind = Some(a.clone()),
             n => match (kind.clone(), n.parse::<usize>()) {
                 (Some(k), Ok(n)) if n >= 1 => cases.push((k, n)),
                 _ => {
-                    eprintln!("usage: scaling [chain N…] [free N…] [clearance N…] (N ≥ 1)");
+                    eprintln!(
+                        "usage: scaling [chain N…] [free N…] [clearance N…] (N ≥ 1) \
+                         [--lash PATH]…"
+                    );
                     std::process::exit(2);
                 }
             },
@@ -164,30 +187,54 @@ fn main() {
             cases.push(("clearance".into(), n));
         }
     }
-    let exe = std::env::current_exe().expect("the example's path");
-    let lash = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("lash"))
-        .expect("target/release");
-    if !lash.exists() {
-        eprintln!(
-            "{} not found: cargo build --release -p lash-cli first",
-            lash.display()
+    if lashes.is_empty() {
+        let exe = std::env::current_exe().expect("the example's path");
+        lashes.push(
+            exe.parent()
+                .and_then(|p| p.parent())
+                .map(|p| p.join("lash"))
+                .expect("target/release"),
         );
-        std::process::exit(2);
     }
+    for lash in &lashes {
+        if !lash.exists() {
+            eprintln!(
+                "{} not found: cargo build --release -p lash-cli first",
+                lash.display()
+            );
+            std::process::exit(2);
+        }
+    }
+    let several = lashes.len() > 1;
     let dir = std::env::temp_dir().join(format!("lash-scaling-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a temporary directory");
-    println!("| case | exit | wall (s) | run (s) | peak RSS (MB) |");
-    println!("|---|---|---|---|---|");
+    if several {
+        println!("| case | lash | exit | wall (s) | run (s) | peak RSS (MB) |");
+        println!("|---|---|---|---|---|---|");
+    } else {
+        println!("| case | exit | wall (s) | run (s) | peak RSS (MB) |");
+        println!("|---|---|---|---|---|");
+    }
     for (k, n) in cases {
         let (scene, t_end) = match k.as_str() {
             "chain" => (chain(n, false), Some("1e-3")),
             "free" => (free(n), None),
             _ => (chain(n, true), Some("0.1")),
         };
-        measure(&lash, &dir, &format!("{k}{n}"), &scene, t_end);
+        for (i, lash) in lashes.iter().enumerate() {
+            let label = several.then(|| lash.display().to_string());
+            // A directory per binary: each run writes its own output.
+            let sub = dir.join(i.to_string());
+            std::fs::create_dir_all(&sub).expect("a temporary directory");
+            measure(
+                lash,
+                label.as_deref(),
+                &sub,
+                &format!("{k}{n}"),
+                &scene,
+                t_end,
+            );
+        }
     }
     std::fs::remove_dir_all(&dir).ok();
 }

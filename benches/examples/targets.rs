@@ -2,7 +2,8 @@
 //! ratio of two measurements taken side by side in one run.
 //!
 //! ```text
-//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [--reps N]
+//! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [g] [p]
+//!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R] [--methods M,..]
 //! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
 //!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
@@ -26,6 +27,11 @@
 //!     RHS-equivalents (RHS + n per Jacobian, n = 12 the cost of a finite-difference one), the
 //!     observed order p from a least-squares fit of log error = c − p log work over the runs
 //!     with 1e-7 ≥ error ≥ 1e-9 · 30 … (error below 1e-2), and the cheapest run with error ≤ 1e-6
+//! (p) (f)'s lubricated press through `lash run` at one run, `--at METHOD:RTOL` (default
+//!     bdf:1e-10, (f)'s cheapest), side by side with the hand-written bdf at `--hand-rtol`
+//!     (default 3.2e-10, (f)'s cheapest), without (f)'s scans: not among the defaults
+//! (q) (f)'s last part alone: the dry press through `lash run`, every adaptive method or
+//!     `--methods` (not among the defaults)
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -52,6 +58,8 @@ struct Ctx {
     reps: usize,
     /// `--formulation`: lash's side runs with it (None: the scene's own).
     formulation: Option<FormulationName>,
+    /// `--methods a,b`: (q) scans only these (None: every adaptive method).
+    methods: Option<Vec<Method>>,
 }
 
 /// One measured run.
@@ -258,6 +266,7 @@ fn rk4_search(
     let once = Ctx {
         reps: 1,
         formulation: None,
+        methods: None,
     };
     let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
     let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
@@ -398,6 +407,7 @@ fn section_b(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -443,6 +453,7 @@ fn section_c(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -460,6 +471,7 @@ fn section_c(ctx: &Ctx) {
             &Ctx {
                 reps: 1,
                 formulation: None,
+                methods: None,
             },
             &m,
             t_end,
@@ -635,7 +647,7 @@ fn section_f(ctx: &Ctx) {
     );
     let (m, times, t_end, reference) = second_revolution(stem);
     let hand = HandPress::paper(150.0, 1e-4, true);
-    let y0 = HandPress::minimal_state(&m.initial_state());
+    let y0 = HandPress::minimal_state(&absolute_initial_state(stem));
     println!("  diffsol bdf on the hand-written press (4 states), atol = rtol·1e-3:");
     print_header();
     let mut hand_runs = Vec::new();
@@ -743,6 +755,12 @@ fn section_f(ctx: &Ctx) {
         lubricated_through_lash_run(ctx, stem, &lm, &times, &reference, h);
     }
     dry_through_lash_run(ctx);
+}
+
+/// The assembled absolute initial state (q, q̇) of the press `stem`, whatever the scene's
+/// formulation: what the hand-written press starts from.
+fn absolute_initial_state(stem: &str) -> Vec<f64> {
+    press_as(stem, 2.0, Some(FormulationName::LagrangeBaumgarte)).initial_state()
 }
 
 /// The press `stem` from `cases/press/` for `revolutions`, with `formulation` over the scene's
@@ -941,7 +959,6 @@ fn lubricated_through_lash_run(
     reference: &[f64],
     h: &Run,
 ) {
-    use lash_benches::handwritten::{diffsol_bdf, HandPress};
     let per = crank_period(lm);
     let dir = std::env::temp_dir().join(format!("lash-targets-f-{}", std::process::id()));
     let path = RunPath {
@@ -971,10 +988,57 @@ fn lubricated_through_lash_run(
         return;
     };
     let method = b.method.expect("a lash run");
+    path_side_by_side(ctx, &path, lm, times, (method, b.rtol, &b.label), h.rtol);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// (p): the lubricated press through `lash run` at one (method, rtol), (f)'s cheapest, side by
+/// side with the hand-written bdf at (f)'s cheapest rtol, without (f)'s scans.
+fn section_p(ctx: &Ctx, (method, rtol): (Method, f64), hand_rtol: f64) {
+    let stem = "lubricated_150rpm_c0.1";
+    println!(
+        "\n(p) {stem}, two revolutions through `lash run` ({}) at {} rtol {rtol:.1e}, side by \
+         side with the hand-written diffsol bdf at rtol {hand_rtol:.1e}",
+        formulation_label(ctx.formulation),
+        method.name()
+    );
+    let (m, times, _, reference) = second_revolution(stem);
+    let per = crank_period(&m);
+    let dir = std::env::temp_dir().join(format!("lash-targets-p-{}", std::process::id()));
+    let path = RunPath {
+        stem,
+        t_end: m.t_start() + 2.0 * per,
+        rows: 2000,
+        formulation: ctx.formulation,
+        out: dir.join("run"),
+    };
+    print_header();
+    let Some(r) = path.measure(ctx, method, rtol, &times, &reference) else {
+        return;
+    };
+    let lm = press_as(stem, 2.0, ctx.formulation);
+    path_side_by_side(ctx, &path, &lm, &times, (method, rtol, &r.label), hand_rtol);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The `lash run` of `path` at (method, rtol) side by side with the hand-written diffsol bdf
+/// at `hand_rtol` (atol hand_rtol·1e-3), and the library runs that split the difference:
+/// `10 · reps` alternating rounds, the minimum of each.
+fn path_side_by_side(
+    ctx: &Ctx,
+    path: &RunPath<'_>,
+    lm: &Mechanism,
+    times: &[f64],
+    (method, rtol, label): (Method, f64, &str),
+    hand_rtol: f64,
+) {
+    use lash_benches::handwritten::{diffsol_bdf, HandPress};
+    let per = crank_period(lm);
     let hand = HandPress::paper(150.0, 1e-4, true);
-    let y0 = HandPress::minimal_state(&lm.initial_state());
+    // The hand-written press starts from the absolute state (lash's side may be minimal).
+    let y0 = HandPress::minimal_state(&absolute_initial_state(path.stem));
     let lib = |o: &SolverOptions| sample(lm, path.t_end, o, times).map(|s| s.wall).ok();
-    let o_run = run_like_options(lm, method, b.rtol, 1e-4);
+    let o_run = run_like_options(lm, method, rtol, 1e-4);
     let mut o_blanket = o_run.clone();
     o_blanket.h_max_near_events = f64::INFINITY;
     o_blanket.h_max = per / 100.0;
@@ -986,17 +1050,24 @@ fn lubricated_through_lash_run(
     let mut best = [f64::INFINITY; 7];
     for _ in 0..rounds {
         let walls = [
-            path.to_disk(method, b.rtol).ok(),
-            path.in_memory(method, b.rtol, (times[0], times[times.len() - 1]))
+            path.to_disk(method, rtol).ok(),
+            path.in_memory(method, rtol, (times[0], times[times.len() - 1]))
                 .ok()
                 .map(|v| v.0),
             lib(&o_run),
             lib(&o_blanket),
             lib(&o_free),
             lib(&o_noev),
-            diffsol_bdf(&hand, lm.t_start(), y0, h.rtol, [h.rtol * 1e-3; 4], times)
-                .ok()
-                .map(|r| r.wall),
+            diffsol_bdf(
+                &hand,
+                lm.t_start(),
+                y0,
+                hand_rtol,
+                [hand_rtol * 1e-3; 4],
+                times,
+            )
+            .ok()
+            .map(|r| r.wall),
         ];
         for (b, w) in best.iter_mut().zip(walls) {
             if let Some(w) = w {
@@ -1004,12 +1075,11 @@ fn lubricated_through_lash_run(
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     let hw = best[6];
     println!(
         "  => side by side, {rounds} alternating rounds, minimum of each (ms, and / the \
          hand-written bdf rtol {:.1e}, {:.3} ms):",
-        h.rtol,
+        hand_rtol,
         hw * 1e3
     );
     for (what, w) in [
@@ -1025,7 +1095,7 @@ fn lubricated_through_lash_run(
     println!(
         "  => best `lash run` ({}): {:.2}× the hand-written run in memory, {:.2}× with its files \
          (target ≤ 1.2×)",
-        b.label,
+        label,
         best[1] / hw,
         best[0] / hw
     );
@@ -1059,6 +1129,7 @@ fn dry_through_lash_run(ctx: &Ctx) {
     let adaptive: Vec<Method> = Method::ALL
         .into_iter()
         .filter(|m| !m.is_fixed_step())
+        .filter(|m| ctx.methods.as_ref().is_none_or(|ms| ms.contains(m)))
         .collect();
     let runs = path.scan_all(ctx, &adaptive, &times, &reference);
     let _ = std::fs::remove_dir_all(&dir);
@@ -1163,6 +1234,9 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut reps = 3;
     let mut formulation = None;
+    let mut at = (Method::Bdf, 1e-10);
+    let mut hand_rtol = 3.2e-10;
+    let mut methods = None;
     let mut sections = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -1180,11 +1254,37 @@ fn main() {
                     std::process::exit(2)
                 }));
             }
-            s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g") => sections.push(s.to_string()),
+            "--at" => {
+                let v = it.next().expect("--at takes METHOD:RTOL");
+                at = v
+                    .split_once(':')
+                    .and_then(|(m, r)| Some((Method::from_name(m)?, r.parse().ok()?)))
+                    .unwrap_or_else(|| {
+                        eprintln!("--at takes METHOD:RTOL, e.g. bdf:1e-10 (got {v})");
+                        std::process::exit(2)
+                    });
+            }
+            "--methods" => {
+                let v = it.next().expect("--methods takes a,b,…");
+                methods = Some(
+                    v.split(',')
+                        .map(|m| Method::from_name(m).expect("a method name"))
+                        .collect(),
+                );
+            }
+            "--hand-rtol" => {
+                hand_rtol = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--hand-rtol takes a number");
+            }
+            s @ ("a" | "b" | "c" | "d" | "e" | "f" | "g" | "p" | "q") => {
+                sections.push(s.to_string())
+            }
             other => {
                 eprintln!(
-                    "unknown argument {other}: expected a, b, c, d, e, f, g, --reps N, \
-                     --formulation F"
+                    "unknown argument {other}: expected a, b, c, d, e, f, g, p, q, --reps N, \
+                     --formulation F, --at METHOD:RTOL, --hand-rtol R"
                 );
                 std::process::exit(2);
             }
@@ -1195,7 +1295,11 @@ fn main() {
             .map(String::from)
             .to_vec();
     }
-    let ctx = Ctx { reps, formulation };
+    let ctx = Ctx {
+        reps,
+        formulation,
+        methods,
+    };
     for s in sections {
         match s.as_str() {
             "a" => section_a(&ctx),
@@ -1204,6 +1308,8 @@ fn main() {
             "d" => section_d(&ctx),
             "e" => section_e(&ctx),
             "f" => section_f(&ctx),
+            "p" => section_p(&ctx, at, hand_rtol),
+            "q" => dry_through_lash_run(&ctx),
             _ => section_g(&ctx),
         }
     }

@@ -65,9 +65,11 @@ fn path_and_reason(e: &SceneError) -> (String, String) {
             path.clone(),
             format!("the equations of motion fail at the initial state: {reason}"),
         ),
-        other @ (SceneError::Syntax { .. } | SceneError::Unknown(_) | SceneError::Io { .. }) => {
-            (".".into(), other.to_string())
-        }
+        other @ (SceneError::Syntax { .. }
+        | SceneError::Unknown(_)
+        | SceneError::Io { .. }
+        | SceneError::Budget { .. }
+        | SceneError::Interrupted { .. }) => (".".into(), other.to_string()),
     }
 }
 

@@ -8,9 +8,11 @@
 //! stdout: the command's result (tables, descriptions, "wrote N files to DIR")
 //! stderr: the engine's notes and the progress of long commands (StderrProgress: a bar on a
 //!         terminal, else a line per finished item), errors
-//! lash run --max-wall-time W: a watchdog ends the process with exit 3 at W + max(1 s, W/4)
-//!                   if the engine has not stopped by itself (work it cannot interrupt: a
-//!                   scene's assembly and initial check, one factorisation of a large system)
+//! lash run --max-wall-time W: the engine stops itself at its next check (set-up's phases and
+//!                   iterations, every step attempt); a watchdog ends the process with exit 3
+//!                   at W + max(1 s, W/20) if it has not (work between checks: one
+//!                   factorisation or Jacobian of a large system), so a budget is overrun by at
+//!                   most 1 s or 5 %
 //! ```
 //!
 //! Source: docs/outputs.md ("Exit codes of `lash`").
@@ -172,7 +174,7 @@ pub fn run_command(a: &RunArgs) -> Result<(RunResult, PathBuf), Error> {
 }
 
 /// Ends the process with exit 3 when a wall-clock budget of `w` s is overrun by
-/// max(1 s, w/4) (module doc); dropped (the command ended) it does nothing.
+/// max(1 s, w/20) (module doc); dropped (the command ended) it does nothing.
 struct Watchdog {
     done: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
@@ -182,7 +184,7 @@ impl Watchdog {
         use std::sync::atomic::{AtomicBool, Ordering};
         let done = std::sync::Arc::new(AtomicBool::new(false));
         let flag = done.clone();
-        let grace = (0.25 * w).max(1.0);
+        let grace = (0.05 * w).max(1.0);
         // A budget longer than a Duration holds (finite w up to 1.8e308 passes the rule) has
         // no end to watch for.
         let Ok(limit) = std::time::Duration::try_from_secs_f64(w + grace) else {
@@ -199,9 +201,8 @@ impl Watchdog {
             if !flag.load(Ordering::Relaxed) {
                 errln(&format!(
                     "error: solver failed: budget exhausted: wall-clock budget of {w} s used; \
-                     stopped {grace:.1} s later inside work that cannot be interrupted (the \
-                     scene's assembly and initial check, or one factorisation of a large \
-                     system); nothing written"
+                     stopped {grace:.1} s later inside work that cannot be interrupted (one \
+                     factorisation or Jacobian of a large system); nothing written"
                 ));
                 std::process::exit(i32::from(EXIT_SOLVER));
             }

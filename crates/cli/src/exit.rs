@@ -55,6 +55,32 @@ pub trait ExitStatus {
     fn report(&self) -> String;
 }
 
+/// Longest state printed whole on standard error; a longer one shows its first
+/// [`STATE_HEAD`] and last [`STATE_TAIL`] components and its length (a 1 000-body state has
+/// 6 000: failure.json keeps them all).
+const STATE_SHOWN: usize = 16;
+/// Components shown from the start of a long state.
+const STATE_HEAD: usize = 8;
+/// Components shown from the end of a long state.
+const STATE_TAIL: usize = 4;
+
+/// `[y0, y1, …]`, shortened past [`STATE_SHOWN`] components.
+fn state_text(y: &[f64]) -> String {
+    let f = |v: &f64| format!("{v:e}");
+    if y.len() <= STATE_SHOWN {
+        let ys: Vec<String> = y.iter().map(f).collect();
+        return format!("[{}]", ys.join(", "));
+    }
+    let head: Vec<String> = y[..STATE_HEAD].iter().map(f).collect();
+    let tail: Vec<String> = y[y.len() - STATE_TAIL..].iter().map(f).collect();
+    format!(
+        "[{}, …, {}] ({} components)",
+        head.join(", "),
+        tail.join(", "),
+        y.len()
+    )
+}
+
 impl ExitStatus for Error {
     fn exit_code(&self) -> u8 {
         match self.kind() {
@@ -70,8 +96,7 @@ impl ExitStatus for Error {
         if let Error::Solver(e) = self {
             match (e.time(), e.state()) {
                 (Some(t), Some(y)) if !y.is_empty() => {
-                    let ys: Vec<String> = y.iter().map(|v| format!("{v:e}")).collect();
-                    s.push_str(&format!("\n  at t = {t:e}, state = [{}]", ys.join(", ")));
+                    s.push_str(&format!("\n  at t = {t:e}, state = {}", state_text(y)));
                 }
                 (Some(t), _) => s.push_str(&format!(
                     "\n  at t = {t:e} (no state yet: the run stopped during its set-up)"
@@ -129,6 +154,16 @@ mod tests {
             "error: solver failed: non-finite or diverging state at t = 2.5e-1"
         );
         assert_eq!(lines[1], "  at t = 2.5e-1, state = [1e0, -2.5e0]");
+        // A long state: its first 8 and last 4 components and its length, on one line.
+        let long = Error::Solver(SolveError::NonFiniteState {
+            t: 0.0,
+            y: (0..6000).map(f64::from).collect(),
+        });
+        assert_eq!(
+            long.report().lines().nth(1).unwrap(),
+            "  at t = 0e0, state = [0e0, 1e0, 2e0, 3e0, 4e0, 5e0, 6e0, 7e0, …, 5.996e3, 5.997e3, \
+             5.998e3, 5.999e3] (6000 components)"
+        );
         // Usage errors stay on one line.
         assert_eq!(
             Error::Usage("--rtol must be > 0".into()).report(),

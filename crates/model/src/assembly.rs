@@ -355,6 +355,7 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
             break;
         }
         iters = it;
+        crate::scene::error::checkpoint("assembly", t0)?;
         let (phi, _, jac) = eval(mech, &rows, t0, &y);
         let (_, err) = worst(&phi);
         if err <= POS_TOL {

@@ -96,12 +96,14 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
     // implicit one refuses the run itself with its typed OutOfMemory error before allocating
     // its own.
     let n = y.len();
+    crate::scene::error::checkpoint("the initial checks", t)?;
     let fits =
         lash_solver::memory::check(lash_solver::memory::dense_bytes(n, 2), String::new, None);
     let Ok(mut jac) = fits.and_then(|()| lash_solver::memory::try_zeros(n, n)) else {
         return Ok(());
     };
     mech.jacobian(t, &y, jac.as_mut());
+    crate::scene::error::checkpoint("the initial Jacobian", t)?;
     for j in 0..n {
         for i in nq..n {
             let v = jac[(i, j)];

@@ -18,7 +18,7 @@
 
 use crate::elements::interface::Account;
 use crate::labels::Column;
-use crate::mechanism::Mechanism;
+use crate::mechanism::{FullEvaluation, Mechanism};
 use crate::planar::{cross, perp, rot};
 use crate::scene::error::SceneError;
 use crate::scene::format::JointSpec;
@@ -429,7 +429,18 @@ impl Mechanism {
     /// One evaluation of every output at (t, y). Non-finite values (a singular KKT matrix)
     /// come out as NaN.
     pub fn outputs(&self, t: f64, y: &[f64]) -> Outputs {
+        self.outputs_of(&self.full_evaluation(t, y))
+    }
+
+    /// [`Mechanism::outputs`] and [`Mechanism::power`] at (t, y) from one full evaluation: the
+    /// same values as the two calls, at the cost of one.
+    pub fn outputs_and_power(&self, t: f64, y: &[f64]) -> (Outputs, PowerTerms) {
         let f = self.full_evaluation(t, y);
+        (self.outputs_of(&f), self.power_of(&f))
+    }
+
+    /// The outputs of one full evaluation `f`.
+    fn outputs_of(&self, f: &FullEvaluation) -> Outputs {
         let (sc, forces, roles) = (&f.sc, self.forces(), self.roles());
         let nan_if = |v: f64| if f.ok { v } else { f64::NAN };
         let side = |k: Option<usize>, v: &[[f64; 3]]| k.map_or(0.0, |k| v[k][2]);
@@ -551,7 +562,11 @@ impl Mechanism {
     /// film (W). The caller integrates them along the trajectory (no quadrature components are
     /// added to the state, so the state stays (q, q̇) for every method).
     pub fn power(&self, t: f64, y: &[f64]) -> PowerTerms {
-        let f = self.full_evaluation(t, y);
+        self.power_of(&self.full_evaluation(t, y))
+    }
+
+    /// The power terms of one full evaluation `f`.
+    fn power_of(&self, f: &FullEvaluation) -> PowerTerms {
         let (sc, forces, scene) = (&f.sc, self.forces(), self.scene());
         let mut p = PowerTerms::default();
         for &(j, tau) in &f.torques {

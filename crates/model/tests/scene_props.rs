@@ -138,7 +138,8 @@ fn walk(v: &Value, rest: &str, first: bool) -> bool {
 ///   ([`consumed_offset`]) and the message is not empty and does not repeat the position;
 /// - `Schema`, `Invalid`, `Redundant`, `Assembly`: `text` is valid JSON, the path resolves in it
 ///   ([`path_resolves`]), and the message starts with `"<path>: "` followed by a reason;
-/// - `Unknown` and `Io` never come from parsing text.
+/// - `Unknown`, `Io`, `Budget` and `Interrupted` never come from parsing text (no deadline
+///   or stop request here).
 fn check_located(text: &str, e: &SceneError) -> Result<(), TestCaseError> {
     let shown = e.to_string();
     match e {
@@ -173,7 +174,10 @@ fn check_located(text: &str, e: &SceneError) -> Result<(), TestCaseError> {
                 "message without path or reason: {shown}"
             );
         }
-        SceneError::Unknown(_) | SceneError::Io { .. } => {
+        SceneError::Unknown(_)
+        | SceneError::Io { .. }
+        | SceneError::Budget { .. }
+        | SceneError::Interrupted { .. } => {
             prop_assert!(false, "not an error of parsing text: {e:?}")
         }
     }

@@ -115,6 +115,7 @@ pub fn deadline_after(start: Instant, w: f64) -> Option<Instant> {
 /// stop requested            → Interrupted   (crate::interrupt)
 /// attempts ≥ max_steps      → TooManySteps
 /// now ≥ start + max_wall    → BudgetExhausted
+/// the thread's deadline     → BudgetExhausted (crate::interrupt::deadline_scope)
 /// ```
 #[derive(Clone, Debug)]
 pub struct Budget {
@@ -154,6 +155,13 @@ impl Budget {
                     reason: format!("wall-clock budget of {w} s used"),
                 });
             }
+        }
+        if let Some(w) = crate::interrupt::deadline_passed() {
+            return Err(SolveError::BudgetExhausted {
+                t,
+                y: y.to_vec(),
+                reason: format!("wall-clock budget of {w} s used"),
+            });
         }
         Ok(())
     }

@@ -313,3 +313,25 @@ fn a_wall_time_budget_beyond_the_clock_is_no_budget() {
         Some(start + Duration::from_millis(2500))
     );
 }
+
+/// Every method stops at its first step attempt when the call's deadline
+/// (`interrupt::deadline_scope`) has passed, with the budget named and the initial state,
+/// however large its own `max_wall_time`; outside the scope the same solve runs to the end.
+#[test]
+fn every_method_stops_at_the_deadline_of_its_call() {
+    for method in Method::ALL {
+        let o = opts_for(method);
+        let err = {
+            let _scope = interrupt::deadline_scope(Some((std::time::Instant::now(), 0.125)));
+            solve(&Decay(1), (0.0, 1.0), &[1.0], &o).unwrap_err()
+        };
+        match err {
+            SolveError::BudgetExhausted { t, y, reason } => {
+                assert_eq!((t, y), (0.0, vec![1.0]), "{method}");
+                assert_eq!(reason, "wall-clock budget of 0.125 s used", "{method}");
+            }
+            e => panic!("{method}: {e}"),
+        }
+        assert!(solve(&Decay(1), (0.0, 1.0), &[1.0], &o).is_ok(), "{method}");
+    }
+}

@@ -14,8 +14,13 @@
 //!                   elements' defaults of that state (a spring's free length)
 //! 8 check           initial_check.rs: the equations of motion at the initial state
 //! ```
+//!
+//! Between the phases, in assembly's iterations and around the initial Jacobian, set-up
+//! stops at the call's deadline or a stop request (`scene::error::checkpoint`).
 
 use std::cell::RefCell;
+
+use crate::scene::error::checkpoint;
 
 use crate::mechanism::bodies::Bodies;
 use crate::mechanism::constraints::Constraints;
@@ -37,9 +42,12 @@ impl Mechanism {
     /// finite, or a KKT system singular in f64, is a [`SceneError::Dynamics`] naming the body
     /// or joint (docs/scene-format.md, "Initial check").
     pub fn from_scene(scene: &Scene) -> Result<Mechanism, SceneError> {
+        let t0 = scene.t_start;
         scene.validate()?;
+        checkpoint("checking the scene", t0)?;
         let bodies = Bodies::prescribe(scene);
         let constraints = Constraints::build(scene, &bodies)?;
+        checkpoint("building the constraints", t0)?;
         let forces = Forces::build(scene);
         let formulation = match scene.formulation {
             FormulationName::LagrangeBaumgarte => Formulation::LagrangeBaumgarte(
@@ -65,9 +73,12 @@ impl Mechanism {
                 }
             }
         };
+        checkpoint("setting up the formulation", t0)?;
         let mut mech = Mechanism::laid_out(scene, bodies, constraints, forces, formulation);
         mech.assemble()?;
+        checkpoint("assembly", t0)?;
         crate::initial_check::check(&mech)?;
+        checkpoint("the initial checks", t0)?;
         Ok(mech)
     }
 

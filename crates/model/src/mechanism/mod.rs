@@ -74,12 +74,36 @@ pub struct Mechanism {
 }
 
 /// One full evaluation at (t, y): its buffers, whether the acceleration solve succeeded, the
-/// torque of every driver (joint index, τ; scene order) and ‖Φ(q, t)‖₂.
+/// torque of every driver (joint index, τ; scene order) and ‖Φ(q, t)‖₂. Its buffers go back
+/// to [`SPARE`] when it is dropped.
 pub(crate) struct FullEvaluation {
     pub sc: Scratch,
     pub ok: bool,
     pub torques: Vec<(usize, f64)>,
     pub violation: f64,
+}
+
+/// Most buffers kept per thread for full evaluations.
+const SPARE_MAX: usize = 4;
+
+thread_local! {
+    /// The buffers of dropped full evaluations, reused by the next ones (outputs are evaluated
+    /// thousands of times per run: a copy into kept buffers instead of ten allocations).
+    static SPARE: RefCell<Vec<Scratch>> = const { RefCell::new(Vec::new()) };
+}
+
+impl Drop for FullEvaluation {
+    fn drop(&mut self) {
+        let sc = std::mem::replace(&mut self.sc, Scratch::empty());
+        // A thread being torn down has no pool left: the buffers are then simply freed.
+        let _ = SPARE.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                if s.len() < SPARE_MAX {
+                    s.push(sc);
+                }
+            }
+        });
+    }
 }
 
 impl Mechanism {
@@ -314,7 +338,13 @@ impl Mechanism {
     ///           on p; g_p gravity and clearance forces on p), children before parents
     /// ```
     pub(crate) fn full_evaluation(&self, t: f64, y: &[f64]) -> FullEvaluation {
-        let mut sc = self.scratch.borrow().clone();
+        // A copy of the right-hand side's buffers (as a clone, into kept ones).
+        let mut sc = SPARE
+            .try_with(|s| s.try_borrow_mut().ok().and_then(|mut s| s.pop()))
+            .ok()
+            .flatten()
+            .unwrap_or_else(Scratch::empty);
+        sc.clone_from(&self.scratch.borrow());
         let ok = self.evaluate(t, y, &mut sc, true);
         let violation = self.formulation.constraint_violation();
         let nb = self.bodies.info.len();

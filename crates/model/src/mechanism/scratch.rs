@@ -13,8 +13,10 @@ use crate::clearance::revolute::RevoluteEval;
 use crate::elements::input::Kin;
 use crate::elements::interface::ElementEval;
 
-/// Buffers of one evaluation (module doc).
-#[derive(Clone, Debug)]
+/// Buffers of one evaluation (module doc). `clone_from` copies into the existing buffers
+/// (no allocation once they have the size): what a full evaluation's copy uses
+/// ([`crate::mechanism::Mechanism::full_evaluation`]).
+#[derive(Debug)]
 pub(crate) struct Scratch {
     pub pose: Vec<[f64; 3]>,
     pub vel: Vec<[f64; 3]>,
@@ -34,7 +36,42 @@ pub(crate) struct Scratch {
     pub pr: Vec<PrismaticEval>,
 }
 
+impl Clone for Scratch {
+    fn clone(&self) -> Scratch {
+        Scratch {
+            pose: self.pose.clone(),
+            vel: self.vel.clone(),
+            acc: self.acc.clone(),
+            cs: self.cs.clone(),
+            g: self.g.clone(),
+            gb: self.gb.clone(),
+            qdd: self.qdd.clone(),
+            revolute: self.revolute.clone(),
+            el: self.el.clone(),
+            pr: self.pr.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, o: &Scratch) {
+        self.pose.clone_from(&o.pose);
+        self.vel.clone_from(&o.vel);
+        self.acc.clone_from(&o.acc);
+        self.cs.clone_from(&o.cs);
+        self.g.clone_from(&o.g);
+        self.gb.clone_from(&o.gb);
+        self.qdd.clone_from(&o.qdd);
+        self.revolute.clone_from(&o.revolute);
+        self.el.clone_from(&o.el);
+        self.pr.clone_from(&o.pr);
+    }
+}
+
 impl Scratch {
+    /// No buffers (no allocation): a placeholder, or the start of a `clone_from`.
+    pub(crate) fn empty() -> Scratch {
+        Scratch::new(0, 0, 0, 0, 0)
+    }
+
     /// Buffers for `nb` bodies, `nq` integrated coordinates and the given numbers of revolute
     /// clearance joints, force elements and prismatic clearance joints.
     pub(crate) fn new(nb: usize, nq: usize, n_rev: usize, n_el: usize, n_pr: usize) -> Scratch {

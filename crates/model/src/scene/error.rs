@@ -12,6 +12,9 @@
 /// Dynamics    <path>: the equations of motion fail at the initial state: … (not finite, or
 ///             Φ_q M⁻¹ Φ_qᵀ singular in f64)
 /// Unknown     unknown body 'x' / unknown point 'p' on body 'x'   (output look-ups)
+/// Budget      the call's wall-clock budget ran out during set-up     (not the scene's fault:
+/// Interrupted a stop was requested during set-up                      front ends report them
+///                                                                     as the solver's)
 /// ```
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SceneError {
@@ -69,6 +72,27 @@ pub enum SceneError {
     /// An output asked for a body or point the scene does not have.
     #[error("unknown {0}")]
     Unknown(String),
+    /// The wall-clock budget of the call ran out during set-up
+    /// (`lash_solver::interrupt::deadline_scope`): not a fault of the scene, a budget that a
+    /// front end reports as the solver's `BudgetExhausted` (exit 3).
+    #[error("wall-clock budget of {budget} s used during set-up ({phase}, t = {t} s)")]
+    Budget {
+        /// What set-up was doing: "building the constraints", "assembly", ….
+        phase: &'static str,
+        /// The scene's start time.
+        t: f64,
+        /// The budget, s.
+        budget: f64,
+    },
+    /// A stop was requested during set-up (`lash_solver::interrupt::request_stop`): a front end
+    /// reports it as the solver's `Interrupted`.
+    #[error("stop requested during set-up ({phase}, t = {t} s)")]
+    Interrupted {
+        /// What set-up was doing.
+        phase: &'static str,
+        /// The scene's start time.
+        t: f64,
+    },
     /// The scene file could not be read.
     #[error("cannot read {path}: {message}")]
     Io {
@@ -84,4 +108,19 @@ pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Sce
         path: path.into(),
         reason: reason.into(),
     }
+}
+
+/// A point where set-up may stop: after `phase`, the call's deadline passed
+/// ([`lash_solver::interrupt::deadline_passed`]) → [`SceneError::Budget`], a stop requested →
+/// [`SceneError::Interrupted`]. Between the phases of `Mechanism::from_scene` and inside its
+/// long loops (assembly's iterations, the initial Jacobian's check), so that a budget is
+/// overrun by at most one phase's step, not the whole set-up.
+pub(crate) fn checkpoint(phase: &'static str, t: f64) -> Result<(), SceneError> {
+    if lash_solver::interrupt::stop_requested() {
+        return Err(SceneError::Interrupted { phase, t });
+    }
+    if let Some(budget) = lash_solver::interrupt::deadline_passed() {
+        return Err(SceneError::Budget { phase, t, budget });
+    }
+    Ok(())
 }

@@ -78,7 +78,8 @@ pub struct RunOptions {
 /// solver failure (exit 3): DIR = failure.json + partial_trajectory.csv (the rows up to the
 /// failure), never summary.json; `progress` notes what was written
 /// budget: solver.max_wall_time counts from this call; past it the run fails with
-/// BudgetExhausted, also after the integration (before the figures)
+/// BudgetExhausted: in set-up at the next of its checks (lash_model's build phases; nothing
+/// written), at the next step attempt, or after the integration (before the figures)
 /// ```
 pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>, Error> {
     let start = Instant::now();
@@ -86,6 +87,8 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
         .solver
         .max_wall_time
         .and_then(|w| deadline_after(start, w));
+    // Set-up and every step attempt stop at the deadline (lash_solver::interrupt).
+    let _scope = lash_solver::interrupt::deadline_scope(deadline.zip(o.solver.max_wall_time));
     let case = Case::load(&o.case, None)?;
     let (prepared, mut req, settled) = run_request(case, o, deadline)?;
     let out = o
@@ -248,6 +251,7 @@ pub fn run_in_memory(case: Case, o: &RunOptions) -> Result<RunResult, Error> {
         .solver
         .max_wall_time
         .and_then(|w| deadline_after(Instant::now(), w));
+    let _scope = lash_solver::interrupt::deadline_scope(deadline.zip(o.solver.max_wall_time));
     let (prepared, req, settled) = run_request(case, o, deadline)?;
     let mut r = simulate(&prepared, &req).and_then(|r| within(r, o, deadline))?;
     r.summary.until_periodic = settled;

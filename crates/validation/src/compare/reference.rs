@@ -6,7 +6,9 @@
 //!                  [t0, t0 + T/2]   (two correct runs still agree there; docs/model.md §9)
 //!                otherwise: the metrics window (the last revolution)
 //!                sampled on 2001 equally spaced times, both ends
-//! reference      a scene with an oil film (stiff): bdf at rtol 1e-12, checked by esdirk34 at
+//! reference      IFToMM A02 (the N-four-bar of lash_model::iftomm): its exact
+//!                one-degree-of-freedom reduction (compare/one_dof.rs), no run
+//!                a scene with an oil film (stiff): bdf at rtol 1e-12, checked by esdirk34 at
 //!                1e-12; otherwise dop853 at rtol 1e-12, checked by tsit54 at 1e-12; atol as
 //!                every run (rtol · scale, simulate.rs); the check's error against the
 //!                reference is reported as the reference's agreement (an upper estimate of its
@@ -28,6 +30,7 @@ use std::path::{Path, PathBuf};
 use lash_model::MetricsWindow;
 use lash_solver::{ControllerKind, Method};
 
+use crate::compare::one_dof::{a02_reference, Exact};
 use crate::compare::workprecision::fmt_num;
 use crate::error::{Error, OptionError};
 use crate::report::metrics::{EventQuantity, Sample, GRID_POINTS};
@@ -263,8 +266,10 @@ pub(crate) struct Reference {
     pub window: ErrorWindow,
     /// End time of the runs, s.
     pub t_end: f64,
-    /// The reference run (None for test problems).
+    /// The reference run (None for test problems and A02).
     pub run: Option<RunResult>,
+    /// A02's exact reference: its samples and states on the window's grid (None otherwise).
+    pub exact: Option<Exact>,
     /// The check's error norms against the reference (None for test problems).
     pub agreement: Option<ErrorNorms>,
     /// Wall time of the reference and its check, s.
@@ -334,9 +339,29 @@ impl Reference {
                 window,
                 t_end: te,
                 run: None,
+                exact: None,
                 agreement: None,
                 wall_time_s: 0.0,
             });
+        }
+        if let Some(scene) = p.scene() {
+            let clock = std::time::Instant::now();
+            if let Some(exact) = a02_reference(scene, t0, &window.grid())? {
+                return Ok(Reference {
+                    how: format!(
+                        "the exact one-degree-of-freedom reduction of IFToMM A02, J θ̈ = −g K \
+                         cos θ (lash_model::iftomm), by dop853 at rtol 1e-13, mapped to every \
+                         body, on the {}",
+                        window.label
+                    ),
+                    window,
+                    t_end: te,
+                    run: None,
+                    exact: Some(exact),
+                    agreement: None,
+                    wall_time_s: clock.elapsed().as_secs_f64(),
+                });
+            }
         }
         let (m, check) = reference_methods(p);
         let run = run_on_window(
@@ -374,6 +399,7 @@ impl Reference {
             window,
             t_end: te,
             run: Some(run),
+            exact: None,
             agreement: Some(agreement),
             wall_time_s: wall,
         })
@@ -381,10 +407,14 @@ impl Reference {
 
     /// What the headline error ([`ErrorNorms::headline`]) measures, in words (axis labels).
     pub(crate) fn measure(&self) -> String {
-        let Some(r) = &self.run else {
-            return "largest relative error of a component at t_end (IVP Test Set solution)".into();
+        let first = match (&self.run, &self.exact) {
+            (Some(r), _) => r.extra.first(),
+            (None, Some((samples, _))) => samples.first(),
+            (None, None) => {
+                return "largest relative error of a component at t_end (IVP Test Set solution)"
+                    .into()
+            }
         };
-        let first = r.extra.first();
         if first.is_some_and(|s| s.slider_a.is_some()) {
             "relative RMS error of the slider acceleration".into()
         } else if first.is_some_and(|s| s.ex_over_c.is_some()) {
@@ -397,16 +427,12 @@ impl Reference {
     /// The error norms of a run made with the same t_end and `extra_times = window.grid()`
     /// (None for test problems: their error is `reference_error`).
     pub(crate) fn norms(&self, r: &RunResult) -> Result<Option<ErrorNorms>, Error> {
-        match &self.run {
-            Some(reference) => ErrorNorms::between(
-                &r.extra,
-                &r.extra_states.y,
-                &reference.extra,
-                &reference.extra_states.y,
-            )
-            .map(Some),
-            None => Ok(None),
-        }
+        let (samples, states) = match (&self.run, &self.exact) {
+            (Some(reference), _) => (&reference.extra, &reference.extra_states.y),
+            (None, Some((samples, states))) => (samples, states),
+            (None, None) => return Ok(None),
+        };
+        ErrorNorms::between(&r.extra, &r.extra_states.y, samples, states).map(Some)
     }
 }
 

@@ -3,6 +3,7 @@
 
 pub(crate) mod column_plot;
 pub(crate) mod metrics;
+pub(crate) mod number;
 pub(crate) mod plot;
 pub(crate) mod summary;
 pub(crate) mod trajectory;

@@ -20,12 +20,12 @@
 //! in the shortest form that reads back to the same f64. Source: docs/outputs.md
 //! (`trajectory.csv`).
 
-use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
+use crate::report::number::push_num;
 use crate::store::io;
 
 /// File name of the trajectory in an output directory.
@@ -60,15 +60,6 @@ pub(crate) fn fmt_num(x: f64) -> String {
     let mut s = String::new();
     push_num(&mut s, x);
     s
-}
-
-fn push_num(out: &mut String, x: f64) {
-    let a = x.abs();
-    let _ = if x == 0.0 || (1e-4..1e15).contains(&a) {
-        write!(out, "{x}")
-    } else {
-        write!(out, "{x:e}")
-    };
 }
 
 /// The columns of one run's trajectory: their names and which of them the run fills.

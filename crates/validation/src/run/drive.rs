@@ -160,7 +160,11 @@ pub(crate) fn drive<S: OdeSystem + ?Sized>(
 }
 
 pub(crate) fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<Powers, Error> {
-    let v = pw(t, y);
+    finite_powers(pw(t, y), t)
+}
+
+/// The power terms `v` at t, or the error of a non-finite one.
+pub(crate) fn finite_powers(v: Powers, t: f64) -> Result<Powers, Error> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(v)
     } else {

@@ -5,7 +5,7 @@
 //! Source: docs/outputs.md (`metrics`, the energy balance); docs/model.md §1.8.
 
 use lash_model::scene::JointSpec;
-use lash_model::{LawRangeMonitor, Mechanism, Outputs, Scene};
+use lash_model::{LawRangeMonitor, Mechanism, Outputs, PowerTerms, Scene};
 use lash_solver::{EventHit, OdeSystem, Solution, SolveError};
 
 use crate::error::Error;
@@ -18,6 +18,7 @@ use crate::report::trajectory::{Columns, Header, TrajectorySink};
 use crate::run::drive::checked_power;
 use crate::run::drive::drive;
 use crate::run::drive::empty_solution;
+use crate::run::drive::finite_powers;
 use crate::run::drive::Observer;
 use crate::run::drive::PowerFn;
 use crate::run::plan::check_times;
@@ -83,6 +84,26 @@ struct MechanismRun<'a> {
     ybuf: Vec<f64>,
     // The ranges of the clearance joints' laws, at every accepted step's end.
     laws: LawRangeMonitor,
+    // The last output's evaluation (t, y, outputs): a row at the time of a window sample
+    // (the same t and y) reuses it.
+    last_output: Option<(f64, Vec<f64>, Outputs)>,
+    // The evaluations at the quadrature's nodes of the current step inside the window
+    // (t, outputs): the extrema's samples at the same times reuse them (the dense output is
+    // the step's, so the same t is the same y).
+    nodes: Vec<(f64, Outputs)>,
+}
+
+/// The power terms in the quadrature's order (Quadrature's `total`).
+fn power_array(p: &PowerTerms) -> Powers {
+    [
+        p.driver,
+        p.contact_damping,
+        p.friction,
+        p.film,
+        p.load,
+        p.motor,
+        p.damper,
+    ]
 }
 
 impl MechanismRun<'_> {
@@ -170,8 +191,18 @@ impl Observer for MechanismRun<'_> {
                 "an output past the last requested time".into(),
             ));
         };
-        let o = self.mech.outputs(t_req, y);
-        let s = self.sampler.of_outputs(t_req, &o);
+        let reuse = matches!(&self.last_output, Some((t, ys, _)) if *t == t_req && ys == y);
+        if !reuse {
+            let o = self.mech.outputs(t_req, y);
+            let mut ys = self.last_output.take().map(|l| l.1).unwrap_or_default();
+            ys.clear();
+            ys.extend_from_slice(y);
+            self.last_output = Some((t_req, ys, o));
+        }
+        let Some((_, _, o)) = &self.last_output else {
+            return Err(Error::Internal("an output without its evaluation".into()));
+        };
+        let s = self.sampler.of_outputs(t_req, o);
         match list {
             List::Window => {
                 self.window.push(s);
@@ -218,12 +249,23 @@ impl Observer for MechanismRun<'_> {
         self.laws
             .observe(self.mech, tb, y)
             .map_err(|v| law_out_of_range(tb, y, &v))?;
+        let in_window = tb >= self.w0 && ta <= self.w1;
+        self.nodes.clear();
         if let (Some(q), Some(pw)) = (self.quad.as_mut(), self.power) {
             let buf = &mut self.ybuf;
             let mech = self.mech;
+            let nodes = &mut self.nodes;
             let mut node = |t: f64| -> Result<Powers, Error> {
                 dense(t, buf);
-                checked_power(pw, t, buf).map_err(|e| singular_or(mech, e, t, buf, (ta, tb)))
+                let p = if in_window {
+                    // One evaluation for the power and the extrema's sample at t.
+                    let (o, p) = mech.outputs_and_power(t, buf);
+                    nodes.push((t, o));
+                    finite_powers(power_array(&p), t)
+                } else {
+                    checked_power(pw, t, buf)
+                };
+                p.map_err(|e| singular_or(mech, e, t, buf, (ta, tb)))
             };
             q.step(ta, tb, cut, &mut node)?;
         }
@@ -233,16 +275,27 @@ impl Observer for MechanismRun<'_> {
                 tr.push(tb, phi, rate);
             }
         }
-        if tb >= self.w0 && ta <= self.w1 {
+        if in_window {
             let (a, b) = (ta.max(self.w0), tb.min(self.w1));
             let mut peaks = std::mem::replace(&mut self.peaks, Peaks::new(0));
             let mut buf = std::mem::take(&mut self.ybuf);
+            let nodes = std::mem::take(&mut self.nodes);
             let r = peaks.step(a, b, &mut |t| {
-                dense(t, &mut buf);
-                let o = self.mech.outputs(t, &buf);
-                self.quantities(&o)
-                    .map_err(|e| singular_or(self.mech, e, t, &buf, (ta, tb)))
+                let fresh;
+                let o = match nodes.iter().find(|n| n.0 == t) {
+                    Some((_, o)) => o,
+                    None => {
+                        dense(t, &mut buf);
+                        fresh = self.mech.outputs(t, &buf);
+                        &fresh
+                    }
+                };
+                self.quantities(o).map_err(|e| {
+                    dense(t, &mut buf);
+                    singular_or(self.mech, e, t, &buf, (ta, tb))
+                })
             });
+            self.nodes = nodes;
             self.ybuf = buf;
             self.peaks = peaks;
             r?;
@@ -417,18 +470,7 @@ fn pass(
             None => ("", None),
         })
         .collect();
-    let power = |t: f64, y: &[f64]| {
-        let p = mech.power(t, y);
-        [
-            p.driver,
-            p.contact_damping,
-            p.friction,
-            p.film,
-            p.load,
-            p.motor,
-            p.damper,
-        ]
-    };
+    let power = |t: f64, y: &[f64]| power_array(&mech.power(t, y));
     let power_ref: PowerFn<'_> = &power;
     let max_panel = info
         .period
@@ -484,6 +526,8 @@ fn pass(
         events: Vec::new(),
         ybuf: vec![0.0; n],
         laws: LawRangeMonitor::new(&mech),
+        last_output: None,
+        nodes: Vec::new(),
     };
     obs.laws
         .observe(&mech, t0, &y0)

@@ -69,7 +69,7 @@ use std::path::Path;
 
 use lash_model::scene::JointSpec;
 use lash_model::{Mechanism, Scene};
-use lash_solver::{testset, Atol, Method, OdeSystem, SolverOptions};
+use lash_solver::{testset, Atol, Method, OdeSystem, SolveError, SolverOptions};
 
 use crate::error::{Error, OptionError};
 use crate::options::SolverChoice;
@@ -190,11 +190,22 @@ fn case_error(case: &Case, e: impl std::fmt::Display) -> Error {
     Error::Input(format!("case {}: {e}", case_label(case)))
 }
 
-/// A scene the model rejects (`case LABEL: PATH: REASON`), its path and reason kept.
+/// A scene the model rejects (`case LABEL: PATH: REASON`), its path and reason kept; set-up
+/// stopped by the call's deadline or a stop request is the solver's `BudgetExhausted` or
+/// `Interrupted` at the scene's start time, before any state (exit 3, not a bad scene).
 pub(crate) fn scene_error(case: &Case, error: lash_model::SceneError) -> Error {
-    Error::Scene {
-        case: case_label(case),
-        error,
+    use lash_model::SceneError as S;
+    match error {
+        S::Budget { phase, t, budget } => Error::Solver(SolveError::BudgetExhausted {
+            t,
+            y: Vec::new(),
+            reason: format!("wall-clock budget of {budget} s used during set-up ({phase})"),
+        }),
+        S::Interrupted { t, .. } => Error::Solver(SolveError::Interrupted { t, y: Vec::new() }),
+        error => Error::Scene {
+            case: case_label(case),
+            error,
+        },
     }
 }
 

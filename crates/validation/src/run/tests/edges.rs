@@ -265,3 +265,34 @@ fn a_singular_configuration_inside_a_step_is_a_typed_error() {
     let r = simulate(&p, &request(&p, Method::Bdf, 0.1)).unwrap();
     assert!(r.summary.law_range.is_none());
 }
+
+/// A wall-clock budget that runs out during set-up ends it at the next check
+/// (lash_model's build phases, `lash_solver::interrupt::deadline_scope`): the solver's
+/// BudgetExhausted at the scene's start time with no state, naming the phase and the budget,
+/// not a scene error; without the scope the same scene sets up.
+#[test]
+fn a_budget_that_runs_out_in_set_up_stops_the_set_up() {
+    let scene = press("dry_150rpm_c0.1");
+    let case = || Case::from_json_bytes("press", scene.to_string().into_bytes()).unwrap();
+    let passed = std::time::Instant::now();
+    let err = {
+        let _scope = lash_solver::interrupt::deadline_scope(Some((passed, 0.5)));
+        match Prepared::load(case()) {
+            Err(e) => e,
+            Ok(_) => panic!("set-up past its deadline went on"),
+        }
+    };
+    match err {
+        Error::Solver(SolveError::BudgetExhausted { t, y, reason }) => {
+            assert_eq!(t, 0.0);
+            assert!(y.is_empty(), "{y:?}");
+            assert_eq!(
+                reason,
+                "wall-clock budget of 0.5 s used during set-up (checking the scene)"
+            );
+        }
+        e => panic!("{e}"),
+    }
+    // The scope ended with its block: the same case sets up.
+    assert!(Prepared::load(case()).is_ok());
+}

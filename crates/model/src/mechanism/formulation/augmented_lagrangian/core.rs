@@ -16,11 +16,16 @@
 //! a singular configuration with a nonzero stabilisation term), λ grows in the null space of
 //! Φ_qᵀ, which q̈ does not see: q̈ still converges, to the least-squares compromise.
 //!
-//! A is stored dense (row-major, n × n) but only its envelope — from the first nonzero of
-//! each row to the diagonal, fixed by the sparsity of M and Φ_q — is written, factored and
-//! read: the Cholesky factor of a matrix has no fill outside its envelope (George & Liu,
-//! Computer Solution of Large Sparse Positive Definite Systems, 1981, §4.2). A chain of bodies
-//! numbered along the chain (the N-four-bar) is then banded and costs O(n b²).
+//! A is stored in its envelope (crate::linalg::Envelope, one block: from the first nonzero of
+//! each row to the diagonal, fixed by the sparsity of M and Φ_q), and only that is written,
+//! factored and read: the Cholesky factor of a matrix has no fill outside its envelope (George
+//! & Liu, Computer Solution of Large Sparse Positive Definite Systems, 1981, §4.2). A chain of
+//! bodies numbered along the chain (the N-four-bar) is then banded and costs O(n b) memory and
+//! O(n b²) work. The kernels below are those of the dense storage it replaced, operation for
+//! operation in the same order (the same numbers bit for bit); only the index of entry (i, k)
+//! changed, from i·n + k to its place in the envelope.
+
+use crate::linalg::Envelope;
 
 /// A sparse constraint Jacobian by rows (compressed sparse rows; repeated columns add up).
 #[derive(Clone, Debug, Default)]
@@ -95,7 +100,9 @@ pub(crate) struct AlCore {
     pub max_iter: usize,
     /// First column of the envelope of each row of A.
     first: Vec<usize>,
-    /// A, then its factor: strict lower triangle L, diagonal 1/L_jj (within the envelope).
+    /// The envelope's storage of A (one block, rows in order).
+    env: Envelope,
+    /// A, then its factor: strict lower triangle L, diagonal 1/L_jj (in `env`).
     a: Vec<f64>,
     /// Scratch: the right-hand side and the previous iterate.
     b: Vec<f64>,
@@ -127,13 +134,15 @@ impl AlCore {
                 }
             }
         }
+        let env = Envelope::new(n, vec![(0..n).collect()], (0..n).map(|i| (i, first[i])));
         AlCore {
             n,
             alpha,
             tol,
             max_iter,
+            a: vec![0.0; env.len()],
             first,
-            a: vec![0.0; n * n],
+            env,
             b: vec![0.0; n],
             prev: vec![0.0; n],
             res: vec![0.0; phi.rows()],
@@ -143,19 +152,17 @@ impl AlCore {
     /// A = M + αΦ_qᵀΦ_q (lower triangle, within the envelope).
     pub(crate) fn assemble(&mut self, mass: Mass<'_>, phi: &SparseRows) {
         let n = self.n;
-        for i in 0..n {
-            self.a[i * n + self.first[i]..i * n + i + 1].fill(0.0);
-        }
+        self.a.fill(0.0);
         match mass {
             Mass::Diagonal(d) => {
                 for i in 0..n {
-                    self.a[i * n + i] = d[i];
+                    self.a[self.env.diag(i)] = d[i];
                 }
             }
             Mass::Dense(m) => {
                 for i in 0..n {
                     for j in self.first[i]..=i {
-                        self.a[i * n + j] = m[i * n + j];
+                        self.a[self.env.at(i, j)] = m[i * n + j];
                     }
                 }
             }
@@ -168,7 +175,7 @@ impl AlCore {
                 for f in range.clone() {
                     let cj = phi.col[f];
                     if cj <= ci {
-                        self.a[ci * n + cj] += vi * phi.val[f];
+                        self.a[self.env.at(ci, cj)] += vi * phi.val[f];
                     }
                 }
             }
@@ -180,24 +187,27 @@ impl AlCore {
     pub(crate) fn factor(&mut self) -> Result<(), usize> {
         let n = self.n;
         let a = &mut self.a;
+        // Entry (i, k) of row i is at oi + k − fi; (j, k) at oj + k − first[j].
         for i in 0..n {
             let fi = self.first[i];
+            let oi = self.env.at(i, fi);
             for j in fi..i {
                 let fj = self.first[j].max(fi);
-                let mut s = a[i * n + j];
+                let oj = self.env.at(j, self.first[j]) - self.first[j];
+                let mut s = a[oi + j - fi];
                 for k in fj..j {
-                    s -= a[i * n + k] * a[j * n + k];
+                    s -= a[oi + k - fi] * a[oj + k];
                 }
-                a[i * n + j] = s * a[j * n + j];
+                a[oi + j - fi] = s * a[oj + j];
             }
-            let mut d = a[i * n + i];
+            let mut d = a[oi + i - fi];
             for k in fi..i {
-                d -= a[i * n + k] * a[i * n + k];
+                d -= a[oi + k - fi] * a[oi + k - fi];
             }
             if !(d > 0.0) {
                 return Err(i);
             }
-            a[i * n + i] = 1.0 / d.sqrt();
+            a[oi + i - fi] = 1.0 / d.sqrt();
         }
         Ok(())
     }
@@ -207,20 +217,23 @@ impl AlCore {
     pub(crate) fn apply_inverse(&self, x: &mut [f64]) {
         let n = self.n;
         let a = &self.a;
+        // Entry (i, k) of row i is at oi + k.
+        let row = |i: usize| self.env.at(i, self.first[i]) - self.first[i];
         for i in 0..n {
-            let fi = self.first[i];
+            let (fi, oi) = (self.first[i], row(i));
             let mut s = x[i];
             for k in fi..i {
-                s -= a[i * n + k] * x[k];
+                s -= a[oi + k] * x[k];
             }
-            x[i] = s * a[i * n + i];
+            x[i] = s * a[oi + i];
         }
         for i in (0..n).rev() {
-            let v = x[i] * a[i * n + i];
+            let oi = row(i);
+            let v = x[i] * a[oi + i];
             x[i] = v;
             let fi = self.first[i];
             for k in fi..i {
-                x[k] -= a[i * n + k] * v;
+                x[k] -= a[oi + k] * v;
             }
         }
     }
@@ -360,6 +373,7 @@ mod tests {
         let mut core = AlCore::new(n, false, &phi, 10.0, 1e-14, 30);
         // The mass couples neighbours: inside the envelope of Φ_qᵀΦ_q already.
         core.assemble(Mass::Dense(&mass), &phi);
+        let assembled = core.a.clone();
         let mut dense = faer::Mat::<f64>::zeros(n, n);
         for i in 0..n {
             for j in 0..n {
@@ -381,5 +395,56 @@ mod tests {
             let ax: f64 = (0..n).map(|j| dense[(i, j)] * x[j]).sum();
             assert!((ax - b[i]).abs() < 1e-13, "row {i}: {ax} vs {}", b[i]);
         }
+        // The dense row-major storage's kernels (before A moved into its envelope), on the
+        // same A: the envelope's factor and solve are theirs bit for bit.
+        let first = core.first.clone();
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in first[i]..=i {
+                a[i * n + j] = assembled[core.env.at(i, j)];
+            }
+        }
+        for i in 0..n {
+            let fi = first[i];
+            for j in fi..i {
+                let fj = first[j].max(fi);
+                let mut s = a[i * n + j];
+                for k in fj..j {
+                    s -= a[i * n + k] * a[j * n + k];
+                }
+                a[i * n + j] = s * a[j * n + j];
+            }
+            let mut d = a[i * n + i];
+            for k in fi..i {
+                d -= a[i * n + k] * a[i * n + k];
+            }
+            a[i * n + i] = 1.0 / d.sqrt();
+        }
+        for i in 0..n {
+            for j in first[i]..=i {
+                assert_eq!(a[i * n + j].to_bits(), core.a[core.env.at(i, j)].to_bits());
+            }
+        }
+        let mut y = b.clone();
+        for i in 0..n {
+            let mut s = y[i];
+            for k in first[i]..i {
+                s -= a[i * n + k] * y[k];
+            }
+            y[i] = s * a[i * n + i];
+        }
+        for i in (0..n).rev() {
+            let v = y[i] * a[i * n + i];
+            y[i] = v;
+            for k in first[i]..i {
+                y[k] -= a[i * n + k] * v;
+            }
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&x), bits(&y));
+        // Stored: the envelope (row i from its first column), not n².
+        let stored: usize = (0..n).map(|i| i - first[i] + 1).sum();
+        assert_eq!(core.a.len(), stored);
+        assert!(stored < n * n);
     }
 }
