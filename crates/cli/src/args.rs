@@ -252,7 +252,7 @@ pub struct RunArgs {
     pub animate: bool,
     /// How the constraints are enforced, over the scene's `formulation`:
     /// lagrange_baumgarte, augmented_lagrangian, minimal or auto (docs/model.md §12). Default:
-    /// the scene's (whose default is lagrange_baumgarte).
+    /// the scene's (whose default is auto).
     #[arg(long, value_name = "F", value_parser = parse_formulation)]
     pub formulation: Option<lash_model::FormulationName>,
     /// The window the metrics of summary.json cover: last-revolution (of the crank:
@@ -391,9 +391,9 @@ pub struct CompareArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Formulations compared side by side, comma-separated (lagrange_baumgarte,
-    /// augmented_lagrangian; docs/model.md §12): every row (RK4 steps and adaptive settings)
-    /// with each, against one reference (the case's own formulation's), each row naming its
-    /// formulation. Default: the case's.
+    /// augmented_lagrangian, minimal, auto; docs/model.md §12): every row (RK4 steps and
+    /// adaptive settings) with each, against one reference (the case's own formulation's:
+    /// auto unless the scene names one), each row naming its formulation. Default: the case's.
     #[arg(long, value_name = "F,..", value_delimiter = ',', value_parser = parse_formulation)]
     pub formulations: Option<Vec<lash_model::FormulationName>>,
 }

@@ -23,13 +23,19 @@
 //! Derivatives: J is the system's Jacobian, or forward differences with increments floored
 //! at atol_i/rtol ([`crate::jacobian`]). f_t is a central difference in t (~10⁻¹¹ relative; a
 //! forward one, ~10⁻⁸, left the dense output with order 2 on forced problems), skipped
-//! (f_t = 0) when [`OdeSystem::is_autonomous`] says so; the order of the method needs the
+//! (f_t = 0) when [`OdeSystem::is_autonomous`] says so, and the system's own
+//! ([`OdeSystem::time_derivative`]) when it has one: a difference in t is only as good as f is
+//! smooth in t on the scale δ_t ≈ 6e-6 s, and a mechanism in joint coordinates is not (a
+//! prescribed crank carries a journal across a lubricant film whose length scale is its gap;
+//! the difference's 2 % error there cost Rodas5P 370× the steps on the lubricated press). The
+//! order of the method needs the
 //! exact J (a Rosenbrock method is not a W-method), so difference errors (~10⁻⁸ relative)
 //! show up only below that level. W is factored in place by faer's LU with partial pivoting
 //! (or the small LU below).
 //!
 //! Cost per step: one Jacobian (analytic, or n RHS evaluations by differences), one RHS for
-//! f(t_n, y_n), two for ∂f/∂t by differences unless the system is autonomous; per attempt one
+//! f(t_n, y_n), two for ∂f/∂t by differences unless the system is autonomous or gives it
+//! (not counted then, like an analytic Jacobian's work); per attempt one
 //! LU factorisation of W, 7 RHS evaluations and 8 triangular solves. A rejected attempt reuses
 //! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
 //! h0 on every step, the error estimate ignored.
@@ -436,6 +442,8 @@ impl SmallLu {
 /// dense output and the failure handling.
 pub struct Rodas5pMethod {
     autonomous: bool,
+    /// The system gives ∂f/∂t ([`OdeSystem::time_derivative`]).
+    analytic_ft: bool,
     rtol: f64,
     atol: Atol,
     f0: Vec<f64>,
@@ -459,6 +467,7 @@ impl Rodas5pMethod {
         let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
         Rodas5pMethod {
             autonomous: sys.is_autonomous(),
+            analytic_ft: sys.has_time_derivative(),
             rtol,
             atol: atol.clone(),
             f0: vec![0.0; n],
@@ -494,6 +503,8 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
             .jacobian(sys, t, y, &self.f0, self.jac.as_mut(), stats);
         if self.autonomous {
             self.dfdt.fill(0.0);
+        } else if self.analytic_ft {
+            sys.time_derivative(t, y, &mut self.dfdt);
         } else {
             self.jac_eval
                 .time_derivative(sys, t, y, &self.f0, &mut self.dfdt, stats);

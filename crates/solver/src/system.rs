@@ -113,6 +113,17 @@ pub trait OdeSystem {
         None
     }
 
+    /// Whether [`OdeSystem::time_derivative`] is implemented. When false, Rosenbrock methods
+    /// take ∂f/∂t by a central difference in t (two RHS evaluations per step), which is
+    /// accurate only when f is smooth in t on the scale of the difference's step.
+    fn has_time_derivative(&self) -> bool {
+        false
+    }
+
+    /// ∂f/∂t at (t, y) at fixed y, written into `dfdt` (length n). Called only when
+    /// [`OdeSystem::has_time_derivative`] returns true (and the system is not autonomous).
+    fn time_derivative(&self, _t: f64, _y: &[f64], _dfdt: &mut [f64]) {}
+
     /// Whether f does not depend on t (∂f/∂t = 0). Default false. Rosenbrock methods need
     /// ∂f/∂t; for a system that says it is autonomous they skip its finite-difference estimate
     /// (one RHS evaluation per step).

@@ -25,6 +25,14 @@ impl OdeSystem for Mechanism {
         crate::jacobian::jacobian(self, t, y, jac);
     }
 
+    fn has_time_derivative(&self) -> bool {
+        self.formulation.has_time_derivative()
+    }
+
+    fn time_derivative(&self, t: f64, y: &[f64], dfdt: &mut [f64]) {
+        crate::jacobian::time_derivative(self, t, y, dfdt);
+    }
+
     fn n_events(&self) -> usize {
         self.events.len()
     }

@@ -92,9 +92,7 @@ pub struct Scene {
 #[serde(rename_all = "snake_case")]
 pub enum FormulationName {
     /// Lagrange multipliers with Baumgarte stabilisation (the paper's; docs/model.md §1).
-    /// Needs a constraint Jacobian of full row rank. The default (docs/model.md §12: `auto`
-    /// becomes the default once it is measured on every case).
-    #[default]
+    /// Needs a constraint Jacobian of full row rank.
     LagrangeBaumgarte,
     /// The augmented Lagrangian of Bayo & Ledesma (1996) in the same absolute coordinates
     /// (docs/model.md §12): its leading matrix M + Φ_qᵀαΦ_q stays positive definite through
@@ -106,7 +104,8 @@ pub enum FormulationName {
     Minimal,
     /// The cheapest formulation that is correct for the scene (docs/model.md §12): `minimal`
     /// for a tree of at most [`FormulationName::AUTO_MINIMAL_MAX_DOF`] degrees of freedom,
-    /// `augmented_lagrangian` otherwise.
+    /// `augmented_lagrangian` otherwise. The default.
+    #[default]
     Auto,
 }
 

@@ -127,7 +127,7 @@ pub fn run(o: &RunOptions, progress: &dyn Progress) -> Result<Written<RunResult>
                 RunHeader::new(&prepared.case, &req.opts),
                 t_span_end,
                 &e,
-                &prepared.state_names(),
+                &prepared.state_names_of(e.state().map_or(prepared.dim(), <[f64]>::len)),
                 (rows > 0).then_some(rows),
             )
             .write(dir.path())?;

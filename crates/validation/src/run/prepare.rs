@@ -147,8 +147,9 @@ pub(crate) struct MechanismInfo {
     pub dim: usize,
     /// Whether the scene is an in-line slider-crank with a closed-form ideal.
     pub has_ideal: bool,
-    /// Names of the state components: `<body>.x`, `<body>.y`, `<body>.theta` of every
-    /// integrated body, then `<body>.vx`, `<body>.vy`, `<body>.omega`.
+    /// Names of the components of an absolute state: `<body>.x`, `<body>.y`, `<body>.theta`
+    /// of every integrated body, then `<body>.vx`, `<body>.vy`, `<body>.omega` (the layout of
+    /// lagrange_baumgarte and augmented_lagrangian, and of RK4's runs of an `auto` scene).
     pub state_names: Vec<String>,
     /// Each event function's kind and element (`lash_model::Mechanism::event_name`:
     /// `("contact" | "eps_cap", clearance joint)`, `("corner_contact", prismatic joint)`), by
@@ -301,12 +302,14 @@ impl Prepared {
         }
     }
 
-    /// Names of the state components (`<body>.x`, … for a scene; `y0`, `y1`, … for a test
-    /// problem).
-    pub(crate) fn state_names(&self) -> Vec<String> {
+    /// Names of the components of a state of length `n` (`<body>.x`, … for an absolute state
+    /// of a scene; `y0`, `y1`, … for a test problem or a state in joint coordinates). A run may
+    /// build another formulation than the prepared mechanism's (RK4 of an `auto` scene runs
+    /// lagrange_baumgarte), hence the length.
+    pub(crate) fn state_names_of(&self, n: usize) -> Vec<String> {
         match &self.info {
-            Some(i) => i.state_names.clone(),
-            None => (0..self.dim()).map(|i| format!("y{i}")).collect(),
+            Some(i) if i.state_names.len() == n => i.state_names.clone(),
+            _ => (0..n).map(|i| format!("y{i}")).collect(),
         }
     }
 
@@ -479,14 +482,11 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
             });
     // y = (q, q̇), q = (x, y, θ) per integrated body (docs/model.md §1).
     let bodies = mech.integrated_bodies();
-    let mut state_names: Vec<String> = Vec::with_capacity(mech.dim());
+    let mut state_names: Vec<String> = Vec::with_capacity(6 * bodies.len());
     for suffixes in [["x", "y", "theta"], ["vx", "vy", "omega"]] {
         for b in &bodies {
             state_names.extend(suffixes.iter().map(|s| format!("{b}.{s}")));
         }
-    }
-    if state_names.len() != mech.dim() {
-        state_names = (0..mech.dim()).map(|i| format!("y{i}")).collect();
     }
     MechanismInfo {
         period: w.map(|w| 2.0 * std::f64::consts::PI / w),

@@ -52,7 +52,7 @@
 //! coordinates on the spanning tree of the ideal joints, trees only) exist today; the
 //! augmented Lagrangian's core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a
 //! reduced system's included (the door for minimal's loop closures, not built). The scene's
-//! `auto` (opt-in; the default is `lagrange_baumgarte`) is resolved to one of them in
+//! `auto` (the default) is resolved to one of them in
 //! `Mechanism::from_scene`.
 
 pub(crate) mod augmented_lagrangian;
@@ -63,6 +63,7 @@ use faer::MatMut;
 
 use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::Constraints;
+use crate::mechanism::forces::Forces;
 use crate::mechanism::scratch::Scratch;
 use crate::scene::error::SceneError;
 use crate::scene::format::Scene;
@@ -170,6 +171,34 @@ impl Formulation {
             Formulation::LagrangeBaumgarte(f) => f.jacobian(cons, sc, dg, jac),
             Formulation::AugmentedLagrangian(f) => f.jacobian(cons, sc, dg, jac),
             Formulation::Minimal(f) => f.jacobian(sc, dg, jac),
+        }
+    }
+
+    /// Whether [`Formulation::time_derivative`] gives ∂ẏ/∂t: minimal only. The others keep
+    /// the integrator's central difference in t, well conditioned there (time enters
+    /// through the driver rows and the prescribed bodies' joints, not through the bodies the
+    /// stiff forces act on).
+    pub(crate) fn has_time_derivative(&self) -> bool {
+        matches!(self, Formulation::Minimal(_))
+    }
+
+    /// ∂ẏ/∂t at fixed y after an evaluation at (t, y), given ∂g/∂(q, q̇) (minimal only:
+    /// minimal/jacobian.rs); false (nothing written) for the others.
+    pub(crate) fn time_derivative(
+        &self,
+        bodies: &Bodies,
+        forces: &Forces,
+        t: f64,
+        sc: &Scratch,
+        dg: &[f64],
+        out: &mut [f64],
+    ) -> bool {
+        match self {
+            Formulation::Minimal(f) => {
+                f.time_derivative(bodies, forces, t, sc, dg, out);
+                true
+            }
+            _ => false,
         }
     }
 
