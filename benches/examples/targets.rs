@@ -764,7 +764,7 @@ fn absolute_initial_state(stem: &str) -> Vec<f64> {
 }
 
 /// The press `stem` from `cases/press/` for `revolutions`, with `formulation` over the scene's
-/// own (None: the scene's).
+/// own (None: lagrange_baumgarte, as [`press`]).
 fn press_as(stem: &str, revolutions: f64, formulation: Option<FormulationName>) -> Mechanism {
     let Some(f) = formulation else {
         return press(stem, revolutions);
