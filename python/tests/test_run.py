@@ -275,8 +275,13 @@ def test_a_solver_failure_raises_solve_error_with_time_and_state():
     # 50 steps of at most T/100 (the step limit near contact of a press run: the dry journal
     # starts at its wall) from t = 0.
     assert 0.0 < e.t <= 50 * 0.4 / 100
-    # The state: (x, y, theta) then velocities of the three integrated bodies.
-    assert e.y.shape == (12,) and np.all(np.isfinite(e.y))
+    # The state under the default formulation (auto: minimal on the press, a tree): the rod's
+    # angle and the slider's x, then their rates; under lagrange_baumgarte (x, y, theta) then
+    # the velocities of the three integrated bodies.
+    assert e.y.shape == (4,) and np.all(np.isfinite(e.y))
+    with pytest.raises(lash.SolveError) as info:
+        lash.run(DRY, max_steps=50, formulation="lagrange_baumgarte")
+    assert info.value.y.shape == (12,) and np.all(np.isfinite(info.value.y))
 
     with pytest.raises(lash.SolveError) as info:
         lash.run(DRY, max_wall_time=1e-3)
