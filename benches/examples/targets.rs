@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [g] [p]
 //!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R] [--methods M,..]
+//!     [--kinks] [--rtols R,..]
 //! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
 //!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
@@ -31,7 +32,8 @@
 //!     bdf:1e-10, (f)'s cheapest), side by side with the hand-written bdf at `--hand-rtol`
 //!     (default 3.2e-10, (f)'s cheapest), without (f)'s scans: not among the defaults
 //! (q) (f)'s last part alone: the dry press through `lash run`, every adaptive method or
-//!     `--methods` (not among the defaults)
+//!     `--methods` (not among the defaults), at rtol 1e-5 … 1e-11 in half decades or
+//!     `--rtols`; `--kinks` runs the scene with its kink events on (`kink_events`)
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -60,6 +62,10 @@ struct Ctx {
     formulation: Option<FormulationName>,
     /// `--methods a,b`: (q) scans only these (None: every adaptive method).
     methods: Option<Vec<Method>>,
+    /// `--kinks`: (q) runs the scene with `kink_events` on.
+    kinks: bool,
+    /// `--rtols a,b`: (q) scans these tolerances (None: 1e-5 … 1e-11 in half decades).
+    rtols: Option<Vec<f64>>,
 }
 
 /// One measured run.
@@ -267,6 +273,8 @@ fn rk4_search(
         reps: 1,
         formulation: None,
         methods: None,
+        kinks: false,
+        rtols: None,
     };
     let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
     let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
@@ -408,6 +416,8 @@ fn section_b(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
+                kinks: false,
+                rtols: None,
             },
             &m,
             t_end,
@@ -454,6 +464,8 @@ fn section_c(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
+                kinks: false,
+                rtols: None,
             },
             &m,
             t_end,
@@ -472,6 +484,8 @@ fn section_c(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
+                kinks: false,
+                rtols: None,
             },
             &m,
             t_end,
@@ -787,6 +801,9 @@ fn formulation_label(f: Option<FormulationName>) -> String {
 /// `t_end`, `rows` trajectory rows per revolution.
 struct RunPath<'a> {
     stem: &'a str,
+    /// The scene to run instead of `cases/press/{stem}.json` (q with `--kinks`: a copy with
+    /// `kink_events` on).
+    case: Option<std::path::PathBuf>,
     t_end: f64,
     rows: usize,
     formulation: Option<FormulationName>,
@@ -795,7 +812,10 @@ struct RunPath<'a> {
 
 impl RunPath<'_> {
     fn options(&self, method: Method, rtol: f64) -> RunOptions {
-        let case = lash_benches::cases_dir().join(format!("{}.json", self.stem));
+        let case = self
+            .case
+            .clone()
+            .unwrap_or_else(|| lash_benches::cases_dir().join(format!("{}.json", self.stem)));
         RunOptions {
             case: case.display().to_string(),
             solver: SolverChoice {
@@ -915,8 +935,9 @@ impl RunPath<'_> {
         reference: &[f64],
     ) -> Vec<Run> {
         let mut runs = Vec::new();
+        let tols = ctx.rtols.clone().unwrap_or_else(|| tolerances(5, 11));
         for &method in methods {
-            for rtol in tolerances(5, 11) {
+            for &rtol in &tols {
                 if let Some(r) = self.measure(ctx, method, rtol, times, reference) {
                     let done = r.error < TARGET / 30.0;
                     runs.push(r);
@@ -963,6 +984,7 @@ fn lubricated_through_lash_run(
     let dir = std::env::temp_dir().join(format!("lash-targets-f-{}", std::process::id()));
     let path = RunPath {
         stem,
+        case: None,
         t_end: lm.t_start() + 2.0 * per,
         rows: 2000,
         formulation: ctx.formulation,
@@ -1007,6 +1029,7 @@ fn section_p(ctx: &Ctx, (method, rtol): (Method, f64), hand_rtol: f64) {
     let dir = std::env::temp_dir().join(format!("lash-targets-p-{}", std::process::id()));
     let path = RunPath {
         stem,
+        case: None,
         t_end: m.t_start() + 2.0 * per,
         rows: 2000,
         formulation: ctx.formulation,
@@ -1116,10 +1139,48 @@ fn dry_through_lash_run(ctx: &Ctx) {
     let times = grid(0.0, half, N_GRID);
     println!("  reference with kink events:");
     let reference = reference(&kinked, kinked.t_end(), &times);
-    let n = press_as(stem, 0.5, ctx.formulation).dim();
+    // The dimension `lash run` integrates: the scene's own formulation (`auto` resolves to
+    // `minimal` for the press, 4 states) unless `--formulation` names one.
+    let n = {
+        let path = lash_benches::cases_dir().join(format!("{stem}.json"));
+        let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
+        if let Some(f) = ctx.formulation {
+            scene.formulation = f;
+        }
+        Mechanism::from_scene(&scene)
+            .expect("the scene assembles")
+            .dim()
+    };
     let dir = std::env::temp_dir().join(format!("lash-targets-fd-{}", std::process::id()));
+    let case = ctx.kinks.then(|| {
+        let src = lash_benches::cases_dir().join(format!("{stem}.json"));
+        let text = std::fs::read_to_string(&src).expect("the catalogue's scene");
+        assert!(
+            !text.contains("kink_events"),
+            "the scene sets kink_events itself"
+        );
+        let brace = text.find('{').expect("a JSON object");
+        let text = format!(
+            "{}{{\n  \"kink_events\": true,{}",
+            &text[..brace],
+            &text[brace + 1..]
+        );
+        std::fs::create_dir_all(&dir).expect("a temporary directory");
+        let p = dir.join(format!("{stem}_kinks.json"));
+        std::fs::write(&p, text).expect("written");
+        p
+    });
+    println!(
+        "  lash's side with kink events {}",
+        if ctx.kinks {
+            "on (--kinks)"
+        } else {
+            "as the scene says (off)"
+        }
+    );
     let path = RunPath {
         stem,
+        case,
         t_end: half,
         rows: 2 * (N_GRID - 1),
         formulation: ctx.formulation,
@@ -1237,6 +1298,8 @@ fn main() {
     let mut at = (Method::Bdf, 1e-10);
     let mut hand_rtol = 3.2e-10;
     let mut methods = None;
+    let mut kinks = false;
+    let mut rtols = None;
     let mut sections = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -1272,6 +1335,15 @@ fn main() {
                         .collect(),
                 );
             }
+            "--kinks" => kinks = true,
+            "--rtols" => {
+                let v = it.next().expect("--rtols takes r1,r2,…");
+                rtols = Some(
+                    v.split(',')
+                        .map(|r| r.parse().expect("a tolerance"))
+                        .collect(),
+                );
+            }
             "--hand-rtol" => {
                 hand_rtol = it
                     .next()
@@ -1284,7 +1356,8 @@ fn main() {
             other => {
                 eprintln!(
                     "unknown argument {other}: expected a, b, c, d, e, f, g, p, q, --reps N, \
-                     --formulation F, --at METHOD:RTOL, --hand-rtol R"
+                     --formulation F, --at METHOD:RTOL, --hand-rtol R, --methods M,.., \
+                     --kinks, --rtols R,.."
                 );
                 std::process::exit(2);
             }
@@ -1299,6 +1372,8 @@ fn main() {
         reps,
         formulation,
         methods,
+        kinks,
+        rtols,
     };
     for s in sections {
         match s.as_str() {
