@@ -193,3 +193,37 @@ fn loop_closure_jacobian_matches_differences_of_f() {
         assert!(err < 1e-6, "{what}: worst relative error {err:e}");
     }
 }
+
+/// The ideal press (no clearance: crank prescribed, rod, slider on its line) is a loop: the
+/// slider hangs from the rod in the tree, and its translational joint closes the loop (2 rows
+/// on 2 angles: no degree of freedom left). At the assembled initial state Φ and Φ̇ vanish to
+/// rounding, so both formulations solve the same KKT system; the iteration and its
+/// refinement reach its solution where Φ_θ has full rank, so the accelerations and the driver
+/// torque (the crank's Newton–Euler balance, from the tree rows' multipliers after the
+/// closing rows' λ*) equal Lagrange–Baumgarte's to 1e-8 of their scale, as
+/// tests/minimal.rs asks on trees.
+#[test]
+fn the_ideal_press_under_minimal_has_lagrange_baumgartes_accelerations_and_torque() {
+    use lash_model::cases::{press_scene, PressJoint};
+    for rpm in [150.0, 2000.0] {
+        let scene = press_scene(PressJoint::Ideal, rpm, 1e-4);
+        let lb = with(scene.clone(), FormulationName::LagrangeBaumgarte);
+        let mi = with(scene, FormulationName::Minimal);
+        assert_eq!(mi.dim(), 2 * 2);
+        let t0 = lb.t_start();
+        let (o_lb, o_mi) = (
+            lb.outputs(t0, &lb.initial_state()),
+            mi.outputs(t0, &mi.initial_state()),
+        );
+        for (a, b) in o_lb.bodies.iter().zip(&o_mi.bodies) {
+            let da = [a.ax - b.ax, a.ay - b.ay, a.alpha - b.alpha];
+            let scale = 1.0 + a.ax.abs().max(a.ay.abs()).max(a.alpha.abs());
+            assert!(da.iter().all(|v| v.abs() < 1e-8 * scale), "{rpm}: {da:?}");
+        }
+        assert!(!o_lb.driver_torques.is_empty());
+        for (a, b) in o_lb.driver_torques.iter().zip(&o_mi.driver_torques) {
+            eprintln!("ideal press {rpm} rpm: driver torque {a} (LB) vs {b} (minimal)");
+            assert!((a - b).abs() < 1e-8 * (1.0 + a.abs()), "{rpm}: {a} vs {b}");
+        }
+    }
+}
