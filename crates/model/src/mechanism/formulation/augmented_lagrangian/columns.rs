@@ -77,6 +77,22 @@ impl KktColumns {
         }
     }
 
+    /// Whether the columns are solved directly (T factored with every relative pivot at
+    /// least `PIVOT_MIN`).
+    pub(crate) fn direct(&self) -> bool {
+        self.direct
+    }
+
+    /// B (n × m, column-major).
+    pub(crate) fn bmat(&self) -> &[f64] {
+        &self.bmat
+    }
+
+    /// The factor of T as `block_cholesky_inv` leaves it (m × m, row-major).
+    pub(crate) fn tmat(&self) -> &[f64] {
+        &self.tmat
+    }
+
     /// ∂x of one column into `x` (n) from ∂f (n) and ∂c (m); `dl` (m) holds ∂λ after.
     pub(crate) fn solve(
         &mut self,
