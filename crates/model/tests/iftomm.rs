@@ -341,3 +341,35 @@ fn minimal_refuses_contradictory_closures_naming_the_joints() {
     assert!(msg.contains("joints["), "{msg}");
     assert!(msg.contains("ground2") || msg.contains("bar2"), "{msg}");
 }
+
+#[test]
+fn minimal_with_loop_closures_keeps_the_branch_with_every_adaptive_method() {
+    // a02_n_four_bar_every_adaptive_method_keeps_the_branch under minimal: 20 s through about
+    // 15 singular positions at rtol 1e-8, exit 0, the cranks never π apart, and B0 within the
+    // same 1e-2 m (a branch switch is about 1 m off).
+    let (scene, reference) = n_four_bar(1, 20.0);
+    for method in [
+        Method::Dop853,
+        Method::Rodas5p,
+        Method::Bdf,
+        Method::Tsit54,
+        Method::Dopri54,
+        Method::Trbdf2,
+        Method::Bs32,
+        Method::Esdirk34,
+    ] {
+        let r = run_as(&scene, FormulationName::Minimal, method, 1e-8)
+            .unwrap_or_else(|e| panic!("{method:?}: {e}"));
+        let (err, _) = check_crank_tip(&r, &reference, 1.0);
+        eprintln!("A02 N = 1 minimal, {method:?}: B0 error {err:.3e} m");
+        for p in &r.poses {
+            assert!(
+                angle_err(p[2][2], p[0][2]) < 1e-4,
+                "{method:?}: cranks {} and {} rad",
+                p[0][2],
+                p[2][2]
+            );
+        }
+        assert!(err < 1e-2, "{method:?}: B0 error {err:e}");
+    }
+}
