@@ -137,6 +137,11 @@ impl Minimal {
         }
     }
 
+    /// The spanning tree (its bodies' coordinates in θ).
+    pub(crate) fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
     /// Number of coordinates θ.
     pub(crate) fn n(&self) -> usize {
         self.tree.n
