@@ -5,18 +5,24 @@
 //!   diffsol's `Bdf`, after Byrne & Hindmarsh (1975) and Shampine & Reichelt's ode15s (1997)
 //! TR-BDF2 (ESDIRK, order 2(3)): Bank et al. (1985); Hosea & Shampine (1996)
 //! ESDIRK3(4) (order 3(4)):      Jørgensen, Kristensen & Thomsen (2018), arXiv:1803.01613
-//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense, nalgebra LU)
+//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense: crate::auto_lu; sparse: crate::sparse_lu)
 //! ```
 //!
 //! Backend: diffsol 0.18 with its nalgebra matrices and LU (chosen for the small dense systems
 //! of this project, where faer's dispatch and workspace handling dominate: BENCHMARKS.md, "What
-//! the profile showed"). The system reaches diffsol as a custom `OdeEquations` type whose
-//! right-hand side operator supplies
+//! the profile showed"), or, for large systems with a sparse Jacobian pattern, faer's vectors
+//! and compressed-column matrices (crate::linear_algebra: the choice, and the sparse path's
+//! coloured finite-difference Jacobian). Everything below is generic over the two
+//! ([`crate::linear_algebra`]'s `La`); the public types wrap one or the other. The system
+//! reaches diffsol as a custom `OdeEquations` type whose right-hand side operator supplies
 //! - the Jacobian-vector product `J v` (diffsol's required interface): the system's dense
 //!   Jacobian times v when it has one, a forward difference of f along v otherwise;
 //! - the dense Jacobian itself (`jacobian_inplace`), so that diffsol does not assemble it
 //!   column by column from n products: the system's Jacobian, or the forward-difference
-//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations).
+//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations); on the sparse path the
+//!   coloured forward differences into the compressed columns (colours + 1 RHS evaluations,
+//!   [`crate::jacobian::JacobianEvaluator::sparse_difference`]), and its pattern
+//!   (`jacobian_sparsity`), from which diffsol builds the Newton matrix's.
 //!
 //! Ownership: diffsol's solvers borrow their `OdeSolverProblem`. Following diffsol's own
 //! pattern, the problem ([`DiffsolProblem`]) is owned by the caller's [`crate::Problem`] and
@@ -76,43 +82,42 @@ use std::cell::RefCell;
 
 use diffsol::ode_solver::state::StateCommon;
 use diffsol::{
-    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraMat, NalgebraVec, NonLinearOp,
-    NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
-    OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk,
-    Tableau, UnitCallable, Vector, VectorCommon,
+    Bdf, BdfState, DiffsolError, Matrix, NonLinearOp, NonLinearOpJacobian, OdeBuilder,
+    OdeEquations, OdeEquationsRef, OdeSolverConfig, OdeSolverMethod, OdeSolverProblem,
+    OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk, Tableau, UnitCallable, Vector,
+    VectorRef,
 };
+use diffsol_la::MatrixRef;
 use faer::MatMut;
 
 use crate::error::SolveError;
-use crate::jacobian::JacobianEvaluator;
+use crate::jacobian::{Colouring, JacobianEvaluator};
+use crate::linear_algebra::{sparse_pattern, Dense, JacView, La, LinearAlgebra, Sparse};
 use crate::method::{Family, Method};
 use crate::options::{Budgets, DiffsolConfig, OptionError, OptionField, Reason, SolverOptions};
 use crate::stats::Stats;
 use crate::stepper::{check_stop, landing_step, step_floor, Budget, Stepper};
 use crate::system::OdeSystem;
 
-type Vd = NalgebraVec<f64>;
-type Md = NalgebraMat<f64>;
-type Cx = NalgebraContext;
-/// nalgebra's LU below crate::auto_lu::FAER_LU_FROM unknowns, faer's above.
-type Lu = crate::auto_lu::AutoLu;
-
 /// Scratch of [`SysRhs`]: f(t, y), f(t, y + εv) and y + εv for finite differences; the dense
 /// J for products.
 type Work = (Vec<f64>, Vec<f64>, Vec<f64>, faer::Mat<f64>);
 
-/// The right-hand side operator handed to diffsol.
-struct SysRhs<'a, S: OdeSystem + ?Sized> {
+/// The right-hand side operator handed to diffsol, on the linear algebra `B`.
+struct SysRhs<'a, S: OdeSystem + ?Sized, B: La> {
     sys: &'a S,
     n: usize,
-    ctx: Cx,
+    ctx: B::C,
     jac_eval: RefCell<JacobianEvaluator>,
     work: RefCell<Work>,
     /// rhs_evals and jac_evals of this operator.
     counts: RefCell<Stats>,
+    /// The sparse path's pattern, coloured, and diffsol's form of it (None: dense).
+    colouring: Option<Colouring>,
+    sparsity: Option<<B::M as Matrix>::Sparsity>,
 }
 
-impl<S: OdeSystem + ?Sized> SysRhs<'_, S> {
+impl<S: OdeSystem + ?Sized, B: La> SysRhs<'_, S, B> {
     fn eval(&self, t: f64, y: &[f64], out: &mut [f64]) {
         self.sys.rhs(t, y, out);
         self.counts.borrow_mut().rhs_evals += 1;
@@ -133,12 +138,12 @@ impl<S: OdeSystem + ?Sized> SysRhs<'_, S> {
     }
 }
 
-impl<S: OdeSystem + ?Sized> Op for SysRhs<'_, S> {
+impl<S: OdeSystem + ?Sized, B: La> Op for SysRhs<'_, S, B> {
     type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
+    type V = B::V;
+    type M = B::M;
+    type C = B::C;
+    fn context(&self) -> &B::C {
         &self.ctx
     }
     fn nstates(&self) -> usize {
@@ -152,18 +157,18 @@ impl<S: OdeSystem + ?Sized> Op for SysRhs<'_, S> {
     }
 }
 
-impl<S: OdeSystem + ?Sized> NonLinearOp for SysRhs<'_, S> {
-    fn call_inplace(&self, x: &Vd, t: f64, y: &mut Vd) {
-        self.eval(t, x.inner().as_slice(), y.inner_mut().as_mut_slice());
+impl<S: OdeSystem + ?Sized, B: La> NonLinearOp for SysRhs<'_, S, B> {
+    fn call_inplace(&self, x: &B::V, t: f64, y: &mut B::V) {
+        self.eval(t, B::slice(x), B::slice_mut(y));
     }
 }
 
-impl<S: OdeSystem + ?Sized> NonLinearOpJacobian for SysRhs<'_, S> {
-    fn jac_mul_inplace(&self, x: &Vd, t: f64, v: &Vd, y: &mut Vd) {
-        let (xs, vs) = (x.inner().as_slice(), v.inner().as_slice());
+impl<S: OdeSystem + ?Sized, B: La> NonLinearOpJacobian for SysRhs<'_, S, B> {
+    fn jac_mul_inplace(&self, x: &B::V, t: f64, v: &B::V, y: &mut B::V) {
+        let (xs, vs) = (B::slice(x), B::slice(v));
         let n = self.n;
-        let out = y.inner_mut().as_mut_slice();
-        if self.sys.has_jacobian() {
+        let out = B::slice_mut(y);
+        if B::SYSTEM_PRODUCTS && self.sys.has_jacobian() {
             let mut jac = std::mem::replace(&mut self.work.borrow_mut().3, faer::Mat::zeros(0, 0));
             if jac.nrows() != n {
                 jac = faer::Mat::zeros(n, n);
@@ -196,29 +201,56 @@ impl<S: OdeSystem + ?Sized> NonLinearOpJacobian for SysRhs<'_, S> {
         }
     }
 
-    fn jacobian_inplace(&self, x: &Vd, t: f64, y: &mut Md) {
-        let n = self.n;
-        let data = y.inner_mut().as_mut_slice();
-        self.dense_jacobian(
-            t,
-            x.inner().as_slice(),
-            MatMut::from_column_major_slice_mut(data, n, n),
-        );
+    fn jacobian_inplace(&self, x: &B::V, t: f64, y: &mut B::M) {
+        let x = B::slice(x);
+        match (B::view(y), &self.colouring) {
+            (JacView::Dense(jac), _) => self.dense_jacobian(t, x, jac),
+            (
+                JacView::Sparse {
+                    col_ptr,
+                    row_idx,
+                    values,
+                },
+                Some(colouring),
+            ) => {
+                let mut work = self.work.borrow_mut();
+                let mut counts = self.counts.borrow_mut();
+                let f0 = &mut work.0;
+                self.sys.rhs(t, x, f0);
+                counts.rhs_evals += 1;
+                self.jac_eval.borrow_mut().sparse_difference(
+                    self.sys,
+                    t,
+                    x,
+                    f0,
+                    colouring,
+                    (col_ptr, row_idx),
+                    values,
+                    &mut counts,
+                );
+            }
+            // A sparse matrix is built only with a colouring (DiffsolProblem::new).
+            (JacView::Sparse { values, .. }, None) => values.fill(f64::NAN),
+        }
+    }
+
+    fn jacobian_sparsity(&self) -> Option<<B::M as Matrix>::Sparsity> {
+        self.sparsity.clone()
     }
 }
 
 /// The initial-value operator (diffsol requires one; our states are built directly).
-struct SysInit {
+struct SysInit<B: La> {
     y0: Vec<f64>,
-    ctx: Cx,
+    ctx: B::C,
 }
 
-impl Op for SysInit {
+impl<B: La> Op for SysInit<B> {
     type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
+    type V = B::V;
+    type M = B::M;
+    type C = B::C;
+    fn context(&self) -> &B::C {
         &self.ctx
     }
     fn nstates(&self) -> usize {
@@ -232,24 +264,24 @@ impl Op for SysInit {
     }
 }
 
-impl diffsol::ConstantOp for SysInit {
-    fn call_inplace(&self, _t: f64, y: &mut Vd) {
-        y.inner_mut().as_mut_slice().copy_from_slice(&self.y0);
+impl<B: La> diffsol::ConstantOp for SysInit<B> {
+    fn call_inplace(&self, _t: f64, y: &mut B::V) {
+        B::slice_mut(y).copy_from_slice(&self.y0);
     }
 }
 
 /// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots.
-struct SysEqn<'a, S: OdeSystem + ?Sized> {
-    rhs: SysRhs<'a, S>,
-    init: SysInit,
+struct SysEqn<'a, S: OdeSystem + ?Sized, B: La> {
+    rhs: SysRhs<'a, S, B>,
+    init: SysInit<B>,
 }
 
-impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
+impl<S: OdeSystem + ?Sized, B: La> Op for SysEqn<'_, S, B> {
     type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
+    type V = B::V;
+    type M = B::M;
+    type C = B::C;
+    fn context(&self) -> &B::C {
         &self.rhs.ctx
     }
     fn nstates(&self) -> usize {
@@ -263,88 +295,154 @@ impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
     }
 }
 
-impl<'b, 'a, S: OdeSystem + ?Sized> OdeEquationsRef<'b> for SysEqn<'a, S> {
-    type Rhs = &'b SysRhs<'a, S>;
-    type Mass = &'b UnitCallable<Md>;
-    type Root = &'b UnitCallable<Md>;
-    type Init = &'b SysInit;
-    type Out = &'b UnitCallable<Md>;
-    type Reset = &'b UnitCallable<Md>;
+impl<'b, 'a, S: OdeSystem + ?Sized, B: La> OdeEquationsRef<'b> for SysEqn<'a, S, B> {
+    type Rhs = &'b SysRhs<'a, S, B>;
+    type Mass = &'b UnitCallable<B::M>;
+    type Root = &'b UnitCallable<B::M>;
+    type Init = &'b SysInit<B>;
+    type Out = &'b UnitCallable<B::M>;
+    type Reset = &'b UnitCallable<B::M>;
 }
 
-impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
-    fn rhs(&self) -> &SysRhs<'a, S> {
+impl<'a, S: OdeSystem + ?Sized, B: La> OdeEquations for SysEqn<'a, S, B> {
+    fn rhs(&self) -> &SysRhs<'a, S, B> {
         &self.rhs
     }
-    fn mass(&self) -> Option<&UnitCallable<Md>> {
+    fn mass(&self) -> Option<&UnitCallable<B::M>> {
         None
     }
-    fn init(&self) -> &SysInit {
+    fn init(&self) -> &SysInit<B> {
         &self.init
     }
-    fn set_params(&mut self, _p: &Vd) {}
-    fn get_params(&self, _p: &mut Vd) {}
+    fn set_params(&mut self, _p: &B::V) {}
+    fn get_params(&self, _p: &mut B::V) {}
 }
 
-type Problem<'a, S> = OdeSolverProblem<SysEqn<'a, S>>;
+type Problem<'a, S, B> = OdeSolverProblem<SysEqn<'a, S, B>>;
+
+/// rhs_evals and jac_evals made through `problem` so far (by every stepper on it).
+fn counts<S: OdeSystem + ?Sized, B: La>(problem: &Problem<'_, S, B>) -> Stats {
+    *problem.eqn.rhs.counts.borrow()
+}
 
 /// diffsol's problem for one system and one set of tolerances: owned by the caller (our
 /// [`crate::Problem`]) and borrowed by every [`DiffsolStepper`] built on it, diffsol's own
-/// pattern (the caller keeps the `OdeSolverProblem`, the solver borrows it).
+/// pattern (the caller keeps the `OdeSolverProblem`, the solver borrows it). Dense or sparse
+/// ([`crate::linear_algebra`]).
 pub struct DiffsolProblem<'a, S: OdeSystem + ?Sized> {
-    problem: Problem<'a, S>,
+    inner: AnyProblem<'a, S>,
+}
+
+enum AnyProblem<'a, S: OdeSystem + ?Sized> {
+    Dense(Problem<'a, S, Dense>),
+    Sparse(Problem<'a, S, Sparse>),
 }
 
 impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
     /// Builds diffsol's problem for `sys` with the tolerances and budgets of `cfg` (the
-    /// validated configuration of one of diffsol's methods).
-    pub fn new(sys: &'a S, cfg: &DiffsolConfig) -> Result<Self, SolveError> {
+    /// validated configuration of one of diffsol's methods), on the linear algebra `choice`
+    /// picks ([`crate::linear_algebra::sparse_pattern`]), after checking its matrices against
+    /// the memory budget (`max_memory`, else crate::memory's share of what is available):
+    /// n² on the dense path, the pattern's entries on the sparse one.
+    pub fn new(
+        sys: &'a S,
+        cfg: &DiffsolConfig,
+        choice: LinearAlgebra,
+        max_memory: Option<u64>,
+    ) -> Result<Self, SolveError> {
         let n = sys.dim();
-        let ctx = Cx::default();
-        let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
-        let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
-        // The first of the n² matrices (crate::memory): a refusal of the allocator is an
-        // error here; diffsol's own (nalgebra's) allocations are covered by the budget only.
-        let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
-        let eqn = SysEqn {
-            rhs: SysRhs {
-                sys,
-                n,
-                ctx,
-                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
-                work: RefCell::new((vec![0.0; n], vec![0.0; n], vec![0.0; n], jac_work)),
-                counts: RefCell::new(Stats::default()),
-            },
-            // Never evaluated: states are built directly from (t, y).
-            init: SysInit {
-                y0: vec![0.0; n],
-                ctx,
-            },
+        let method = cfg.method();
+        let dense = || -> Result<AnyProblem<'a, S>, SolveError> {
+            crate::memory::check_method(method, n, max_memory).map_err(SolveError::OutOfMemory)?;
+            // The first of the n² matrices (crate::memory): a refusal of the allocator is an
+            // error here; diffsol's own (nalgebra's) allocations are covered by the budget
+            // only.
+            let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
+            Ok(AnyProblem::Dense(build::<S, Dense>(
+                sys, cfg, jac_work, None,
+            )?))
         };
-        let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
-        let mut problem = OdeBuilder::<Md>::new()
-            .rtol(rtol)
-            .atol(atol)
-            .build_from_eqn(eqn)
-            .map_err(|e| {
-                OptionError::new(
-                    OptionField::Method,
-                    Reason::Invalid(format!("diffsol: {e}")),
-                )
-            })?;
-        problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
-        Ok(DiffsolProblem { problem })
+        let inner = match sparse_pattern(sys, choice) {
+            None => dense()?,
+            Some(pattern) => {
+                let nnz = pattern.iter().map(Vec::len).sum::<usize>();
+                crate::memory::check_sparse(method, n, nnz, max_memory)
+                    .map_err(SolveError::OutOfMemory)?;
+                // sparse_pattern's rows are in range, ascending and distinct: neither fails.
+                let sparse = Colouring::new(pattern)
+                    .and_then(|c| Sparse::sparsity(n, c.pattern()).map(|s| (c, s)));
+                match sparse {
+                    Some(sparse) => AnyProblem::Sparse(build::<S, Sparse>(
+                        sys,
+                        cfg,
+                        faer::Mat::zeros(0, 0),
+                        Some(sparse),
+                    )?),
+                    None => dense()?,
+                }
+            }
+        };
+        Ok(DiffsolProblem { inner })
     }
 
-    /// rhs_evals and jac_evals made through this problem so far (by every stepper on it).
-    fn counts(&self) -> Stats {
-        *self.problem.eqn.rhs.counts.borrow()
+    /// Whether the problem runs on sparse matrices ([`crate::linear_algebra`]).
+    pub fn is_sparse(&self) -> bool {
+        matches!(self.inner, AnyProblem::Sparse(_))
     }
 }
 
-enum Solver<'p, 'a, S: OdeSystem + ?Sized> {
-    Bdf(Box<Bdf<'p, SysEqn<'a, S>, Lu>>),
-    Sdirk(Box<Sdirk<'p, SysEqn<'a, S>, Lu>>),
+/// diffsol's problem on the linear algebra `B`; `sparse` is the sparse path's coloured
+/// pattern and diffsol's form of it (None on the dense path), `jac_work` the dense products'
+/// scratch.
+fn build<'a, S: OdeSystem + ?Sized, B: La>(
+    sys: &'a S,
+    cfg: &DiffsolConfig,
+    jac_work: faer::Mat<f64>,
+    sparse: Option<(Colouring, <B::M as Matrix>::Sparsity)>,
+) -> Result<Problem<'a, S, B>, SolveError> {
+    let n = sys.dim();
+    let ctx = B::C::default();
+    let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
+    let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
+    let (colouring, sparsity) = match sparse {
+        Some((c, s)) => (Some(c), Some(s)),
+        None => (None, None),
+    };
+    let eqn = SysEqn {
+        rhs: SysRhs {
+            sys,
+            n,
+            ctx,
+            jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
+            work: RefCell::new((vec![0.0; n], vec![0.0; n], vec![0.0; n], jac_work)),
+            counts: RefCell::new(Stats::default()),
+            colouring,
+            sparsity,
+        },
+        // Never evaluated: states are built directly from (t, y).
+        init: SysInit {
+            y0: vec![0.0; n],
+            ctx,
+        },
+    };
+    let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
+    let mut problem = OdeBuilder::<B::M>::new()
+        .rtol(rtol)
+        .atol(atol)
+        .build_from_eqn(eqn)
+        .map_err(|e| {
+            OptionError::new(
+                OptionField::Method,
+                Reason::Invalid(format!("diffsol: {e}")),
+            )
+        })?;
+    problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
+    Ok(problem)
+}
+
+enum Solver<'p, 'a, S: OdeSystem + ?Sized, B: La> {
+    Bdf(Box<Bdf<'p, SysEqn<'a, S, B>, B::Lu>>),
+    Sdirk(Box<Sdirk<'p, SysEqn<'a, S, B>, B::Lu>>),
 }
 
 macro_rules! with_solver {
@@ -362,13 +460,86 @@ macro_rules! with_solver {
 /// BDF:      Σ α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1}),  orders 1–5
 /// TR-BDF2:  ESDIRK, order 2(3);   ESDIRK34: order 3(4)
 /// ```
-/// diffsol 0.18 (M. Robinson), nalgebra backend; see the module documentation for how our
-/// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
+/// diffsol 0.18 (M. Robinson), nalgebra's dense or faer's sparse matrices
+/// ([`crate::linear_algebra`]); see the module documentation for how our stepper contract
+/// (stop times, dense output, restarts, h_max, errors, counters) is met.
 pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
-    problem: &'p DiffsolProblem<'a, S>,
+    inner: AnyStepper<'p, 'a, S>,
+}
+
+enum AnyStepper<'p, 'a, S: OdeSystem + ?Sized> {
+    Dense(Core<'p, 'a, S, Dense>),
+    Sparse(Core<'p, 'a, S, Sparse>),
+}
+
+macro_rules! with_core {
+    ($stepper:expr, $c:ident => $body:expr) => {
+        match $stepper {
+            AnyStepper::Dense($c) => $body,
+            AnyStepper::Sparse($c) => $body,
+        }
+    };
+}
+
+impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
+    /// Builds the problem's method (bdf, trbdf2 or esdirk34, from `opts`) at (t0, y0).
+    /// Options must be validated and be the ones the problem was built with.
+    pub fn new(
+        problem: &'p DiffsolProblem<'a, S>,
+        t0: f64,
+        y0: &[f64],
+        opts: &SolverOptions,
+    ) -> Result<Self, SolveError> {
+        let inner = match &problem.inner {
+            AnyProblem::Dense(p) => AnyStepper::Dense(Core::new(p, t0, y0, opts)?),
+            AnyProblem::Sparse(p) => AnyStepper::Sparse(Core::new(p, t0, y0, opts)?),
+        };
+        Ok(DiffsolStepper { inner })
+    }
+
+    /// Current order of the method: BDF's variable order (1 right after a start or restart),
+    /// the tableau's order for the SDIRK methods.
+    pub fn order(&self) -> usize {
+        with_core!(&self.inner, c => c.order())
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
+    fn method(&self) -> Method {
+        with_core!(&self.inner, c => c.method)
+    }
+    fn t(&self) -> f64 {
+        with_core!(&self.inner, c => c.t)
+    }
+    fn y(&self) -> &[f64] {
+        with_core!(&self.inner, c => &c.y)
+    }
+    fn t_prev(&self) -> f64 {
+        with_core!(&self.inner, c => c.t_prev)
+    }
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        with_core!(&mut self.inner, c => c.step(t_stop))
+    }
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        with_core!(&self.inner, c => c.interpolate(t, out))
+    }
+    fn set_h_max(&mut self, h_max: f64) {
+        with_core!(&mut self.inner, c => c.set_h_max(h_max))
+    }
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        with_core!(&mut self.inner, c => c.restart(t, y))
+    }
+    fn stats(&self) -> Stats {
+        with_core!(&self.inner, c => c.stats)
+    }
+}
+
+/// The stepper on the linear algebra `B`.
+struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
+    problem: &'p Problem<'a, S, B>,
     /// The live solver, borrowing `problem`: None between a start (or restart) and the first
     /// step after it, which builds it (`pending`), and after a failed restart.
-    solver: Option<Solver<'p, 'a, S>>,
+    solver: Option<Solver<'p, 'a, S, B>>,
     /// f(t, y) of a start whose solver is built at the next step, when the stop time is known
     /// (the starting-step estimate keeps its probe inside it: `initial_h`).
     pending: Option<Vec<f64>>,
@@ -392,7 +563,7 @@ pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
     /// Solver counters of replaced solvers (restarts).
     base: Stats,
     stats: Stats,
-    buf: RefCell<Vd>,
+    buf: RefCell<B::V>,
 }
 
 fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
@@ -414,11 +585,13 @@ fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
     }
 }
 
-impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
-    /// Builds the problem's method (bdf, trbdf2 or esdirk34, from `opts`) at (t0, y0).
-    /// Options must be validated and be the ones the problem was built with.
-    pub fn new(
-        problem: &'p DiffsolProblem<'a, S>,
+impl<'p, 'a, S: OdeSystem + ?Sized, B: La> Core<'p, 'a, S, B>
+where
+    for<'b> &'b B::V: VectorRef<B::V>,
+    for<'b> &'b B::M: MatrixRef<B::M>,
+{
+    fn new(
+        problem: &'p Problem<'a, S, B>,
         t0: f64,
         y0: &[f64],
         opts: &SolverOptions,
@@ -435,18 +608,18 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             .into());
         }
         let n = y0.len();
-        if n != problem.problem.eqn.rhs.n {
+        if n != problem.eqn.rhs.n {
             return Err(OptionError::new(
                 OptionField::Y0,
                 Reason::WrongLength {
                     len: n,
-                    expected: problem.problem.eqn.rhs.n,
+                    expected: problem.eqn.rhs.n,
                 },
             )
             .into());
         }
-        let ctx = *problem.problem.context();
-        let mut st = DiffsolStepper {
+        let ctx = *problem.context();
+        let mut st = Core {
             problem,
             solver: None,
             pending: None,
@@ -459,19 +632,17 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             tstop: None,
             tstop_set: None,
             sliver: None,
-            counts_at_start: problem.counts(),
+            counts_at_start: counts(problem),
             base: Stats::default(),
             stats: Stats::default(),
-            buf: RefCell::new(Vd::zeros(n, ctx)),
+            buf: RefCell::new(B::V::zeros(n, ctx)),
         };
         st.start(t0, y0)?;
         st.update_stats();
         Ok(st)
     }
 
-    /// Current order of the method: BDF's variable order (1 right after a start or restart),
-    /// the tableau's order for the SDIRK methods.
-    pub fn order(&self) -> usize {
+    fn order(&self) -> usize {
         match &self.solver {
             Some(solver) => with_solver!(solver, s => s.order()),
             None if self.pending.is_some() => self.start_order(),
@@ -493,7 +664,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     fn start(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         let n = y.len();
         let mut dy = vec![0.0; n];
-        self.problem.problem.eqn.rhs.eval(t, y, &mut dy);
+        self.problem.eqn.rhs.eval(t, y, &mut dy);
         self.solver = None;
         self.pending = None;
         if !dy.iter().all(|v| v.is_finite()) {
@@ -512,12 +683,12 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// trial step `opts.h0` or the starting-step estimate with its probe inside
     /// [t, `t_stop`] (`initial_h`).
     fn build(&mut self, dy: Vec<f64>, t_stop: f64) -> Result<(), SolveError> {
-        let problem = &self.problem.problem;
+        let problem = self.problem;
         let ctx = *problem.context();
         let (t, y) = (self.t, &self.y);
-        let yv = Vd::from_slice(y, ctx);
-        let dy = Vd::from_slice(&dy, ctx);
-        let empty = || Vd::zeros(0, ctx);
+        let yv = B::V::from_slice(y, ctx);
+        let dy = B::V::from_slice(&dy, ctx);
+        let empty = || B::V::zeros(0, ctx);
         let common = StateCommon {
             y: yv,
             dy,
@@ -536,10 +707,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
         let span = t_stop - t;
         let solver = match self.method {
             Method::Bdf => {
-                let mut state = BdfState::<Vd>::new_from_common(common);
+                let mut state = BdfState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Bdf(Box::new(
-                    Bdf::new(problem, state, Lu::default()).map_err(err)?,
+                    Bdf::new(problem, state, B::Lu::default()).map_err(err)?,
                 ))
             }
             m => {
@@ -548,10 +719,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
                 } else {
                     Tableau::<f64>::esdirk34()
                 };
-                let mut state = RkState::<Vd>::new_from_common(common);
+                let mut state = RkState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Sdirk(Box::new(
-                    Sdirk::new(problem, state, tableau, Lu::default()).map_err(err)?,
+                    Sdirk::new(problem, state, tableau, B::Lu::default()).map_err(err)?,
                 ))
             }
         };
@@ -573,10 +744,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// ```
     /// Where h0 ≤ span the operations are diffsol's, in its order, on its vectors: the step is
     /// the one diffsol's `set_step_size` gives, bit for bit.
-    fn initial_h<St: OdeSolverState<Vd>>(
+    fn initial_h<St: OdeSolverState<B::V>>(
         state: &mut St,
         h: Option<f64>,
-        problem: &Problem<'a, S>,
+        problem: &Problem<'a, S, B>,
         order: usize,
         opts: &SolverOptions,
         span: f64,
@@ -629,7 +800,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     fn sliver_step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         let n = self.y.len();
         let mut f = vec![0.0; n];
-        self.problem.problem.eqn.rhs.eval(self.t, &self.y, &mut f);
+        self.problem.eqn.rhs.eval(self.t, &self.y, &mut f);
         let dt = t_stop - self.t;
         let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
         if !y_new.iter().all(|v| v.is_finite()) {
@@ -651,7 +822,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
 
     /// Refreshes the counters from the live solver.
     fn update_stats(&mut self) {
-        let counts = self.problem.counts();
+        let counts = counts(self.problem);
         // No live solver between a start and the first step after it: the base counters.
         let d = self
             .solver
@@ -671,20 +842,11 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     }
 }
 
-impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
-    fn method(&self) -> Method {
-        self.method
-    }
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn y(&self) -> &[f64] {
-        &self.y
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-
+impl<S: OdeSystem + ?Sized, B: La> Core<'_, '_, S, B>
+where
+    for<'b> &'b B::V: VectorRef<B::V>,
+    for<'b> &'b B::M: MatrixRef<B::M>,
+{
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         check_stop(self.t, t_stop)?;
         self.budget.check(self.stats.steps, self.t, &self.y)?;
@@ -793,7 +955,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
             t_new
         };
         let finite = with_solver!(&*solver, s => {
-            let y_new = s.state().y.inner().as_slice();
+            let y_new = B::slice(s.state().y);
             if y_new.iter().all(|v| v.is_finite()) {
                 self.y.copy_from_slice(y_new);
                 true
@@ -838,7 +1000,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         let t_end = with_solver!(solver, s => s.state().t);
         let tq = t.max(self.t_prev).min(t_end);
         match with_solver!(solver, s => s.interpolate_inplace(tq, &mut buf)) {
-            Ok(()) => out.copy_from_slice(buf.inner().as_slice()),
+            Ok(()) => out.copy_from_slice(B::slice(&buf)),
             // Unreachable for t in [t_prev, t]; the end state is the safe answer.
             Err(_) => out.copy_from_slice(&self.y),
         }
@@ -861,17 +1023,17 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         self.update_stats();
         Ok(())
     }
-
-    fn stats(&self) -> Stats {
-        self.stats
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::testset::Orego;
-    use diffsol::MatrixCommon;
+    use diffsol::{MatrixCommon, NalgebraContext, NalgebraMat, NalgebraVec, VectorCommon};
+
+    type Vd = NalgebraVec<f64>;
+    type Md = NalgebraMat<f64>;
+    type Cx = NalgebraContext;
 
     /// Orego without its Jacobian (finite differences).
     struct OregoFd;
@@ -884,7 +1046,7 @@ mod tests {
         }
     }
 
-    fn rhs_op<S: OdeSystem + ?Sized>(sys: &S) -> SysRhs<'_, S> {
+    fn rhs_op<S: OdeSystem + ?Sized>(sys: &S) -> SysRhs<'_, S, Dense> {
         let n = sys.dim();
         SysRhs {
             sys,
@@ -898,6 +1060,8 @@ mod tests {
                 faer::Mat::zeros(n, n),
             )),
             counts: RefCell::new(Stats::default()),
+            colouring: None,
+            sparsity: None,
         }
     }
 
@@ -915,8 +1079,10 @@ mod tests {
         let crate::options::Config::Diffsol(cfg) = o.configure(3).unwrap() else {
             panic!("bdf has a diffsol configuration")
         };
-        let problem = DiffsolProblem::new(&OregoFd, &cfg).unwrap();
-        let p = &problem.problem;
+        let problem = DiffsolProblem::new(&OregoFd, &cfg, LinearAlgebra::Auto, None).unwrap();
+        let AnyProblem::Dense(p) = &problem.inner else {
+            panic!("three unknowns are dense")
+        };
         let ctx = *p.context();
         for (y, order) in [([2.0, 300.0, 40.0], 1), ([1.0, 2.0, 3.0], 3), ([0.0; 3], 5)] {
             let common = || {
@@ -941,7 +1107,7 @@ mod tests {
                 .as_mut()
                 .set_step_size(1.0, &p.atol, p.rtol, &p.eqn, order);
             let mut ours = BdfState::<Vd>::new_from_common(common());
-            DiffsolStepper::initial_h(&mut ours, None, p, order, &o, 1e3);
+            Core::<OregoFd, Dense>::initial_h(&mut ours, None, p, order, &o, 1e3);
             assert_eq!(
                 ours.as_ref().h.to_bits(),
                 theirs.as_ref().h.to_bits(),
@@ -950,7 +1116,7 @@ mod tests {
             // A span shorter than the probe: the probe is the span.
             let mut short = BdfState::<Vd>::new_from_common(common());
             let calls = p.eqn.rhs.counts.borrow().rhs_evals;
-            DiffsolStepper::initial_h(&mut short, None, p, order, &o, 1e-12);
+            Core::<OregoFd, Dense>::initial_h(&mut short, None, p, order, &o, 1e-12);
             assert_eq!(p.eqn.rhs.counts.borrow().rhs_evals, calls + 1);
             let h = short.as_ref().h;
             assert!(h > 0.0 && h.is_finite() && h < 1e-9, "{h}");
