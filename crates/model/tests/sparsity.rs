@@ -300,3 +300,31 @@ fn auto_is_dense_below_the_threshold_and_for_one_cluster() {
         .unwrap()
         .is_sparse());
 }
+
+/// The memory check counts the sparse path's entries, not n²: 1 000 free bodies in pairs
+/// (n = 6 000, 500 blocks of 12 × 12, nnz = 72 000) need 80 · (72 000 + 6 000) = 6.24 MB
+/// sparse (lash_solver::memory::sparse_bytes), 4 · 8 · 6 000² = 1.152 GB dense: a budget of
+/// 6.24 MB admits the sparse path and refuses the dense one, and one byte less refuses both.
+#[test]
+fn the_memory_budget_of_the_sparse_path_counts_entries() {
+    use lash_solver::{LinearAlgebra, Method, Problem, SolveError, SolverOptions};
+    let m = pairs(1000);
+    assert_eq!(m.dim(), 6000);
+    let mut o = SolverOptions::with_method(Method::Bdf);
+    o.max_memory = Some(6_240_000);
+    assert!(Problem::new(&m, &o).unwrap().diffsol().unwrap().is_sparse());
+    o.linear_algebra = LinearAlgebra::Dense;
+    match Problem::new(&m, &o) {
+        Err(SolveError::OutOfMemory(e)) => assert_eq!(e.needed, 1_152_000_000),
+        other => panic!("dense path admitted: {:?}", other.err()),
+    }
+    o.linear_algebra = LinearAlgebra::Auto;
+    o.max_memory = Some(6_239_999);
+    match Problem::new(&m, &o) {
+        Err(SolveError::OutOfMemory(e)) => {
+            assert_eq!((e.needed, e.budget), (6_240_000, 6_239_999));
+            assert!(e.to_string().contains("72000 entries"), "{e}");
+        }
+        other => panic!("sparse path over budget admitted: {:?}", other.err()),
+    }
+}
