@@ -196,9 +196,9 @@ fn pairs(n: usize) -> Mechanism {
 /// The sparse path (crate lash_solver::linear_algebra) against the dense one on 100 free
 /// bodies in pairs (n = 600, the size from which `auto` goes sparse), bdf, trbdf2 and
 /// esdirk34 at their default tolerances, to t = 0.1 s (about two periods of the springs'
-/// stretch mode, ω = √(k/μ) ≈ 140 rad/s with μ ≈ 0.5 kg). Each path is compared with dop853 at rtol 1e-12: both errors are
-/// controlled by the same tolerances, so the sparse path's error must be of the dense path's
-/// size (within a factor 10, the spread of global errors between runs of one tolerance whose
+/// stretch mode, ω = √(k/μ) ≈ 140 rad/s with μ ≈ 0.5 kg). Each path is compared with
+/// dop853 at rtol 1e-12: both errors are controlled by the same tolerances, so the sparse
+/// path's error must be of the dense path's size (within a factor 10, the spread of global errors between runs of one tolerance whose
 /// step sequences differ). The Jacobians differ only by the sparse path's finite differences
 /// (√ε relative), which leave Newton's iteration and the step-size sequence nearly the same:
 /// the accepted steps agree within 10 %, and the two answers are closer to each other than

@@ -1,7 +1,8 @@
 //! diffsol's sparse path (lash_solver::linear_algebra) on systems with a known answer: a
 //! diagonal linear system y_i' = −k_i y_i (exact solution e^{−k_i t}) of 1 000 unknowns, whose
-//! pattern is the diagonal (one colour: each Jacobian costs 2 RHS evaluations), and a right-hand side that is NaN off its initial state, which must end in a typed
-//! error, not a panic (the NaN Jacobian reaches faer's sparse LU; diffsol's own sparse LU
+//! pattern is the diagonal (one colour: each Jacobian costs 2 RHS evaluations), and a
+//! right-hand side that is NaN off its initial state, which must end in a typed error, not a
+//! panic (the NaN Jacobian reaches faer's sparse LU; diffsol's own sparse LU
 //! panics whenever a factorisation fails, lash_solver's returns the failure).
 use lash_solver::{
     Atol, LinearAlgebra, Method, OdeSystem, Output, Problem, SolveError, SolverOptions,
