@@ -5,13 +5,18 @@
 //! ```text
 //! cargo build --release -p lash-cli
 //! cargo run --release -p lash-benches --example scaling -- [chain N…] [free N…] [clearance N…]
-//!     [--lash PATH]…
+//!     [crossover N…] [--lash PATH]…
 //! chain N      N pendulum links (0.1 m, 1 kg) pinned end to end, the first to the ground,
 //!              released horizontal under gravity: 2N revolute equations; --t-end 1e-3
 //! free N       N free bodies (1 kg, 0.1 kg m²) moving up under gravity, no joint; t_end 0.01
 //! clearance N  a chain of N links whose N − 1 elbows are dry revolute clearance joints (the
 //!              README pendulum's elbow: c = 1 mm, impact law, Coulomb friction); --t-end 0.1
 //! ```
+//! crossover N  in this process, not through `lash run`: the `free N` scene's mechanism
+//!              integrated by bdf to t = 0.01 s on dense and on sparse matrices
+//!              (SolverOptions::linear_algebra, lash_solver::linear_algebra), the integration
+//!              alone timed (best of 3), with the steps and LU factorisations of each: where
+//!              the sparse path starts to win (SPARSE_FROM)
 //! Without arguments: chain 30 100 200 300, free 100 300 1000, clearance 10 25 50. Each case
 //! is one `lash run` at default settings (method bdf) in a child process, its scene written to
 //! a temporary directory; the table gives its exit code, the wall time of the whole process,
@@ -148,8 +153,52 @@ fn measure(
     std::io::stdout().flush().ok();
 }
 
+/// The `crossover N` case (module doc): one table row.
+fn crossover(n: usize) {
+    use lash_solver::{LinearAlgebra, Method, OdeSystem, Output, Problem, SolverOptions};
+    let scene = lash_model::Scene::from_json_str(&free(n)).expect("the free-body scene");
+    let mech = lash_model::Mechanism::from_scene(&scene).expect("its mechanism");
+    let y0 = mech.initial_state();
+    let mut row = format!("| {n} | {} |", mech.dim());
+    for la in [LinearAlgebra::Dense, LinearAlgebra::Sparse] {
+        let mut o = SolverOptions::with_method(Method::Bdf);
+        o.output = Output::Final;
+        o.linear_algebra = la;
+        let mut best = f64::INFINITY;
+        let mut stats = None;
+        for _ in 0..3 {
+            let start = Instant::now();
+            let sol = Problem::new(&mech, &o)
+                .and_then(|p| p.solve((0.0, 0.01), &y0))
+                .expect("the integration");
+            best = best.min(start.elapsed().as_secs_f64());
+            stats = Some(sol.stats);
+        }
+        let st = stats.expect("three runs");
+        row += &format!(" {best:.4} | {} | {} |", st.accepted, st.lu_factorizations);
+    }
+    println!("{row}");
+    std::io::stdout().flush().ok();
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("crossover") {
+        println!(
+            "| N | n | dense (s) | steps | LUs | sparse (s) | steps | LUs |\n\
+             |---|---|---|---|---|---|---|---|"
+        );
+        for a in &args[1..] {
+            match a.parse::<usize>() {
+                Ok(n) if n >= 1 => crossover(n),
+                _ => {
+                    eprintln!("usage: scaling crossover N… (N ≥ 1)");
+                    std::process::exit(2);
+                }
+            }
+        }
+        return;
+    }
     let mut cases: Vec<(String, usize)> = Vec::new();
     let mut kind = None;
     let mut lashes: Vec<PathBuf> = Vec::new();

@@ -18,7 +18,11 @@
 //!                        (when its n² f64, twice over with the Jacobian's work buffers,
 //!                        fit the memory budget of lash_solver::memory;
 //!                        beyond, an implicit method refuses the run itself, and an
-//!                        explicit one needs no Jacobian)
+//!                        explicit one needs no Jacobian); from
+//!                        lash_solver::linear_algebra::SPARSE_FROM unknowns, a mechanism of
+//!                        several clusters (crate::jacobian) instead checks the coloured
+//!                        differences of its sparse pattern, the Jacobian that diffsol's
+//!                        sparse path computes (O(nnz), no n² matrix)
 //! ```
 //! The formulation's checks, with the reasons for their bounds, are in
 //! mechanism/formulation/lagrange_baumgarte/check.rs.
@@ -97,6 +101,14 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
     // its own.
     let n = y.len();
     crate::scene::error::checkpoint("the initial checks", t)?;
+    // A large mechanism of several clusters: diffsol's sparse path (lash_solver::
+    // linear_algebra) takes the Jacobian by coloured differences on its pattern, never the
+    // dense closed form; those differences are checked instead, in O(nnz) memory.
+    if n >= lash_solver::linear_algebra::SPARSE_FROM {
+        if let Some(pattern) = mech.jacobian_sparsity() {
+            return check_sparse_jacobian(mech, t, &y, &dy, pattern);
+        }
+    }
     let fits =
         lash_solver::memory::check(lash_solver::memory::dense_bytes(n, 2), String::new, None);
     let Ok(mut jac) = fits.and_then(|()| lash_solver::memory::try_zeros(n, n)) else {
@@ -121,6 +133,65 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
                         "the Jacobian entry ∂({what})/∂({by}) that the implicit methods need \
                          is {v} ({})",
                         mech.body_info()[k].describe()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The Jacobian as the sparse path computes it (coloured forward differences on `pattern`,
+/// lash_solver::jacobian) at (t, y) with f(t, y) = `dy`: a non-finite entry of the lower
+/// half is the same error as the dense check's.
+fn check_sparse_jacobian(
+    mech: &Mechanism,
+    t: f64,
+    y: &[f64],
+    dy: &[f64],
+    pattern: Vec<Vec<usize>>,
+) -> Result<(), SceneError> {
+    let n = y.len();
+    let nq = n / 2;
+    let Some(colouring) = lash_solver::jacobian::Colouring::new(pattern) else {
+        return Ok(());
+    };
+    let mut col_ptr = vec![0];
+    let mut row_idx = Vec::new();
+    for rows in colouring.pattern() {
+        row_idx.extend_from_slice(rows);
+        col_ptr.push(row_idx.len());
+    }
+    let mut values = vec![0.0; row_idx.len()];
+    let mut stats = lash_solver::Stats::default();
+    lash_solver::jacobian::JacobianEvaluator::new(vec![1.0; n]).sparse_difference(
+        mech,
+        t,
+        y,
+        dy,
+        &colouring,
+        (&col_ptr, &row_idx),
+        &mut values,
+        &mut stats,
+    );
+    crate::scene::error::checkpoint("the initial Jacobian", t)?;
+    for j in 0..n {
+        for k in col_ptr[j]..col_ptr[j + 1] {
+            let (i, v) = (row_idx[k], values[k]);
+            if i >= nq && !v.is_finite() {
+                let (b, what) = component(mech, i - nq, ["ẍ", "ÿ", "φ̈"]);
+                let by = if j < nq {
+                    ["x", "y", "φ"]
+                } else {
+                    ["ẋ", "ẏ", "φ̇"]
+                };
+                let (_, by) = component(mech, j % nq, by);
+                return Err(fail(
+                    format!("bodies[{b}]"),
+                    format!(
+                        "the Jacobian entry ∂({what})/∂({by}) that the implicit methods need \
+                         is {v} ({})",
+                        mech.body_info()[b].describe()
                     ),
                 ));
             }

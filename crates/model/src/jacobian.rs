@@ -15,6 +15,8 @@
 
 use faer::MatMut;
 
+use crate::mechanism::bodies::Owner;
+use crate::mechanism::formulation::Formulation;
 use crate::mechanism::Mechanism;
 
 /// Fills `jac` (n × n) with ∂f/∂y at (t, y); NaN rows when the evaluation fails.
@@ -47,4 +49,182 @@ pub(crate) fn time_derivative(mech: &Mechanism, t: f64, y: &[f64], out: &mut [f6
     let mut fw = mech.force_jac_work();
     mech.forces().jacobian(mech.bodies(), t, &sc, &mut fw);
     form.time_derivative(mech.bodies(), mech.forces(), t, &sc, &fw.dg, out)
+}
+
+impl Mechanism {
+    /// The sparsity pattern of ∂f/∂y: for each column j of the state, the rows where ∂f/∂y_j
+    /// may be nonzero, ascending (block diagonal over the mechanism's clusters of bodies that
+    /// joints and force elements join; crate::jacobian). Dense (every row in every column)
+    /// when the mechanism is one cluster, as a chain or the press.
+    pub fn jacobian_pattern(&self) -> Vec<Vec<usize>> {
+        pattern(self)
+    }
+
+    /// [`OdeSystem::jacobian_sparsity`]: the pattern of [`Mechanism::jacobian_pattern`] when
+    /// the mechanism has more than one cluster, None (dense) when it has one.
+    ///
+    /// [`OdeSystem::jacobian_sparsity`]: lash_solver::OdeSystem::jacobian_sparsity
+    pub(crate) fn sparsity(&self) -> Option<Vec<Vec<usize>>> {
+        let n = lash_solver::OdeSystem::dim(self);
+        (pattern_nnz(self) < n * n).then(|| pattern(self))
+    }
+}
+
+/// The sparsity pattern of ∂f/∂y (for each column j of y, the rows i where ∂f_i/∂y_j may be
+/// nonzero, ascending): block diagonal over the mechanism's clusters.
+///
+/// ```text
+/// cluster   integrated bodies joined by a joint (ideal, driver or clearance) or a force element
+///           (the bodies, joints and elements it names), transitively; the ground and the
+///           prescribed bodies (functions of t) join nothing
+/// pattern   every state component of a cluster (its bodies' q and q̇ under the absolute
+///           formulations, its tree coordinates θ and θ̇ under minimal) depends on every other
+///           of the same cluster and on none outside it
+/// ```
+/// Why it covers ∂f/∂y: a body's applied forces come from the elements and clearance joints
+/// that name it, which read only the bodies (and joints, elements) they name; the constraint
+/// solve couples the bodies of one connected set of joints (S = Φ_q M⁻¹ Φ_qᵀ, and M + Φ_qᵀαΦ_q,
+/// are block diagonal over them; minimal's mass matrix over one tree); a prescribed body is a
+/// function of t. The names are read from the scene's JSON form of each joint, element and
+/// body (every string equal to a body, joint or element name), so a reference of a kind added
+/// later is counted without code here. The augmented Lagrangian's multiplier iteration stops on
+/// a global test, which couples clusters only through when it stops (below its tolerance).
+fn pattern(mech: &Mechanism) -> Vec<Vec<usize>> {
+    let blocks = state_blocks(mech);
+    let n = blocks.iter().map(Vec::len).sum::<usize>();
+    let mut pattern = vec![Vec::new(); n];
+    for block in &blocks {
+        let mut rows = block.clone();
+        rows.sort_unstable();
+        for &j in block {
+            pattern[j] = rows.clone();
+        }
+    }
+    pattern
+}
+
+/// Entries of [`pattern`] (Σ over clusters of its size²) without building it.
+fn pattern_nnz(mech: &Mechanism) -> usize {
+    state_blocks(mech).iter().map(|b| b.len() * b.len()).sum()
+}
+
+/// The state components of each cluster ([`pattern`]), clusters in order of their first body.
+fn state_blocks(mech: &Mechanism) -> Vec<Vec<usize>> {
+    let clusters = body_clusters(mech);
+    // State components of each integrated body.
+    let nint = clusters.len();
+    let mut of_body: Vec<Vec<usize>> = vec![Vec::new(); nint];
+    match mech.formulation() {
+        Formulation::LagrangeBaumgarte(_) | Formulation::AugmentedLagrangian(_) => {
+            let nq = mech.nq();
+            for (i, comps) in of_body.iter_mut().enumerate() {
+                comps.extend((0..3).map(|k| 3 * i + k));
+                comps.extend((0..3).map(|k| nq + 3 * i + k));
+            }
+        }
+        Formulation::Minimal(f) => {
+            let tree = f.tree();
+            for tb in &tree.bodies {
+                let d = tb.link.dof();
+                of_body[tb.int].extend(tb.col..tb.col + d);
+                of_body[tb.int].extend(tree.n + tb.col..tree.n + tb.col + d);
+            }
+        }
+    }
+    let mut index_of_root = vec![usize::MAX; nint];
+    let mut blocks: Vec<Vec<usize>> = Vec::new();
+    for (i, comps) in of_body.into_iter().enumerate() {
+        let root = clusters[i];
+        if index_of_root[root] == usize::MAX {
+            index_of_root[root] = blocks.len();
+            blocks.push(Vec::new());
+        }
+        blocks[index_of_root[root]].extend(comps);
+    }
+    blocks.retain(|b| !b.is_empty());
+    blocks
+}
+
+/// For each integrated body, a representative integrated body of its cluster ([`pattern`]).
+fn body_clusters(mech: &Mechanism) -> Vec<usize> {
+    let scene = mech.scene();
+    let info = mech.body_info();
+    let (nb, nj) = (scene.bodies.len(), scene.joints.len());
+    // Nodes: scene bodies, then joints, then force elements.
+    let mut uf = UnionFind::new(nb + nj + scene.forces.len());
+    let mut names: std::collections::HashMap<&str, Vec<usize>> = Default::default();
+    for (k, b) in info.iter().enumerate() {
+        if matches!(b.owner, Owner::Int(_)) {
+            names.entry(b.name.as_str()).or_default().push(k);
+        }
+    }
+    for (j, joint) in scene.joints.iter().enumerate() {
+        names.entry(joint.name()).or_default().push(nb + j);
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        names.entry(element.name()).or_default().push(nb + nj + e);
+    }
+    let mut link = |node: usize, value: serde_json::Value| {
+        let mut stack = vec![value];
+        while let Some(v) = stack.pop() {
+            match v {
+                serde_json::Value::String(s) => {
+                    for &other in names.get(s.as_str()).into_iter().flatten() {
+                        uf.union(node, other);
+                    }
+                }
+                serde_json::Value::Array(a) => stack.extend(a),
+                serde_json::Value::Object(o) => stack.extend(o.into_iter().map(|(_, v)| v)),
+                _ => {}
+            }
+        }
+    };
+    let json = |v: Result<serde_json::Value, serde_json::Error>| v.unwrap_or_default();
+    for (j, joint) in scene.joints.iter().enumerate() {
+        link(nb + j, json(serde_json::to_value(joint)));
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        link(nb + nj + e, json(serde_json::to_value(element)));
+    }
+    for (k, body) in scene.bodies.iter().enumerate() {
+        if matches!(info[k].owner, Owner::Int(_)) {
+            link(k, json(serde_json::to_value(body)));
+        }
+    }
+    // A prescribed body is no name above: it joined nothing. Each cluster is named by the
+    // integrated index of its first body in scene order.
+    let nint = info
+        .iter()
+        .filter(|b| matches!(b.owner, Owner::Int(_)))
+        .count();
+    let mut first: std::collections::HashMap<usize, usize> = Default::default();
+    let mut out = vec![0; nint];
+    for (k, b) in info.iter().enumerate() {
+        if let Owner::Int(i) = b.owner {
+            out[i] = *first.entry(uf.find(k)).or_insert(i);
+        }
+    }
+    out
+}
+
+/// Disjoint sets with path halving.
+struct UnionFind(Vec<usize>);
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind((0..n).collect())
+    }
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.0[i] != i {
+            self.0[i] = self.0[self.0[i]];
+            i = self.0[i];
+        }
+        i
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.0[ra.max(rb)] = ra.min(rb);
+        }
+    }
 }

@@ -5,18 +5,24 @@
 //!   diffsol's `Bdf`, after Byrne & Hindmarsh (1975) and Shampine & Reichelt's ode15s (1997)
 //! TR-BDF2 (ESDIRK, order 2(3)): Bank et al. (1985); Hosea & Shampine (1996)
 //! ESDIRK3(4) (order 3(4)):      Jørgensen, Kristensen & Thomsen (2018), arXiv:1803.01613
-//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense, nalgebra LU)
+//! Newton on  (I − h γ J) Δ = −r,   J = ∂f/∂y (dense: crate::auto_lu; sparse: crate::sparse_lu)
 //! ```
 //!
 //! Backend: diffsol 0.18 with its nalgebra matrices and LU (chosen for the small dense systems
 //! of this project, where faer's dispatch and workspace handling dominate: BENCHMARKS.md, "What
-//! the profile showed"). The system reaches diffsol as a custom `OdeEquations` type whose
-//! right-hand side operator supplies
+//! the profile showed"), or, for large systems with a sparse Jacobian pattern, faer's vectors
+//! and compressed-column matrices (crate::linear_algebra: the choice, and the sparse path's
+//! coloured finite-difference Jacobian). Everything below is generic over the two
+//! ([`crate::linear_algebra`]'s `La`); the public types wrap one or the other. The system
+//! reaches diffsol as a custom `OdeEquations` type whose right-hand side operator supplies
 //! - the Jacobian-vector product `J v` (diffsol's required interface): the system's dense
 //!   Jacobian times v when it has one, a forward difference of f along v otherwise;
 //! - the dense Jacobian itself (`jacobian_inplace`), so that diffsol does not assemble it
 //!   column by column from n products: the system's Jacobian, or the forward-difference
-//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations).
+//!   Jacobian of [`crate::jacobian`] (n + 1 RHS evaluations); on the sparse path the
+//!   coloured forward differences into the compressed columns (colours + 1 RHS evaluations,
+//!   [`crate::jacobian::JacobianEvaluator::sparse_difference`]), and its pattern
+//!   (`jacobian_sparsity`), from which diffsol builds the Newton matrix's.
 //!
 //! Ownership: diffsol's solvers borrow their `OdeSolverProblem`. Following diffsol's own
 //! pattern, the problem ([`DiffsolProblem`]) is owned by the caller's [`crate::Problem`] and
@@ -76,275 +82,149 @@ use std::cell::RefCell;
 
 use diffsol::ode_solver::state::StateCommon;
 use diffsol::{
-    Bdf, BdfState, DiffsolError, Matrix, NalgebraContext, NalgebraMat, NalgebraVec, NonLinearOp,
-    NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverConfig,
-    OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, Op, RkState, Sdirk,
-    Tableau, UnitCallable, Vector, VectorCommon,
+    Bdf, BdfState, DiffsolError, Matrix, NonLinearOp, OdeBuilder, OdeEquations, OdeSolverConfig,
+    OdeSolverMethod, OdeSolverProblem, OdeSolverState, OdeSolverStopReason, RkState, Sdirk,
+    Tableau, Vector, VectorRef,
 };
-use faer::MatMut;
+use diffsol_la::MatrixRef;
 
 use crate::error::SolveError;
-use crate::jacobian::JacobianEvaluator;
+use crate::jacobian::{Colouring, JacobianEvaluator};
+use crate::linear_algebra::{sparse_pattern, Dense, La, LinearAlgebra, Sparse};
 use crate::method::{Family, Method};
 use crate::options::{Budgets, DiffsolConfig, OptionError, OptionField, Reason, SolverOptions};
 use crate::stats::Stats;
 use crate::stepper::{check_stop, landing_step, step_floor, Budget, Stepper};
 use crate::system::OdeSystem;
 
-type Vd = NalgebraVec<f64>;
-type Md = NalgebraMat<f64>;
-type Cx = NalgebraContext;
-/// nalgebra's LU below crate::auto_lu::FAER_LU_FROM unknowns, faer's above.
-type Lu = crate::auto_lu::AutoLu;
+mod ops;
+use ops::{SysEqn, SysInit, SysRhs};
 
-/// Scratch of [`SysRhs`]: f(t, y), f(t, y + εv) and y + εv for finite differences; the dense
-/// J for products.
-type Work = (Vec<f64>, Vec<f64>, Vec<f64>, faer::Mat<f64>);
+type Problem<'a, S, B> = OdeSolverProblem<SysEqn<'a, S, B>>;
 
-/// The right-hand side operator handed to diffsol.
-struct SysRhs<'a, S: OdeSystem + ?Sized> {
-    sys: &'a S,
-    n: usize,
-    ctx: Cx,
-    jac_eval: RefCell<JacobianEvaluator>,
-    work: RefCell<Work>,
-    /// rhs_evals and jac_evals of this operator.
-    counts: RefCell<Stats>,
+/// rhs_evals and jac_evals made through `problem` so far (by every stepper on it).
+fn counts<S: OdeSystem + ?Sized, B: La>(problem: &Problem<'_, S, B>) -> Stats {
+    *problem.eqn.rhs.counts.borrow()
 }
-
-impl<S: OdeSystem + ?Sized> SysRhs<'_, S> {
-    fn eval(&self, t: f64, y: &[f64], out: &mut [f64]) {
-        self.sys.rhs(t, y, out);
-        self.counts.borrow_mut().rhs_evals += 1;
-    }
-
-    /// Dense Jacobian at (t, x) into `jac` (column-major n × n).
-    fn dense_jacobian(&self, t: f64, x: &[f64], jac: MatMut<'_, f64>) {
-        let mut work = self.work.borrow_mut();
-        let mut counts = self.counts.borrow_mut();
-        let f0 = &mut work.0;
-        if !self.sys.has_jacobian() {
-            self.sys.rhs(t, x, f0);
-            counts.rhs_evals += 1;
-        }
-        self.jac_eval
-            .borrow_mut()
-            .jacobian(self.sys, t, x, f0, jac, &mut counts);
-    }
-}
-
-impl<S: OdeSystem + ?Sized> Op for SysRhs<'_, S> {
-    type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
-        &self.ctx
-    }
-    fn nstates(&self) -> usize {
-        self.n
-    }
-    fn nout(&self) -> usize {
-        self.n
-    }
-    fn nparams(&self) -> usize {
-        0
-    }
-}
-
-impl<S: OdeSystem + ?Sized> NonLinearOp for SysRhs<'_, S> {
-    fn call_inplace(&self, x: &Vd, t: f64, y: &mut Vd) {
-        self.eval(t, x.inner().as_slice(), y.inner_mut().as_mut_slice());
-    }
-}
-
-impl<S: OdeSystem + ?Sized> NonLinearOpJacobian for SysRhs<'_, S> {
-    fn jac_mul_inplace(&self, x: &Vd, t: f64, v: &Vd, y: &mut Vd) {
-        let (xs, vs) = (x.inner().as_slice(), v.inner().as_slice());
-        let n = self.n;
-        let out = y.inner_mut().as_mut_slice();
-        if self.sys.has_jacobian() {
-            let mut jac = std::mem::replace(&mut self.work.borrow_mut().3, faer::Mat::zeros(0, 0));
-            if jac.nrows() != n {
-                jac = faer::Mat::zeros(n, n);
-            }
-            self.dense_jacobian(t, xs, jac.as_mut());
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = (0..n).map(|j| jac[(i, j)] * vs[j]).sum();
-            }
-            self.work.borrow_mut().3 = jac;
-        } else {
-            // Directional forward difference: J v ≈ (f(x + εv) − f(x)) / ε with
-            // ε = √eps · max(‖x‖∞, 1) / ‖v‖∞.
-            let vmax = vs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if vmax == 0.0 {
-                out.fill(0.0);
-                return;
-            }
-            let xmax = xs.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-            let eps = f64::EPSILON.sqrt() * xmax / vmax;
-            let mut work = self.work.borrow_mut();
-            let (f0, f1, xp, _) = &mut *work;
-            for i in 0..n {
-                xp[i] = xs[i] + eps * vs[i];
-            }
-            self.eval(t, xs, f0);
-            self.eval(t, xp, f1);
-            for i in 0..n {
-                out[i] = (f1[i] - f0[i]) / eps;
-            }
-        }
-    }
-
-    fn jacobian_inplace(&self, x: &Vd, t: f64, y: &mut Md) {
-        let n = self.n;
-        let data = y.inner_mut().as_mut_slice();
-        self.dense_jacobian(
-            t,
-            x.inner().as_slice(),
-            MatMut::from_column_major_slice_mut(data, n, n),
-        );
-    }
-}
-
-/// The initial-value operator (diffsol requires one; our states are built directly).
-struct SysInit {
-    y0: Vec<f64>,
-    ctx: Cx,
-}
-
-impl Op for SysInit {
-    type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
-        &self.ctx
-    }
-    fn nstates(&self) -> usize {
-        self.y0.len()
-    }
-    fn nout(&self) -> usize {
-        self.y0.len()
-    }
-    fn nparams(&self) -> usize {
-        0
-    }
-}
-
-impl diffsol::ConstantOp for SysInit {
-    fn call_inplace(&self, _t: f64, y: &mut Vd) {
-        y.inner_mut().as_mut_slice().copy_from_slice(&self.y0);
-    }
-}
-
-/// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots.
-struct SysEqn<'a, S: OdeSystem + ?Sized> {
-    rhs: SysRhs<'a, S>,
-    init: SysInit,
-}
-
-impl<S: OdeSystem + ?Sized> Op for SysEqn<'_, S> {
-    type T = f64;
-    type V = Vd;
-    type M = Md;
-    type C = Cx;
-    fn context(&self) -> &Cx {
-        &self.rhs.ctx
-    }
-    fn nstates(&self) -> usize {
-        self.rhs.n
-    }
-    fn nout(&self) -> usize {
-        self.rhs.n
-    }
-    fn nparams(&self) -> usize {
-        0
-    }
-}
-
-impl<'b, 'a, S: OdeSystem + ?Sized> OdeEquationsRef<'b> for SysEqn<'a, S> {
-    type Rhs = &'b SysRhs<'a, S>;
-    type Mass = &'b UnitCallable<Md>;
-    type Root = &'b UnitCallable<Md>;
-    type Init = &'b SysInit;
-    type Out = &'b UnitCallable<Md>;
-    type Reset = &'b UnitCallable<Md>;
-}
-
-impl<'a, S: OdeSystem + ?Sized> OdeEquations for SysEqn<'a, S> {
-    fn rhs(&self) -> &SysRhs<'a, S> {
-        &self.rhs
-    }
-    fn mass(&self) -> Option<&UnitCallable<Md>> {
-        None
-    }
-    fn init(&self) -> &SysInit {
-        &self.init
-    }
-    fn set_params(&mut self, _p: &Vd) {}
-    fn get_params(&self, _p: &mut Vd) {}
-}
-
-type Problem<'a, S> = OdeSolverProblem<SysEqn<'a, S>>;
 
 /// diffsol's problem for one system and one set of tolerances: owned by the caller (our
 /// [`crate::Problem`]) and borrowed by every [`DiffsolStepper`] built on it, diffsol's own
-/// pattern (the caller keeps the `OdeSolverProblem`, the solver borrows it).
+/// pattern (the caller keeps the `OdeSolverProblem`, the solver borrows it). Dense or sparse
+/// ([`crate::linear_algebra`]).
 pub struct DiffsolProblem<'a, S: OdeSystem + ?Sized> {
-    problem: Problem<'a, S>,
+    inner: AnyProblem<'a, S>,
+}
+
+enum AnyProblem<'a, S: OdeSystem + ?Sized> {
+    Dense(Problem<'a, S, Dense>),
+    Sparse(Problem<'a, S, Sparse>),
 }
 
 impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
     /// Builds diffsol's problem for `sys` with the tolerances and budgets of `cfg` (the
-    /// validated configuration of one of diffsol's methods).
-    pub fn new(sys: &'a S, cfg: &DiffsolConfig) -> Result<Self, SolveError> {
+    /// validated configuration of one of diffsol's methods), on the linear algebra `choice`
+    /// picks ([`crate::linear_algebra::sparse_pattern`]), after checking its matrices against
+    /// the memory budget (`max_memory`, else crate::memory's share of what is available):
+    /// n² on the dense path, the pattern's entries on the sparse one.
+    pub fn new(
+        sys: &'a S,
+        cfg: &DiffsolConfig,
+        choice: LinearAlgebra,
+        max_memory: Option<u64>,
+    ) -> Result<Self, SolveError> {
         let n = sys.dim();
-        let ctx = Cx::default();
-        let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
-        let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
-        // The first of the n² matrices (crate::memory): a refusal of the allocator is an
-        // error here; diffsol's own (nalgebra's) allocations are covered by the budget only.
-        let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
-        let eqn = SysEqn {
-            rhs: SysRhs {
-                sys,
-                n,
-                ctx,
-                jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
-                work: RefCell::new((vec![0.0; n], vec![0.0; n], vec![0.0; n], jac_work)),
-                counts: RefCell::new(Stats::default()),
-            },
-            // Never evaluated: states are built directly from (t, y).
-            init: SysInit {
-                y0: vec![0.0; n],
-                ctx,
-            },
+        let method = cfg.method();
+        let dense = || -> Result<AnyProblem<'a, S>, SolveError> {
+            crate::memory::check_method(method, n, max_memory).map_err(SolveError::OutOfMemory)?;
+            // The first of the n² matrices (crate::memory): a refusal of the allocator is an
+            // error here; diffsol's own (nalgebra's) allocations are covered by the budget
+            // only.
+            let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
+            Ok(AnyProblem::Dense(build::<S, Dense>(
+                sys, cfg, jac_work, None,
+            )?))
         };
-        let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
-        let mut problem = OdeBuilder::<Md>::new()
-            .rtol(rtol)
-            .atol(atol)
-            .build_from_eqn(eqn)
-            .map_err(|e| {
-                OptionError::new(
-                    OptionField::Method,
-                    Reason::Invalid(format!("diffsol: {e}")),
-                )
-            })?;
-        problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
-        Ok(DiffsolProblem { problem })
+        let inner = match sparse_pattern(sys, choice) {
+            None => dense()?,
+            Some(pattern) => {
+                let nnz = pattern.iter().map(Vec::len).sum::<usize>();
+                crate::memory::check_sparse(method, n, nnz, max_memory)
+                    .map_err(SolveError::OutOfMemory)?;
+                // sparse_pattern's rows are in range, ascending and distinct: neither fails.
+                let sparse = Colouring::new(pattern)
+                    .and_then(|c| Sparse::sparsity(n, c.pattern()).map(|s| (c, s)));
+                match sparse {
+                    Some(sparse) => AnyProblem::Sparse(build::<S, Sparse>(
+                        sys,
+                        cfg,
+                        faer::Mat::zeros(0, 0),
+                        Some(sparse),
+                    )?),
+                    None => dense()?,
+                }
+            }
+        };
+        Ok(DiffsolProblem { inner })
     }
 
-    /// rhs_evals and jac_evals made through this problem so far (by every stepper on it).
-    fn counts(&self) -> Stats {
-        *self.problem.eqn.rhs.counts.borrow()
+    /// Whether the problem runs on sparse matrices ([`crate::linear_algebra`]).
+    pub fn is_sparse(&self) -> bool {
+        matches!(self.inner, AnyProblem::Sparse(_))
     }
 }
 
-enum Solver<'p, 'a, S: OdeSystem + ?Sized> {
-    Bdf(Box<Bdf<'p, SysEqn<'a, S>, Lu>>),
-    Sdirk(Box<Sdirk<'p, SysEqn<'a, S>, Lu>>),
+/// diffsol's problem on the linear algebra `B`; `sparse` is the sparse path's coloured
+/// pattern and diffsol's form of it (None on the dense path), `jac_work` the dense products'
+/// scratch.
+fn build<'a, S: OdeSystem + ?Sized, B: La>(
+    sys: &'a S,
+    cfg: &DiffsolConfig,
+    jac_work: faer::Mat<f64>,
+    sparse: Option<(Colouring, <B::M as Matrix>::Sparsity)>,
+) -> Result<Problem<'a, S, B>, SolveError> {
+    let n = sys.dim();
+    let ctx = B::C::default();
+    let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
+    let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
+    let (colouring, sparsity) = match sparse {
+        Some((c, s)) => (Some(c), Some(s)),
+        None => (None, None),
+    };
+    let eqn = SysEqn {
+        rhs: SysRhs {
+            sys,
+            n,
+            ctx,
+            jac_eval: RefCell::new(JacobianEvaluator::new(scale)),
+            work: RefCell::new((vec![0.0; n], vec![0.0; n], vec![0.0; n], jac_work)),
+            counts: RefCell::new(Stats::default()),
+            colouring,
+            sparsity,
+        },
+        // Never evaluated: states are built directly from (t, y).
+        init: SysInit {
+            y0: vec![0.0; n],
+            ctx,
+        },
+    };
+    let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
+    let mut problem = OdeBuilder::<B::M>::new()
+        .rtol(rtol)
+        .atol(atol)
+        .build_from_eqn(eqn)
+        .map_err(|e| {
+            OptionError::new(
+                OptionField::Method,
+                Reason::Invalid(format!("diffsol: {e}")),
+            )
+        })?;
+    problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
+    Ok(problem)
+}
+
+enum Solver<'p, 'a, S: OdeSystem + ?Sized, B: La> {
+    Bdf(Box<Bdf<'p, SysEqn<'a, S, B>, B::Lu>>),
+    Sdirk(Box<Sdirk<'p, SysEqn<'a, S, B>, B::Lu>>),
 }
 
 macro_rules! with_solver {
@@ -362,13 +242,86 @@ macro_rules! with_solver {
 /// BDF:      Σ α_j y_{n+1−j} = h f(t_{n+1}, y_{n+1}),  orders 1–5
 /// TR-BDF2:  ESDIRK, order 2(3);   ESDIRK34: order 3(4)
 /// ```
-/// diffsol 0.18 (M. Robinson), nalgebra backend; see the module documentation for how our
-/// stepper contract (stop times, dense output, restarts, h_max, errors, counters) is met.
+/// diffsol 0.18 (M. Robinson), nalgebra's dense or faer's sparse matrices
+/// ([`crate::linear_algebra`]); see the module documentation for how our stepper contract
+/// (stop times, dense output, restarts, h_max, errors, counters) is met.
 pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
-    problem: &'p DiffsolProblem<'a, S>,
+    inner: AnyStepper<'p, 'a, S>,
+}
+
+enum AnyStepper<'p, 'a, S: OdeSystem + ?Sized> {
+    Dense(Core<'p, 'a, S, Dense>),
+    Sparse(Core<'p, 'a, S, Sparse>),
+}
+
+macro_rules! with_core {
+    ($stepper:expr, $c:ident => $body:expr) => {
+        match $stepper {
+            AnyStepper::Dense($c) => $body,
+            AnyStepper::Sparse($c) => $body,
+        }
+    };
+}
+
+impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
+    /// Builds the problem's method (bdf, trbdf2 or esdirk34, from `opts`) at (t0, y0).
+    /// Options must be validated and be the ones the problem was built with.
+    pub fn new(
+        problem: &'p DiffsolProblem<'a, S>,
+        t0: f64,
+        y0: &[f64],
+        opts: &SolverOptions,
+    ) -> Result<Self, SolveError> {
+        let inner = match &problem.inner {
+            AnyProblem::Dense(p) => AnyStepper::Dense(Core::new(p, t0, y0, opts)?),
+            AnyProblem::Sparse(p) => AnyStepper::Sparse(Core::new(p, t0, y0, opts)?),
+        };
+        Ok(DiffsolStepper { inner })
+    }
+
+    /// Current order of the method: BDF's variable order (1 right after a start or restart),
+    /// the tableau's order for the SDIRK methods.
+    pub fn order(&self) -> usize {
+        with_core!(&self.inner, c => c.order())
+    }
+}
+
+impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
+    fn method(&self) -> Method {
+        with_core!(&self.inner, c => c.method)
+    }
+    fn t(&self) -> f64 {
+        with_core!(&self.inner, c => c.t)
+    }
+    fn y(&self) -> &[f64] {
+        with_core!(&self.inner, c => &c.y)
+    }
+    fn t_prev(&self) -> f64 {
+        with_core!(&self.inner, c => c.t_prev)
+    }
+    fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        with_core!(&mut self.inner, c => c.step(t_stop))
+    }
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        with_core!(&self.inner, c => c.interpolate(t, out))
+    }
+    fn set_h_max(&mut self, h_max: f64) {
+        with_core!(&mut self.inner, c => c.set_h_max(h_max))
+    }
+    fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        with_core!(&mut self.inner, c => c.restart(t, y))
+    }
+    fn stats(&self) -> Stats {
+        with_core!(&self.inner, c => c.stats)
+    }
+}
+
+/// The stepper on the linear algebra `B`.
+struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
+    problem: &'p Problem<'a, S, B>,
     /// The live solver, borrowing `problem`: None between a start (or restart) and the first
     /// step after it, which builds it (`pending`), and after a failed restart.
-    solver: Option<Solver<'p, 'a, S>>,
+    solver: Option<Solver<'p, 'a, S, B>>,
     /// f(t, y) of a start whose solver is built at the next step, when the stop time is known
     /// (the starting-step estimate keeps its probe inside it: `initial_h`).
     pending: Option<Vec<f64>>,
@@ -392,7 +345,7 @@ pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
     /// Solver counters of replaced solvers (restarts).
     base: Stats,
     stats: Stats,
-    buf: RefCell<Vd>,
+    buf: RefCell<B::V>,
 }
 
 fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
@@ -414,11 +367,13 @@ fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
     }
 }
 
-impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
-    /// Builds the problem's method (bdf, trbdf2 or esdirk34, from `opts`) at (t0, y0).
-    /// Options must be validated and be the ones the problem was built with.
-    pub fn new(
-        problem: &'p DiffsolProblem<'a, S>,
+impl<'p, 'a, S: OdeSystem + ?Sized, B: La> Core<'p, 'a, S, B>
+where
+    for<'b> &'b B::V: VectorRef<B::V>,
+    for<'b> &'b B::M: MatrixRef<B::M>,
+{
+    fn new(
+        problem: &'p Problem<'a, S, B>,
         t0: f64,
         y0: &[f64],
         opts: &SolverOptions,
@@ -435,18 +390,18 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             .into());
         }
         let n = y0.len();
-        if n != problem.problem.eqn.rhs.n {
+        if n != problem.eqn.rhs.n {
             return Err(OptionError::new(
                 OptionField::Y0,
                 Reason::WrongLength {
                     len: n,
-                    expected: problem.problem.eqn.rhs.n,
+                    expected: problem.eqn.rhs.n,
                 },
             )
             .into());
         }
-        let ctx = *problem.problem.context();
-        let mut st = DiffsolStepper {
+        let ctx = *problem.context();
+        let mut st = Core {
             problem,
             solver: None,
             pending: None,
@@ -459,19 +414,17 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
             tstop: None,
             tstop_set: None,
             sliver: None,
-            counts_at_start: problem.counts(),
+            counts_at_start: counts(problem),
             base: Stats::default(),
             stats: Stats::default(),
-            buf: RefCell::new(Vd::zeros(n, ctx)),
+            buf: RefCell::new(B::V::zeros(n, ctx)),
         };
         st.start(t0, y0)?;
         st.update_stats();
         Ok(st)
     }
 
-    /// Current order of the method: BDF's variable order (1 right after a start or restart),
-    /// the tableau's order for the SDIRK methods.
-    pub fn order(&self) -> usize {
+    fn order(&self) -> usize {
         match &self.solver {
             Some(solver) => with_solver!(solver, s => s.order()),
             None if self.pending.is_some() => self.start_order(),
@@ -493,7 +446,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     fn start(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         let n = y.len();
         let mut dy = vec![0.0; n];
-        self.problem.problem.eqn.rhs.eval(t, y, &mut dy);
+        self.problem.eqn.rhs.eval(t, y, &mut dy);
         self.solver = None;
         self.pending = None;
         if !dy.iter().all(|v| v.is_finite()) {
@@ -512,12 +465,12 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// trial step `opts.h0` or the starting-step estimate with its probe inside
     /// [t, `t_stop`] (`initial_h`).
     fn build(&mut self, dy: Vec<f64>, t_stop: f64) -> Result<(), SolveError> {
-        let problem = &self.problem.problem;
+        let problem = self.problem;
         let ctx = *problem.context();
         let (t, y) = (self.t, &self.y);
-        let yv = Vd::from_slice(y, ctx);
-        let dy = Vd::from_slice(&dy, ctx);
-        let empty = || Vd::zeros(0, ctx);
+        let yv = B::V::from_slice(y, ctx);
+        let dy = B::V::from_slice(&dy, ctx);
+        let empty = || B::V::zeros(0, ctx);
         let common = StateCommon {
             y: yv,
             dy,
@@ -536,10 +489,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
         let span = t_stop - t;
         let solver = match self.method {
             Method::Bdf => {
-                let mut state = BdfState::<Vd>::new_from_common(common);
+                let mut state = BdfState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Bdf(Box::new(
-                    Bdf::new(problem, state, Lu::default()).map_err(err)?,
+                    Bdf::new(problem, state, B::Lu::default()).map_err(err)?,
                 ))
             }
             m => {
@@ -548,10 +501,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
                 } else {
                     Tableau::<f64>::esdirk34()
                 };
-                let mut state = RkState::<Vd>::new_from_common(common);
+                let mut state = RkState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Sdirk(Box::new(
-                    Sdirk::new(problem, state, tableau, Lu::default()).map_err(err)?,
+                    Sdirk::new(problem, state, tableau, B::Lu::default()).map_err(err)?,
                 ))
             }
         };
@@ -573,10 +526,10 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     /// ```
     /// Where h0 ≤ span the operations are diffsol's, in its order, on its vectors: the step is
     /// the one diffsol's `set_step_size` gives, bit for bit.
-    fn initial_h<St: OdeSolverState<Vd>>(
+    fn initial_h<St: OdeSolverState<B::V>>(
         state: &mut St,
         h: Option<f64>,
-        problem: &Problem<'a, S>,
+        problem: &Problem<'a, S, B>,
         order: usize,
         opts: &SolverOptions,
         span: f64,
@@ -629,7 +582,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     fn sliver_step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         let n = self.y.len();
         let mut f = vec![0.0; n];
-        self.problem.problem.eqn.rhs.eval(self.t, &self.y, &mut f);
+        self.problem.eqn.rhs.eval(self.t, &self.y, &mut f);
         let dt = t_stop - self.t;
         let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
         if !y_new.iter().all(|v| v.is_finite()) {
@@ -651,7 +604,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
 
     /// Refreshes the counters from the live solver.
     fn update_stats(&mut self) {
-        let counts = self.problem.counts();
+        let counts = counts(self.problem);
         // No live solver between a start and the first step after it: the base counters.
         let d = self
             .solver
@@ -671,20 +624,11 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
     }
 }
 
-impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
-    fn method(&self) -> Method {
-        self.method
-    }
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn y(&self) -> &[f64] {
-        &self.y
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-
+impl<S: OdeSystem + ?Sized, B: La> Core<'_, '_, S, B>
+where
+    for<'b> &'b B::V: VectorRef<B::V>,
+    for<'b> &'b B::M: MatrixRef<B::M>,
+{
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         check_stop(self.t, t_stop)?;
         self.budget.check(self.stats.steps, self.t, &self.y)?;
@@ -793,7 +737,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
             t_new
         };
         let finite = with_solver!(&*solver, s => {
-            let y_new = s.state().y.inner().as_slice();
+            let y_new = B::slice(s.state().y);
             if y_new.iter().all(|v| v.is_finite()) {
                 self.y.copy_from_slice(y_new);
                 true
@@ -838,7 +782,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         let t_end = with_solver!(solver, s => s.state().t);
         let tq = t.max(self.t_prev).min(t_end);
         match with_solver!(solver, s => s.interpolate_inplace(tq, &mut buf)) {
-            Ok(()) => out.copy_from_slice(buf.inner().as_slice()),
+            Ok(()) => out.copy_from_slice(B::slice(&buf)),
             // Unreachable for t in [t_prev, t]; the end state is the safe answer.
             Err(_) => out.copy_from_slice(&self.y),
         }
@@ -861,155 +805,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         self.update_stats();
         Ok(())
     }
-
-    fn stats(&self) -> Stats {
-        self.stats
-    }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::testset::Orego;
-    use diffsol::MatrixCommon;
-
-    /// Orego without its Jacobian (finite differences).
-    struct OregoFd;
-    impl OdeSystem for OregoFd {
-        fn dim(&self) -> usize {
-            3
-        }
-        fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-            Orego.rhs(t, y, dy);
-        }
-    }
-
-    fn rhs_op<S: OdeSystem + ?Sized>(sys: &S) -> SysRhs<'_, S> {
-        let n = sys.dim();
-        SysRhs {
-            sys,
-            n,
-            ctx: Cx::default(),
-            jac_eval: RefCell::new(JacobianEvaluator::new(vec![1.0; n])),
-            work: RefCell::new((
-                vec![0.0; n],
-                vec![0.0; n],
-                vec![0.0; n],
-                faer::Mat::zeros(n, n),
-            )),
-            counts: RefCell::new(Stats::default()),
-        }
-    }
-
-    /// Where the probe fits the span, the starting step is diffsol's own `set_step_size`, bit
-    /// for bit (so runs whose span is longer than the probe are unchanged); where it does not,
-    /// the probe lands on the stop time.
-    #[test]
-    fn the_starting_step_is_diffsols_where_the_probe_fits() {
-        let o = SolverOptions {
-            method: Method::Bdf,
-            rtol: 1e-6,
-            atol: crate::options::Atol::Scalar(1e-9),
-            ..Default::default()
-        };
-        let crate::options::Config::Diffsol(cfg) = o.configure(3).unwrap() else {
-            panic!("bdf has a diffsol configuration")
-        };
-        let problem = DiffsolProblem::new(&OregoFd, &cfg).unwrap();
-        let p = &problem.problem;
-        let ctx = *p.context();
-        for (y, order) in [([2.0, 300.0, 40.0], 1), ([1.0, 2.0, 3.0], 3), ([0.0; 3], 5)] {
-            let common = || {
-                let yv = Vd::from_slice(&y, ctx);
-                let mut dy = Vd::zeros(3, ctx);
-                p.eqn.rhs.call_inplace(&yv, 0.5, &mut dy);
-                StateCommon {
-                    y: yv,
-                    dy,
-                    g: Vd::zeros(0, ctx),
-                    dg: Vd::zeros(0, ctx),
-                    s: Vd::zeros(0, ctx),
-                    ds: Vd::zeros(0, ctx),
-                    sg: Vd::zeros(0, ctx),
-                    dsg: Vd::zeros(0, ctx),
-                    t: 0.5,
-                    h: 1.0,
-                }
-            };
-            let mut theirs = BdfState::<Vd>::new_from_common(common());
-            theirs
-                .as_mut()
-                .set_step_size(1.0, &p.atol, p.rtol, &p.eqn, order);
-            let mut ours = BdfState::<Vd>::new_from_common(common());
-            DiffsolStepper::initial_h(&mut ours, None, p, order, &o, 1e3);
-            assert_eq!(
-                ours.as_ref().h.to_bits(),
-                theirs.as_ref().h.to_bits(),
-                "{y:?}"
-            );
-            // A span shorter than the probe: the probe is the span.
-            let mut short = BdfState::<Vd>::new_from_common(common());
-            let calls = p.eqn.rhs.counts.borrow().rhs_evals;
-            DiffsolStepper::initial_h(&mut short, None, p, order, &o, 1e-12);
-            assert_eq!(p.eqn.rhs.counts.borrow().rhs_evals, calls + 1);
-            let h = short.as_ref().h;
-            assert!(h > 0.0 && h.is_finite() && h < 1e-9, "{h}");
-        }
-    }
-
-    /// J v from the product and column j of the dense Jacobian agree with the analytic
-    /// Jacobian, for the system's Jacobian and for finite differences.
-    #[test]
-    fn jacobian_products_and_dense_jacobians_agree() {
-        let ctx = Cx::default();
-        let y = [2.0, 300.0, 40.0];
-        let v = [0.3, -1.0, 2.0];
-        let mut exact = faer::Mat::<f64>::zeros(3, 3);
-        Orego.jacobian(0.0, &y, exact.as_mut());
-        let jv: Vec<f64> = (0..3)
-            .map(|i| (0..3).map(|j| exact[(i, j)] * v[j]).sum())
-            .collect();
-        let (yv, vv) = (Vd::from_slice(&y, ctx), Vd::from_slice(&v, ctx));
-        for fd in [false, true] {
-            let mut out = Vd::zeros(3, ctx);
-            let mut dense = <Md as Matrix>::zeros(3, 3, ctx);
-            let (prod, jac) = if fd {
-                let op = rhs_op(&OregoFd);
-                op.jac_mul_inplace(&yv, 0.0, &vv, &mut out);
-                op.jacobian_inplace(&yv, 0.0, &mut dense);
-                // one product: f(y) and f(y + εv); one Jacobian: f(y) and 3 columns
-                assert_eq!(op.counts.borrow().rhs_evals, 2 + 4);
-                assert_eq!(op.counts.borrow().jac_evals, 1);
-                (
-                    out.inner().as_slice().to_vec(),
-                    dense.inner().as_slice().to_vec(),
-                )
-            } else {
-                let op = rhs_op(&Orego);
-                op.jac_mul_inplace(&yv, 0.0, &vv, &mut out);
-                op.jacobian_inplace(&yv, 0.0, &mut dense);
-                assert_eq!(op.counts.borrow().rhs_evals, 0);
-                assert_eq!(op.counts.borrow().jac_evals, 2);
-                (
-                    out.inner().as_slice().to_vec(),
-                    dense.inner().as_slice().to_vec(),
-                )
-            };
-            // Forward differences: relative error ~√ε·(curvature) ≲ 1e-6 of the row scale.
-            let tol = if fd { 1e-5 } else { 1e-12 };
-            for i in 0..3 {
-                let scale = jv[i].abs().max(77.27 * 300.0 * 1e-3);
-                assert!((prod[i] - jv[i]).abs() < tol * scale, "fd {fd}: J v [{i}]");
-                for j in 0..3 {
-                    let e = exact[(i, j)];
-                    // column-major dense storage
-                    let d = jac[i + 3 * j];
-                    assert!(
-                        (d - e).abs() < tol * e.abs().max(1.0),
-                        "fd {fd}: J[{i},{j}] {d} vs {e}"
-                    );
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -199,11 +199,19 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
             config = opts.configure(0)?;
         }
         let opts = &opts;
-        crate::memory::check_method(opts.method, sys.dim(), opts.max_memory)
-            .map_err(SolveError::OutOfMemory)?;
+        // diffsol's methods check their own matrices: dense or sparse (crate::linear_algebra).
         let diffsol = match &config {
-            Config::Diffsol(c) => Some(DiffsolProblem::new(sys, c)?),
-            _ => None,
+            Config::Diffsol(c) => Some(DiffsolProblem::new(
+                sys,
+                c,
+                opts.linear_algebra,
+                opts.max_memory,
+            )?),
+            _ => {
+                crate::memory::check_method(opts.method, sys.dim(), opts.max_memory)
+                    .map_err(SolveError::OutOfMemory)?;
+                None
+            }
         };
         Ok(Problem {
             sys,

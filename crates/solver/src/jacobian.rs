@@ -101,6 +101,11 @@ impl Colouring {
         self.groups.len()
     }
 
+    /// For each column, the rows where it may be nonzero.
+    pub fn pattern(&self) -> &[Vec<usize>] {
+        &self.pattern
+    }
+
     /// The columns of each colour.
     pub fn groups(&self) -> &[Vec<usize>] {
         &self.groups
@@ -198,6 +203,45 @@ impl JacobianEvaluator {
                 stats.rhs_evals += c.groups.len();
             }
         }
+        stats.jac_evals += 1;
+    }
+
+    /// Forward-difference Jacobian at (t, y) into the values of a compressed-column matrix
+    /// (column j's rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, its entries the same range of
+    /// `values`), one RHS evaluation per colour of `colouring`, whose pattern must hold every
+    /// entry of the matrix's; `f0` must hold f(t, y). O(colours · cost(f) + nnz) work and no
+    /// n × n storage: the Jacobian of diffsol's sparse path (crate::linear_algebra). The
+    /// increments and the columns of each colour are those of
+    /// [`JacobianEvaluator::finite_difference`] with the same pattern.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sparse_difference<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        y: &[f64],
+        f0: &[f64],
+        colouring: &Colouring,
+        (col_ptr, row_idx): (&[usize], &[usize]),
+        values: &mut [f64],
+        stats: &mut Stats,
+    ) {
+        self.ytmp.copy_from_slice(y);
+        for group in &colouring.groups {
+            for &j in group {
+                self.deltas[j] = increment(y[j], self.scale[j]);
+                self.ytmp[j] = y[j] + self.deltas[j];
+            }
+            sys.rhs(t, &self.ytmp, &mut self.ftmp);
+            for &j in group {
+                self.ytmp[j] = y[j];
+                let inv = 1.0 / self.deltas[j];
+                for k in col_ptr[j]..col_ptr[j + 1] {
+                    let i = row_idx[k];
+                    values[k] = (self.ftmp[i] - f0[i]) * inv;
+                }
+            }
+        }
+        stats.rhs_evals += colouring.groups.len();
         stats.jac_evals += 1;
     }
 

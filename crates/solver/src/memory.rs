@@ -23,6 +23,19 @@
 //! (∂f/∂y, the LU and faer's scratch of the factorisation; counted as 3), the explicit methods
 //! and RK4 0.
 //!
+//! The sparse path of diffsol's methods (crate::linear_algebra) stores no n × n matrix: its
+//! need is counted per entry of the pattern of ∂f/∂y (nnz) and of the Newton matrix
+//! (nnz + n, with the diagonal), [`sparse_bytes`]:
+//!
+//! ```text
+//! need = SPARSE_BYTES_PER_ENTRY · (nnz + n)      (SPARSE_BYTES_PER_ENTRY = 80)
+//!        the pattern and its colouring (8), ∂f/∂y in compressed columns (16), the Newton
+//!        matrix (16), its LU factors with up to as many entries again of fill (32), faer's
+//!        scratch and diffsol's vectors (8)
+//! ```
+//! Fill beyond that (a pattern whose LU fills in) is not foreseen by the estimate; the
+//! patterns of mechanisms are block diagonal, whose LU has no fill.
+//!
 //! Source: issue 23 ("No process death on memory"); proc(5) for the files read.
 
 use std::fmt;
@@ -180,6 +193,32 @@ pub fn check_method(method: Method, n: usize, max_memory: Option<u64>) -> Result
     )
 }
 
+/// Bytes per entry of the sparse path's estimate (module doc).
+pub const SPARSE_BYTES_PER_ENTRY: u64 = 80;
+
+/// The sparse path's need for a system of dimension `n` whose ∂f/∂y pattern has `nnz`
+/// entries (module doc), saturating.
+pub fn sparse_bytes(n: usize, nnz: usize) -> u64 {
+    (nnz as u64)
+        .saturating_add(n as u64)
+        .saturating_mul(SPARSE_BYTES_PER_ENTRY)
+}
+
+/// Checks the sparse matrices of `method` (one of diffsol's) for a system of dimension `n`
+/// with `nnz` entries in its Jacobian's pattern against the budget.
+pub fn check_sparse(
+    method: Method,
+    n: usize,
+    nnz: usize,
+    max_memory: Option<u64>,
+) -> Result<(), MemoryError> {
+    check(
+        sparse_bytes(n, nnz),
+        || format!("{method}'s sparse Jacobian and LU ({nnz} entries, n = {n})"),
+        max_memory,
+    )
+}
+
 /// An r × c matrix of zeros, or a [`MemoryError`] when the allocator refuses it (instead of
 /// faer's panic).
 pub fn try_zeros(r: usize, c: usize) -> Result<Mat<f64>, MemoryError> {
@@ -271,6 +310,19 @@ mod tests {
         assert_eq!(e.basis, "max_memory");
         let msg = e.to_string();
         assert!(msg.contains("bdf") && msg.contains("320.000 kB"), "{msg}");
+    }
+
+    #[test]
+    fn the_sparse_need_grows_with_the_entries_not_with_n_squared() {
+        // 3 000 free bodies: n = 18 000, 6 × 6 blocks, nnz = 36 n = 648 000:
+        // 80 · (648 000 + 18 000) bytes = 53.28 MB, against 4 · 8 · 18 000² = 10.4 GB dense.
+        assert_eq!(sparse_bytes(18_000, 648_000), 53_280_000);
+        assert!(check_sparse(Method::Bdf, 18_000, 648_000, Some(53_280_000)).is_ok());
+        let e = check_sparse(Method::Bdf, 18_000, 648_000, Some(53_279_999)).unwrap_err();
+        assert_eq!((e.needed, e.budget), (53_280_000, 53_279_999));
+        assert!(e.to_string().contains("648000 entries"), "{e}");
+        assert!(check_method(Method::Bdf, 18_000, Some(1 << 30)).is_err());
+        assert_eq!(sparse_bytes(usize::MAX, usize::MAX), u64::MAX);
     }
 
     #[test]

@@ -25,6 +25,11 @@ impl OdeSystem for Mechanism {
         crate::jacobian::jacobian(self, t, y, jac);
     }
 
+    /// Block diagonal over the clusters of bodies (crate::jacobian); None for one cluster.
+    fn jacobian_sparsity(&self) -> Option<Vec<Vec<usize>>> {
+        self.sparsity()
+    }
+
     fn has_time_derivative(&self) -> bool {
         self.formulation.has_time_derivative()
     }

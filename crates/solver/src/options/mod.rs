@@ -152,6 +152,11 @@ pub struct SolverOptions {
     /// half of the memory available to the process ([`crate::memory`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_memory: Option<u64>,
+    /// Dense or sparse matrices for diffsol's implicit methods
+    /// ([`crate::linear_algebra::LinearAlgebra`]). Default `auto`: sparse for large systems
+    /// that give a sparse Jacobian pattern. Ignored by the other methods.
+    #[serde(skip_serializing_if = "crate::linear_algebra::LinearAlgebra::is_auto")]
+    pub linear_algebra: crate::linear_algebra::LinearAlgebra,
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
@@ -184,6 +189,7 @@ impl Default for SolverOptions {
             event_samples: 4,
             max_wall_time: None,
             max_memory: None,
+            linear_algebra: Default::default(),
             divergence_bound: 1e100,
             rk4_instability_steps: 0,
         }

@@ -148,6 +148,11 @@ impl Minimal {
         }
     }
 
+    /// The spanning tree (its bodies' coordinates in θ).
+    pub(crate) fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
     /// The closing joints' constraints (None on a tree).
     pub(crate) fn loops(&self) -> Option<&Loops> {
         self.loops.as_ref()
