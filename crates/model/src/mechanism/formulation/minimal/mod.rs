@@ -137,6 +137,12 @@ impl Minimal {
         }
     }
 
+    /// Whether every ideal joint is a tree joint (no joint closes a loop): the positions then
+    /// meet every constraint by construction.
+    pub(crate) fn closes_no_loop(&self) -> bool {
+        self.tree.closing.is_empty()
+    }
+
     /// Number of coordinates θ.
     pub(crate) fn n(&self) -> usize {
         self.tree.n
