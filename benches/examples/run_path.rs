@@ -14,7 +14,9 @@
 //! --library   instead: the library run with the run's options (`lash_benches::run_options`,
 //!             dense output on the 2001-point grid of the second revolution) and the
 //!             hand-written diffsol bdf at rtol 3.2e-10 (4 states), alternately, the minimum
-//!             of each, their counters and the cost per step: the loop to `perf record`
+//!             of each, their counters and the cost per step, and a digest of the library
+//!             run's sampled accelerations (bit for bit comparisons of builds): the loop to
+//!             `perf record`
 //! ```
 
 use std::time::Instant;
@@ -129,11 +131,16 @@ fn library_loop(
     let hand_rtol = 3.2e-10;
     let (mut best_lib, mut best_hand) = (f64::INFINITY, f64::INFINITY);
     let (mut lib_stats, mut hand_counts) = (None, (0, 0));
+    let mut digest = 0u64;
     for _ in 0..reps {
         let s = lash_benches::sample(&m, m.t_start() + 2.0 * per, &o, &times)
             .expect("the library run succeeds");
         best_lib = best_lib.min(s.wall);
         lib_stats = Some(s.stats);
+        // FNV-1a of the sampled accelerations' bits: equal digests, equal results.
+        digest = s.slider_a.iter().fold(0xcbf2_9ce4_8422_2325, |h, v| {
+            (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        });
         let h = diffsol_bdf(
             &hand,
             m.t_start(),
@@ -158,6 +165,7 @@ fn library_loop(
         st.jac_evals,
         best_lib * 1e6 / st.accepted as f64
     );
+    println!("  digest of the sampled slider accelerations' bits: {digest:016x}");
     println!(
         "hand-written diffsol bdf rtol {hand_rtol:.1e}: {:.3} ms, {} steps, {} RHS, {:.3} µs/step",
         best_hand * 1e3,
