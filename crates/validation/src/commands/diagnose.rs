@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use lash_solver::SolverOptions;
+use lash_solver::{Method, SolverOptions};
 
 use crate::commands::default_out;
 use crate::diagnostics::poincare::{self, PoincareResult, PoincareSettings};
@@ -15,6 +15,7 @@ use crate::error::Error;
 use crate::options::SolverChoice;
 use crate::progress::Progress;
 use crate::run::case::Case;
+use crate::run::mechanism::paper_formulation;
 use crate::run::prepare::Prepared;
 use crate::store::io::Written;
 
@@ -64,7 +65,17 @@ pub fn stiffness(
 ) -> Result<Written<StiffnessResult>, Error> {
     let case = Case::load(&o.case, None)?;
     o.solver.apply(&SolverOptions::default())?;
-    let prepared = Prepared::load(case)?;
+    let mut prepared = Prepared::load(case)?;
+    // The analysis predicts and measures RK4's limit, so it analyses the formulation
+    // `lash run --method rk4` integrates: on a scene whose formulation is `auto` that is the
+    // paper's lagrange_baumgarte (`paper_formulation`), for the reference run too, whatever its
+    // method; a scene that names its formulation is analysed in it.
+    if let Some(s) = prepared.scene() {
+        let f = paper_formulation(s, Method::Rk4).formulation;
+        if f != s.formulation {
+            prepared = prepared.with_formulation(f)?;
+        }
+    }
     let opts = prepared.options(&o.solver)?;
     prepared.t_span(o.t_end)?;
     let out = o

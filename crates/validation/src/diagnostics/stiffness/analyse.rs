@@ -70,10 +70,12 @@ pub(crate) fn analyse(
     let rk4_base = |guess: f64| -> Result<SolverOptions, Error> {
         p.options_for(Method::Rk4, None, Some(guess), None)
     };
+    let mut formulation = None;
     let (sampled, measurement, analytic) = match &p.model {
         Model::Mechanism(scene) => {
             let build = || Mechanism::from_scene(scene).map_err(|e| scene_error(&p.case, e));
             let mech = build()?;
+            formulation = Some(mech.formulation_name().to_string());
             let sampler = Sampler::new(&mech, scene);
             let y0 = mech.initial_state();
             let angle = |t: f64, y: &[f64]| sampler.sample(t, y).crank_angle;
@@ -121,7 +123,8 @@ pub(crate) fn analyse(
             (sampled, m, sys.has_jacobian())
         }
     };
-    let report = build_report(p, opts, settings, t_span, &sampled, measurement, analytic)?;
+    let mut report = build_report(p, opts, settings, t_span, &sampled, measurement, analytic)?;
+    report.formulation = formulation;
     Ok(StiffnessResult {
         report,
         points: sampled.points,

@@ -57,6 +57,10 @@ pub(crate) struct StiffnessReport {
     /// Case and settings (the keys of summary.json).
     #[serde(flatten)]
     pub run: RunHeader,
+    /// The formulation analysed (a mechanism case; null for a test problem): the one
+    /// `lash run --method rk4` integrates, so `lagrange_baumgarte` on a scene whose
+    /// formulation is `auto`.
+    pub formulation: Option<String>,
     /// Start of the run, s.
     pub t_start: f64,
     /// End of the run, s.
@@ -202,6 +206,7 @@ pub(crate) fn build_report(
     };
     Ok(StiffnessReport {
         run: RunHeader::new(&p.case, opts),
+        formulation: None,
         t_start: t_span.0,
         t_end: t_span.1,
         samples: pts.len(),
@@ -298,8 +303,12 @@ impl StiffnessReport {
     /// The lines `lash stiffness` prints: the two limits and the verdict.
     pub(crate) fn describe(&self) -> String {
         let mut s = format!(
-            "{}: {} samples over [{}, {}] s, {} reference run: {} steps, median {:.3e} s\n",
+            "{}{}: {} samples over [{}, {}] s, {} reference run: {} steps, median {:.3e} s\n",
             self.run.case,
+            self.formulation
+                .as_deref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default(),
             self.samples,
             self.t_start,
             self.t_end,

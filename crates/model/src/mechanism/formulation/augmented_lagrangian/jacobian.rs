@@ -29,11 +29,13 @@
 //! ∂c/∂q̇_j   = 2 φ̇_i (w · A s)  [φ̇_i, point terms]                     − 2ξω Φ_q[:, j]
 //! ```
 
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::MatMut;
 
 use crate::linalg::{block_cholesky_inv, cholesky_solve, first_order_jacobian_frame};
 use crate::mechanism::accepted::PIVOT_MIN;
 use crate::mechanism::constraints::Constraints;
+use crate::mechanism::formulation::augmented_lagrangian::core::{AlCore, SparseRows};
 use crate::mechanism::formulation::augmented_lagrangian::{AugmentedLagrangian, Work};
 use crate::mechanism::scratch::Scratch;
 
@@ -107,6 +109,7 @@ impl AugmentedLagrangian {
             });
         let mut z = vec![0.0; nq];
         let mut ac = vec![0.0; m];
+        let mut batch = (direct && m >= BATCHED_MIN_CONSTRAINTS).then(|| Batch::new(&tmat, nq, m));
         for j in 0..n {
             let (qj, vel) = (j % nq, j >= nq);
             let (body_i, comp) = (qj / 3, qj % 3);
@@ -137,6 +140,13 @@ impl AugmentedLagrangian {
             if f.iter().all(|&v| v == 0.0) && c.iter().all(|&v| v == 0.0) {
                 continue;
             }
+            if let Some(b) = batch.as_mut() {
+                b.push(j, &f, &c);
+                if b.cols.len() == BATCH_COLUMNS {
+                    b.flush(core, rows, &bmat, alpha, &mut jac);
+                }
+                continue;
+            }
             if direct {
                 z.copy_from_slice(&f);
                 for (v, &ci) in ac.iter_mut().zip(&c) {
@@ -163,5 +173,129 @@ impl AugmentedLagrangian {
                 jac[(nq + i, j)] = x[i];
             }
         }
+        if let Some(b) = batch.as_mut() {
+            b.flush(core, rows, &bmat, alpha, &mut jac);
+        }
+    }
+}
+
+/// From this many constraint rows on, the direct solve takes its columns in batches of
+/// `BATCH_COLUMNS` through dense level-3 kernels (faer's triangular solves and matrix product)
+/// instead of one column at a time: the per-column solve with T (m²) and the product with B
+/// (n_q m) are the Jacobian's whole cost on a long chain (a 500-link chain, m = 1000: 73 % of
+/// its first step in one Jacobian), and the level-3 kernels run them several times faster.
+/// Below it (every case in cases/, A02 N = 40 included: m ≤ 242) the columns are solved one
+/// at a time as before, bit for bit.
+pub(crate) const BATCHED_MIN_CONSTRAINTS: usize = 256;
+
+/// Columns per batch of the direct solve.
+const BATCH_COLUMNS: usize = 64;
+
+/// The columns of one batch of the direct solve (module doc): z = A⁻¹(∂f + αΦ_qᵀ∂c) one column
+/// at a time (banded solves), then ∂λ = T⁻¹(Φ_q z − ∂c) and ∂q̈ = z − B ∂λ for the whole batch.
+struct Batch {
+    /// The factor L of T (lower triangular; T = L Lᵀ).
+    l: faer::Mat<f64>,
+    /// z of each column (n_q × k).
+    z: faer::Mat<f64>,
+    /// Φ_q z − ∂c of each column, then ∂λ (m × k).
+    r: faer::Mat<f64>,
+    /// The Jacobian's column of each batch column.
+    cols: Vec<usize>,
+    /// αc and Φ_q z of one column.
+    ac: Vec<f64>,
+    pz: Vec<f64>,
+}
+
+impl Batch {
+    /// A batch for the factor left by `block_cholesky_inv` in `tmat` (strict lower triangle of
+    /// L, 1/L_jj on the diagonal).
+    fn new(tmat: &[f64], nq: usize, m: usize) -> Batch {
+        let l = faer::Mat::from_fn(m, m, |i, j| match j.cmp(&i) {
+            std::cmp::Ordering::Less => tmat[i * m + j],
+            std::cmp::Ordering::Equal => 1.0 / tmat[i * m + i],
+            std::cmp::Ordering::Greater => 0.0,
+        });
+        Batch {
+            l,
+            z: faer::Mat::zeros(nq, BATCH_COLUMNS),
+            r: faer::Mat::zeros(m, BATCH_COLUMNS),
+            cols: Vec::with_capacity(BATCH_COLUMNS),
+            ac: vec![0.0; m],
+            pz: vec![0.0; m],
+        }
+    }
+
+    /// Adds column `j` with ∂f = `f`, ∂c = `c`; keeps ∂c in `r` until the flush.
+    fn push(&mut self, j: usize, f: &[f64], c: &[f64]) {
+        let k = self.cols.len();
+        self.cols.push(j);
+        self.z
+            .col_mut(k)
+            .iter_mut()
+            .zip(f)
+            .for_each(|(z, &v)| *z = v);
+        self.r
+            .col_mut(k)
+            .iter_mut()
+            .zip(c)
+            .for_each(|(r, &v)| *r = v);
+    }
+
+    /// Solves the batch and writes its columns into the lower rows of `jac`.
+    fn flush(
+        &mut self,
+        core: &AlCore,
+        rows: &SparseRows,
+        bmat: &[f64],
+        alpha: f64,
+        jac: &mut MatMut<'_, f64>,
+    ) {
+        let k = self.cols.len();
+        if k == 0 {
+            return;
+        }
+        let (nq, m) = (self.z.nrows(), self.r.nrows());
+        let mut z = vec![0.0; nq];
+        for b in 0..k {
+            for (a, v) in self.ac.iter_mut().enumerate() {
+                *v = alpha * self.r[(a, b)];
+            }
+            z.iter_mut()
+                .zip(self.z.col(b).iter())
+                .for_each(|(d, &s)| *d = s);
+            rows.mul_t_add(&self.ac, &mut z);
+            core.apply_inverse(&mut z);
+            rows.mul(&z, &mut self.pz);
+            for a in 0..m {
+                self.r[(a, b)] = self.pz[a] - self.r[(a, b)];
+            }
+            self.z
+                .col_mut(b)
+                .iter_mut()
+                .zip(&z)
+                .for_each(|(d, &s)| *d = s);
+        }
+        let par = faer::Par::Seq;
+        let mut r = self.r.as_mut().subcols_mut(0, k);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            self.l.as_ref(),
+            r.rb_mut(),
+            par,
+        );
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            self.l.transpose(),
+            r.rb_mut(),
+            par,
+        );
+        let bref = faer::MatRef::from_column_major_slice(bmat, nq, m);
+        let mut zk = self.z.as_mut().subcols_mut(0, k);
+        faer::linalg::matmul::matmul(zk.rb_mut(), faer::Accum::Add, bref, r.rb(), -1.0, par);
+        for (b, &j) in self.cols.iter().enumerate() {
+            for i in 0..nq {
+                jac[(nq + i, j)] = zk[(i, b)];
+            }
+        }
+        self.cols.clear();
     }
 }
