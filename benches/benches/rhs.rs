@@ -7,9 +7,9 @@
 //! ```
 //! Also the mechanism's Jacobian ∂f/∂y at the contact state (what Rodas5P and BDF call), and
 //! group `formulation`: the right-hand side and the Jacobian of each formulation
-//! (docs/model.md §12) on the dry press at its contact state and on IFToMM A02 (N = 1, 40) at
-//! its initial state (`minimal` refuses A02's loops): the Jacobian's cost in right-hand sides
-//! is the ratio of the two.
+//! (docs/model.md §12) on the dry press at its contact state and on IFToMM A02 (N = 1, 40) and
+//! Andrews' mechanism at their initial states (`minimal` with its loop closures on the last
+//! three): the Jacobian's cost in right-hand sides is the ratio of the two.
 
 // criterion_group! defines an undocumented public function.
 #![allow(missing_docs)]
@@ -72,6 +72,13 @@ fn formulation(c: &mut Criterion) {
         let y0 = Mechanism::from_scene(&scene).unwrap().initial_state();
         cases.push((if n == 1 { "a02_n1" } else { "a02_n40" }, scene, 0.0, y0));
     }
+    let andrews = lash_model::Scene::from_path(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../cases/andrews/andrews.json"
+    ))
+    .unwrap();
+    let y0 = Mechanism::from_scene(&andrews).unwrap().initial_state();
+    cases.push(("andrews", andrews, 0.0, y0));
     for (name, scene, t, y) in cases {
         for f in FormulationName::ALL {
             let mut s = scene.clone();

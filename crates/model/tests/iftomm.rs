@@ -8,9 +8,12 @@
 //! A01 pendulum     the bob at (l cos θ, l sin θ) within 1e-6 m; energy drift < 1e-8
 //! parallel cranks  every crank angle within 1e-6 rad of θ (redundant: rank 11 of 12)
 //! ```
+//! The same targets hold under the minimal formulation with its loop closures (joint
+//! coordinates on the spanning tree, the closing joints enforced by the augmented Lagrangian
+//! on the reduced system: minimal/loops.rs), whose state is the tree's coordinates only.
 
 use lash_model::iftomm::{n_four_bar, parallel_cranks, simple_pendulum, OneDof};
-use lash_model::{FormulationName, Mechanism, Scene};
+use lash_model::{FormulationName, FormulationStats, Mechanism, Scene};
 use lash_solver::{solve, Atol, Method, SolveError, SolverOptions};
 
 struct Run {
@@ -19,11 +22,24 @@ struct Run {
     poses: Vec<Vec<[f64; 3]>>,
     energy: Vec<f64>,
     violation: f64,
+    /// Length of the state.
+    dim: usize,
+    /// The formulation's iteration statistics.
+    stats: Option<FormulationStats>,
 }
 
 fn run(scene: &Scene, method: Method, rtol: f64) -> Result<Run, String> {
+    run_as(scene, FormulationName::AugmentedLagrangian, method, rtol)
+}
+
+fn run_as(
+    scene: &Scene,
+    formulation: FormulationName,
+    method: Method,
+    rtol: f64,
+) -> Result<Run, String> {
     let mut scene = scene.clone();
-    scene.formulation = FormulationName::AugmentedLagrangian;
+    scene.formulation = formulation;
     let m = Mechanism::from_scene(&scene).map_err(|e| e.to_string())?;
     let y0 = m.initial_state();
     let opts = SolverOptions {
@@ -39,6 +55,8 @@ fn run(scene: &Scene, method: Method, rtol: f64) -> Result<Run, String> {
         poses: Vec::new(),
         energy: Vec::new(),
         violation: 0.0,
+        dim: y0.len(),
+        stats: None,
     };
     for k in 0..sol.len() {
         let o = m.outputs(sol.t[k], sol.state(k));
@@ -47,6 +65,7 @@ fn run(scene: &Scene, method: Method, rtol: f64) -> Result<Run, String> {
         out.energy.push(o.kinetic_energy + o.potential_energy);
         out.violation = out.violation.max(o.constraint_violation);
     }
+    out.stats = m.formulation_stats();
     Ok(out)
 }
 
@@ -80,8 +99,12 @@ fn check_crank_tip(r: &Run, reference: &OneDof, tip: f64) -> (f64, f64) {
 /// A02 over `t_end` at rtol 1e-10: B0 within 1e-6 m of the reference, energy drift below
 /// 1e-8, no parallelogram flipped.
 fn a02_meets_its_targets(n: usize, t_end: f64) {
+    a02_meets_its_targets_as(FormulationName::AugmentedLagrangian, n, t_end);
+}
+
+fn a02_meets_its_targets_as(formulation: FormulationName, n: usize, t_end: f64) -> Run {
     let (scene, reference) = n_four_bar(n, t_end);
-    let r = run(&scene, Method::Dop853, 1e-10).unwrap();
+    let r = run_as(&scene, formulation, Method::Dop853, 1e-10).unwrap();
     let (err, drift) = check_crank_tip(&r, &reference, 1.0);
     eprintln!("A02 N = {n}, {t_end} s: B0 error {err:.3e} m, energy drift {drift:.3e}");
     assert!(err < 1e-6, "N = {n}: B0 error {err:e}");
@@ -93,6 +116,7 @@ fn a02_meets_its_targets(n: usize, t_end: f64) {
             assert!(angle_err(p[2 * i][2], p[0][2]) < 1e-5);
         }
     }
+    r
 }
 
 #[test]
@@ -115,6 +139,12 @@ fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
     // 20 s as published, through about 15 singular positions; Lagrange–Baumgarte ends at
     // the first in a typed error (lagrange_baumgarte_stops_at_the_first_singular_configuration;
     // before that check it stalled or, with bdf, flipped to the anti-parallelogram).
+    every_adaptive_method_keeps_the_branch(FormulationName::AugmentedLagrangian);
+}
+
+/// A02 N = 1 over 20 s at rtol 1e-8 under `formulation` with every adaptive method: exit 0,
+/// the cranks never π apart, B0 within 1e-2 m of the reference.
+fn every_adaptive_method_keeps_the_branch(formulation: FormulationName) {
     let (scene, reference) = n_four_bar(1, 20.0);
     for method in [
         Method::Dop853,
@@ -126,9 +156,10 @@ fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
         Method::Bs32,
         Method::Esdirk34,
     ] {
-        let r = run(&scene, method, 1e-8).unwrap_or_else(|e| panic!("{method:?}: {e}"));
+        let r = run_as(&scene, formulation, method, 1e-8)
+            .unwrap_or_else(|e| panic!("{formulation:?} {method:?}: {e}"));
         let (err, _) = check_crank_tip(&r, &reference, 1.0);
-        eprintln!("A02 N = 1, {method:?}: B0 error {err:.3e} m");
+        eprintln!("A02 N = 1, {formulation:?} {method:?}: B0 error {err:.3e} m");
         // No branch switch: the anti-parallelogram puts the cranks π apart.
         for p in &r.poses {
             assert!(
@@ -139,7 +170,8 @@ fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
             );
         }
         // A branch switch is about 1 m off; at rtol 1e-8 over 20 s the global error of the
-        // methods is 2e-7 (dopri54) to 3.2e-3 (bs32, third order).
+        // methods is 2e-7 (dopri54) to 3.2e-3 (bs32, third order) under the augmented
+        // Lagrangian, 1e-8 (tsit54) to 4.6e-3 (esdirk34) under minimal.
         assert!(err < 1e-2, "{method:?}: B0 error {err:e}");
     }
 }
@@ -259,4 +291,67 @@ fn contradictory_constraints_are_refused_naming_the_joints() {
     assert!(msg.contains("joints["), "{msg}");
     // The equations left unmet are those of the loop through the moved pin.
     assert!(msg.contains("ground2") || msg.contains("bar2"), "{msg}");
+}
+
+#[test]
+fn minimal_with_loop_closures_meets_the_a02_targets() {
+    // The A02 targets above (B0 within 1e-6 m of the 1-DOF reference at rtol 1e-10, energy
+    // drift below 1e-8, violation below 1e-6, no parallelogram flipped) under the minimal
+    // formulation: the 2N + 1 rods are a tree of 2N + 1 angles from the ground pins, and the
+    // N joints of the last crank's windows close the loops (2N rows on the reduced system).
+    for n in [1, 2] {
+        let r = a02_meets_its_targets_as(FormulationName::Minimal, n, 20.0);
+        // The state holds the tree's coordinates only: 2N + 1 angles and their rates (the
+        // augmented Lagrangian's holds 3 (2N + 1) coordinates and their rates).
+        assert_eq!(r.dim, 2 * (2 * n + 1), "N = {n}");
+        // The closures iterate as the augmented Lagrangian does and report it: every
+        // evaluation runs the iteration and its refinement (core.rs, `AlCore::refine`), each
+        // at least two iterates (its convergence test compares two).
+        let s = r.stats.expect("minimal with loops reports its iterations");
+        eprintln!("A02 N = {n} minimal: {s:?}");
+        assert!(
+            s.evaluations > 0 && s.iterations >= 4 * s.evaluations,
+            "{s:?}"
+        );
+    }
+}
+
+#[test]
+fn minimal_with_loop_closures_runs_the_redundant_parallel_cranks() {
+    // Three cranks and a bar: a tree of 4 angles, and the bar's pins on cranks 2 and 3 close
+    // two loops with 4 rows of rank 3 (redundant), which the augmented Lagrangian's
+    // iteration takes on the reduced system as it does on the absolute one.
+    let (scene, reference) = parallel_cranks(5.0);
+    let r = run_as(&scene, FormulationName::Minimal, Method::Dop853, 1e-10).unwrap();
+    assert_eq!(r.dim, 2 * 4);
+    let refs = reference.solve(&r.t);
+    let mut err = 0.0f64;
+    for (p, th) in r.poses.iter().zip(&refs) {
+        for crank in &p[..3] {
+            err = err.max(angle_err(crank[2], th[0]));
+        }
+    }
+    eprintln!("parallel cranks, minimal: crank angle error {err:.3e} rad");
+    assert!(err < 1e-6, "{err:e}");
+}
+
+#[test]
+fn minimal_refuses_contradictory_closures_naming_the_joints() {
+    // The scene of contradictory_constraints_are_refused_naming_the_joints under minimal: the
+    // closures are checked at assembly as the augmented Lagrangian's constraints are.
+    let (scene, _) = parallel_cranks(1.0);
+    let mut text = serde_json::to_value(&scene).unwrap();
+    text["joints"][2]["b"]["at"] = serde_json::json!([5.0, 0.0]);
+    text["formulation"] = serde_json::json!("minimal");
+    let bad = Scene::from_json_str(&text.to_string()).unwrap();
+    let msg = Mechanism::from_scene(&bad).unwrap_err().to_string();
+    assert!(msg.contains("contradictory"), "{msg}");
+    assert!(msg.contains("joints["), "{msg}");
+    assert!(msg.contains("ground2") || msg.contains("bar2"), "{msg}");
+}
+
+#[test]
+fn minimal_with_loop_closures_keeps_the_branch_with_every_adaptive_method() {
+    // The test above under minimal: 20 s through about 15 singular positions at rtol 1e-8.
+    every_adaptive_method_keeps_the_branch(FormulationName::Minimal);
 }

@@ -1,11 +1,11 @@
 //! The minimal (joint-coordinate) formulation (docs/model.md §12): the same motion as
 //! Lagrange–Baumgarte on the trees of the examples, the energy of a conservative scene kept,
-//! the Jacobian against differences of f, and a loop refused with the joints named.
+//! and the Jacobian against differences of f (loop closures: tests/minimal_loops.rs).
 mod common;
 use common::{richardson, worst_row_error};
 use faer::Mat;
 use lash_model::cases::{press_scene, PressJoint};
-use lash_model::{FormulationName, Mechanism, Scene, SceneError};
+use lash_model::{FormulationName, Mechanism, Scene};
 use lash_solver::{solve, Atol, Method, OdeSystem, Output, SolverOptions};
 use serde_json::json;
 
@@ -241,23 +241,6 @@ fn minimal_jacobian_matches_differences_of_f() {
             .unwrap()
             .y_final;
         check(&m, t1, &y, 1e-7, name);
-    }
-}
-
-/// A scene whose ideal joints close a loop (IFToMM A02, N = 1: a parallelogram) is refused by
-/// the minimal formulation with a scene error at the joint that closes it, naming the joints
-/// outside the tree.
-#[test]
-fn a_loop_is_refused_naming_its_joints() {
-    let (mut scene, _) = lash_model::iftomm::n_four_bar(1, 1.0);
-    scene.formulation = FormulationName::Minimal;
-    match Mechanism::from_scene(&scene) {
-        Err(SceneError::Invalid { path, reason }) => {
-            assert!(path.starts_with("joints["), "{path}");
-            assert!(reason.contains("closes a kinematic loop"), "{reason}");
-            assert!(reason.contains("augmented_lagrangian"), "{reason}");
-        }
-        other => panic!("expected a scene error, got {other:?}"),
     }
 }
 

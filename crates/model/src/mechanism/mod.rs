@@ -169,7 +169,8 @@ impl Mechanism {
 
     /// The iteration statistics of the formulation since the mechanism was built or the last
     /// [`Mechanism::reset_formulation_stats`]; None for one that does not iterate
-    /// (`lagrange_baumgarte`).
+    /// (`lagrange_baumgarte`, `minimal` on a tree; `minimal` with loop closures iterates on
+    /// them).
     pub fn formulation_stats(&self) -> Option<FormulationStats> {
         self.formulation.stats()
     }

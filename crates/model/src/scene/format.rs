@@ -70,7 +70,8 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "FormulationName::is_default")]
     pub formulation: FormulationName,
     /// The augmented Lagrangian's parameters (read when `formulation` is
-    /// `augmented_lagrangian`). Defaults: [`AugmentedLagrangianParams::default`].
+    /// `augmented_lagrangian`, and by `minimal`'s loop closures). Defaults:
+    /// [`AugmentedLagrangianParams::default`].
     #[serde(
         default,
         skip_serializing_if = "AugmentedLagrangianParams::is_default",
@@ -99,8 +100,8 @@ pub enum FormulationName {
     /// singular configurations and with redundant constraints.
     AugmentedLagrangian,
     /// Joint coordinates on the spanning tree of the ideal joints (docs/model.md §12): the
-    /// state is the degrees of freedom only; a scene whose ideal joints close a loop is
-    /// refused.
+    /// state is the tree's coordinates only; the joints that close a loop are kept as
+    /// constraints on the reduced system, enforced by the augmented Lagrangian.
     Minimal,
     /// The cheapest formulation that is correct for the scene (docs/model.md §12): `minimal`
     /// for a tree of at most [`FormulationName::AUTO_MINIMAL_MAX_DOF`] degrees of freedom,
@@ -161,7 +162,8 @@ impl fmt::Display for FormulationName {
     }
 }
 
-/// Parameters of the augmented Lagrangian formulation (docs/model.md §12).
+/// Parameters of the augmented Lagrangian formulation (docs/model.md §12), also those of the
+/// minimal formulation's loop closures (the same equations on the reduced system).
 ///
 /// ```text
 /// (M + Φ_qᵀ α Φ_q) q̈ = Q − Φ_qᵀ λ* + Φ_qᵀ α (γ − 2ξω Φ̇ − ω² Φ),

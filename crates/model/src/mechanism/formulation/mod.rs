@@ -49,11 +49,11 @@
 //! clearance joints, the force elements or the outputs.
 //!
 //! `lagrange_baumgarte`, `augmented_lagrangian` and `minimal` (minimal/: joint
-//! coordinates on the spanning tree of the ideal joints, trees only) exist today; the
-//! augmented Lagrangian's core (augmented_lagrangian/core.rs) works on any (M, Φ_q, c), a
-//! reduced system's included (the door for minimal's loop closures, not built). The scene's
-//! `auto` (the default) is resolved to one of them in
-//! `Mechanism::from_scene`.
+//! coordinates on the spanning tree of the ideal joints, the joints that close loops kept as
+//! constraints on the reduced system: minimal/loops.rs) exist today; the augmented
+//! Lagrangian's core (augmented_lagrangian/core.rs) and the columns of its Jacobian
+//! (augmented_lagrangian/columns.rs) work on any (M, Φ_q, c) and serve both. The scene's
+//! `auto` (the default) is resolved to one of them in `Mechanism::from_scene`.
 
 pub(crate) mod augmented_lagrangian;
 pub(crate) mod lagrange_baumgarte;
@@ -174,16 +174,18 @@ impl Formulation {
         }
     }
 
-    /// Whether [`Formulation::time_derivative`] gives ∂ẏ/∂t: minimal only. The others keep
+    /// Whether [`Formulation::time_derivative`] gives ∂ẏ/∂t: minimal on a tree only (with
+    /// loop closures, whose drivers' rows enter through t, it is left to the integrator as
+    /// for the augmented Lagrangian). The others keep
     /// the integrator's central difference in t, well conditioned there (time enters
     /// through the driver rows and the prescribed bodies' joints, not through the bodies the
     /// stiff forces act on).
     pub(crate) fn has_time_derivative(&self) -> bool {
-        matches!(self, Formulation::Minimal(_))
+        matches!(self, Formulation::Minimal(f) if f.loops().is_none())
     }
 
-    /// ∂ẏ/∂t at fixed y after an evaluation at (t, y), given ∂g/∂(q, q̇) (minimal only:
-    /// minimal/jacobian.rs); false (nothing written) for the others.
+    /// ∂ẏ/∂t at fixed y after an evaluation at (t, y), given ∂g/∂(q, q̇) (minimal on a tree
+    /// only: minimal/jacobian.rs); false (nothing written) for the others.
     pub(crate) fn time_derivative(
         &self,
         bodies: &Bodies,
@@ -194,7 +196,7 @@ impl Formulation {
         out: &mut [f64],
     ) -> bool {
         match self {
-            Formulation::Minimal(f) => {
+            Formulation::Minimal(f) if f.loops().is_none() => {
                 f.time_derivative(bodies, forces, t, sc, dg, out);
                 true
             }
@@ -231,23 +233,33 @@ impl Formulation {
         match self {
             // The tree's rows have full rank by construction (each link's rows hold the
             // identity in its own body's coordinates); the reactions' normal equations need it.
-            Formulation::LagrangeBaumgarte(_) | Formulation::Minimal(_) => true,
+            // Loop closures are enforced by the augmented Lagrangian: no rank condition.
+            Formulation::LagrangeBaumgarte(_) => true,
+            Formulation::Minimal(f) => f.loops().is_none(),
             Formulation::AugmentedLagrangian(_) => false,
         }
     }
 
-    /// Iteration statistics (None for a formulation that does not iterate).
+    /// Iteration statistics (None for a formulation that does not iterate: Lagrange–
+    /// Baumgarte, minimal on a tree).
     pub(crate) fn stats(&self) -> Option<FormulationStats> {
         match self {
-            Formulation::LagrangeBaumgarte(_) | Formulation::Minimal(_) => None,
+            Formulation::LagrangeBaumgarte(_) => None,
+            Formulation::Minimal(f) => f.loops().map(|l| l.stats()),
             Formulation::AugmentedLagrangian(f) => Some(f.stats()),
         }
     }
 
     /// Sets the iteration statistics back to zero.
     pub(crate) fn reset_stats(&self) {
-        if let Formulation::AugmentedLagrangian(f) = self {
-            f.reset_stats();
+        match self {
+            Formulation::AugmentedLagrangian(f) => f.reset_stats(),
+            Formulation::Minimal(f) => {
+                if let Some(l) = f.loops() {
+                    l.reset_stats();
+                }
+            }
+            Formulation::LagrangeBaumgarte(_) => {}
         }
     }
 

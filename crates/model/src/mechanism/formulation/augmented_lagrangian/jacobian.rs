@@ -6,17 +6,10 @@
 //! differentiated in y_j:    M ∂q̈ + Φ_qᵀ ∂λ = ∂Q/∂y_j − (∂Φ_q/∂y_j)ᵀ λ
 //!                           Φ_q ∂q̈ = ∂c/∂y_j − (∂Φ_q/∂y_j) q̈
 //! ```
-//! a system of the same form. Where Φ_q has full row rank it is solved directly, every column
-//! with the factor of A = M + Φ_qᵀαΦ_q and one m × m Cholesky factor (the exact solution the
-//! iteration converges to):
-//! ```text
-//! B = A⁻¹ Φ_qᵀ (m solves),  T = Φ_q B = S (I + αS)⁻¹, S = Φ_q M⁻¹ Φ_qᵀ   (SPD)
-//! per column:  z = A⁻¹ (∂f + αΦ_qᵀ ∂c),  T ∂λ = Φ_q z − ∂c,  ∂q̈ = z − B ∂λ
-//! ```
-//! (A ∂q̈ = ∂f − Φ_qᵀ∂λ + αΦ_qᵀΦ_q∂q̈ with Φ_q∂q̈ = ∂c.) When T has a relative Cholesky pivot
-//! below `mechanism::accepted::PIVOT_MIN` (a singular configuration, redundant rows) the
-//! columns are solved by the same multiplier iteration as a right-hand side (core.rs) from
-//! ∂λ = 0, column by column. Where Φ_q has full row rank
+//! a system of the same form, solved column by column by columns.rs (directly with
+//! B = A⁻¹Φ_qᵀ and the factor of T = Φ_q B where Φ_q has full row rank, else by the
+//! multiplier iteration; from `BATCHED_MIN_CONSTRAINTS` rows on, the direct solve's columns in
+//! batches, below). Where Φ_q has full row rank
 //! this is the derivative of the Lagrange–Baumgarte q̈ with (α_B, β_B) = (ξω, ω)
 //! (crates/model/src/mechanism/formulation/lagrange_baumgarte/jacobian.rs has the same closed
 //! forms); where it has not, the derivative of the q̈ the iteration converges to.
@@ -32,9 +25,9 @@
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::MatMut;
 
-use crate::linalg::{block_cholesky_inv, cholesky_solve, first_order_jacobian_frame};
-use crate::mechanism::accepted::PIVOT_MIN;
+use crate::linalg::first_order_jacobian_frame;
 use crate::mechanism::constraints::Constraints;
+use crate::mechanism::formulation::augmented_lagrangian::columns::KktColumns;
 use crate::mechanism::formulation::augmented_lagrangian::core::{AlCore, SparseRows};
 use crate::mechanism::formulation::augmented_lagrangian::{AugmentedLagrangian, Work};
 use crate::mechanism::scratch::Scratch;
@@ -77,39 +70,11 @@ impl AugmentedLagrangian {
         let mut c = vec![0.0; m];
         let mut dl = vec![0.0; m];
         let mut x = vec![0.0; nq];
-        // The direct solve where Φ_q has full row rank: B (nq × m, column-major) and the
-        // factor of T.
+        // B and the factor of T where Φ_q has full row rank (columns.rs).
+        let mut kkt = KktColumns::new(core, rows, nq);
         let alpha = core.alpha;
-        let mut bmat = vec![0.0; nq * m];
-        for a in 0..m {
-            let col = &mut bmat[a * nq..(a + 1) * nq];
-            for e in rows.start[a]..rows.start[a + 1] {
-                col[rows.col[e]] += rows.val[e];
-            }
-            core.apply_inverse(col);
-        }
-        let mut tmat = vec![0.0; m * m];
-        for a in 0..m {
-            for b in 0..=a {
-                let col = &bmat[b * nq..(b + 1) * nq];
-                let mut v = 0.0;
-                for e in rows.start[a]..rows.start[a + 1] {
-                    v += rows.val[e] * col[rows.col[e]];
-                }
-                tmat[a * m + b] = v;
-            }
-        }
-        let diag: Vec<f64> = (0..m).map(|a| tmat[a * m + a]).collect();
-        let all: Vec<usize> = (0..m).collect();
-        let direct = m > 0
-            && block_cholesky_inv(&mut tmat, m, &all).is_ok()
-            && (0..m).all(|a| {
-                let l = tmat[a * m + a];
-                1.0 / (l * l) >= PIVOT_MIN * diag[a]
-            });
-        let mut z = vec![0.0; nq];
-        let mut ac = vec![0.0; m];
-        let mut batch = (direct && m >= BATCHED_MIN_CONSTRAINTS).then(|| Batch::new(&tmat, nq, m));
+        let mut batch =
+            (kkt.direct() && m >= BATCHED_MIN_CONSTRAINTS).then(|| Batch::new(kkt.tmat(), nq, m));
         for j in 0..n {
             let (qj, vel) = (j % nq, j >= nq);
             let (body_i, comp) = (qj / 3, qj % 3);
@@ -143,38 +108,17 @@ impl AugmentedLagrangian {
             if let Some(b) = batch.as_mut() {
                 b.push(j, &f, &c);
                 if b.cols.len() == BATCH_COLUMNS {
-                    b.flush(core, rows, &bmat, alpha, &mut jac);
+                    b.flush(core, rows, kkt.bmat(), alpha, &mut jac);
                 }
                 continue;
             }
-            if direct {
-                z.copy_from_slice(&f);
-                for (v, &ci) in ac.iter_mut().zip(&c) {
-                    *v = alpha * ci;
-                }
-                rows.mul_t_add(&ac, &mut z);
-                core.apply_inverse(&mut z);
-                rows.mul(&z, &mut dl);
-                for (d, &ci) in dl.iter_mut().zip(&c) {
-                    *d -= ci;
-                }
-                cholesky_solve(&tmat, m, &mut dl);
-                x.copy_from_slice(&z);
-                for (a, &da) in dl.iter().enumerate() {
-                    for (xi, &bi) in x.iter_mut().zip(&bmat[a * nq..(a + 1) * nq]) {
-                        *xi -= bi * da;
-                    }
-                }
-            } else {
-                dl.iter_mut().for_each(|v| *v = 0.0);
-                core.solve(rows, &f, &c, &mut dl, &mut x);
-            }
+            kkt.solve(core, rows, &f, &c, &mut dl, &mut x);
             for i in 0..nq {
                 jac[(nq + i, j)] = x[i];
             }
         }
         if let Some(b) = batch.as_mut() {
-            b.flush(core, rows, &bmat, alpha, &mut jac);
+            b.flush(core, rows, kkt.bmat(), alpha, &mut jac);
         }
     }
 }

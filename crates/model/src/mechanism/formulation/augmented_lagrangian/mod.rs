@@ -27,6 +27,7 @@
 //! Sources: Bayo & Ledesma, Nonlinear Dynamics 9 (1996) 113–130; García de Jalón & Bayo,
 //! Kinematic and Dynamic Simulation of Multibody Systems (1994), §5.3.
 
+pub(crate) mod columns;
 pub(crate) mod core;
 mod jacobian;
 
@@ -38,7 +39,7 @@ use crate::mechanism::scratch::Scratch;
 use crate::scene::error::SceneError;
 use crate::scene::format::{AugmentedLagrangianParams, Scene};
 
-use self::core::{AlCore, Mass, SparseRows};
+use self::core::{AlCore, Iterations, Mass, SparseRows};
 
 /// Iteration statistics of a formulation that iterates (the augmented Lagrangian), summed
 /// over every evaluation since the mechanism was built (or [`crate::Mechanism::reset_formulation_stats`]).
@@ -53,6 +54,32 @@ pub struct FormulationStats {
     pub max_iterations: u64,
     /// Evaluations that stopped at `max_iterations` before the tolerance.
     pub unconverged: u64,
+}
+
+impl FormulationStats {
+    /// Counts one acceleration solve that took `it`.
+    pub(crate) fn record(&mut self, it: Iterations) {
+        self.evaluations += 1;
+        self.iterations += it.count as u64;
+        self.max_iterations = self.max_iterations.max(it.count as u64);
+        self.unconverged += u64::from(!it.converged);
+    }
+}
+
+/// α = penalty · (mean mass of the integrated bodies): the scale that makes αΦ_qᵀΦ_q
+/// comparable with M (the reasons for the default penalty: `AugmentedLagrangianParams`). A
+/// reduced system's loop closures (minimal/loops.rs) use the same α: there a row of Φ_θ
+/// has the units of Φ_q times a length, and so has M̄ = RᵀMR against M, which leaves the
+/// ratio of αΦ_θᵀΦ_θ to M̄ that of αΦ_qᵀΦ_q to M.
+pub(crate) fn penalty_alpha(bodies: &Bodies, params: &AugmentedLagrangianParams) -> f64 {
+    let nb = bodies.int_bodies.len().max(1);
+    let mean_mass = bodies
+        .int_bodies
+        .iter()
+        .map(|&k| bodies.info[k].mass)
+        .sum::<f64>()
+        / nb as f64;
+    params.penalty * mean_mass
 }
 
 /// The buffers of one evaluation.
@@ -112,20 +139,13 @@ impl AugmentedLagrangian {
     ) -> Self {
         let nq = bodies.nq();
         let mass: Vec<f64> = bodies.inverse_masses().iter().map(|v| 1.0 / v).collect();
-        let nb = bodies.int_bodies.len().max(1);
-        let mean_mass = bodies
-            .int_bodies
-            .iter()
-            .map(|&k| bodies.info[k].mass)
-            .sum::<f64>()
-            / nb as f64;
         let rows = pattern(cons);
         let m = cons.len();
         let core = AlCore::new(
             nq,
             false,
             &rows,
-            params.penalty * mean_mass,
+            penalty_alpha(bodies, &params),
             params.tol,
             params.max_iterations,
         );
@@ -205,10 +225,7 @@ impl AugmentedLagrangian {
         lam.iter_mut().for_each(|v| *v = 0.0);
         let it = core.solve(rows, &sc.g[..self.nq], c, lam, &mut sc.qdd[..self.nq]);
         let mut s = self.stats.get();
-        s.evaluations += 1;
-        s.iterations += it.count as u64;
-        s.max_iterations = s.max_iterations.max(it.count as u64);
-        s.unconverged += u64::from(!it.converged);
+        s.record(it);
         self.stats.set(s);
         sc.qdd[..self.nq].iter().all(|v| v.is_finite())
     }

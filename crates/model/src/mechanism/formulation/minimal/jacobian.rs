@@ -12,7 +12,8 @@
 //! is taken by central differences of the recursive kinematics (tree.rs), step
 //! h = 6e-6 (1 + |y_j|) ≈ ε^(1/3) scale, error O(h²) ≈ 1e-10 relative. One Jacobian costs the
 //! forces' ∂g plus 4n passes of the tree's kinematics and n + n solves with the factor of
-//! Rᵀ M R.
+//! Rᵀ M R. With loop closures (loops.rs) ρ also carries −Φ_θᵀλ*, the closing rows' σ is
+//! differenced alongside, and each column solves the differentiated KKT system instead.
 //!
 //! ∂f/∂t ([`Minimal::time_derivative`]) is given too, for Rosenbrock methods: time moves the
 //! prescribed bodies and, at fixed (θ, θ̇), everything that hangs from them, so f_t carries
@@ -90,6 +91,13 @@ impl Minimal {
         zeroed(dq, 2 * nq);
         zeroed(dgq, nq);
         zeroed(col, n);
+        // Loop closures (loops.rs): σ at the perturbed states, and the columns' KKT solve.
+        let ml = self.loops.as_ref().map_or(0, |l| l.len());
+        let mut sig = [vec![0.0; ml], vec![0.0; ml]];
+        let mut dsig = vec![0.0; ml];
+        if let Some(l) = &self.loops {
+            l.start_jacobian();
+        }
         for j in 0..2 * n {
             let h = 6e-6 * (1.0 + y[j].abs());
             let mut hs = [0.0; 2];
@@ -115,6 +123,9 @@ impl Minimal {
                         s += ra[i] * (sc.g[i] - self.mass[i] * qddp[i]);
                     }
                     *out = s;
+                }
+                if let Some(l) = &self.loops {
+                    l.perturbed(w.t, s2, r, qddp, &mut rho[side], &mut sig[side]);
                 }
             }
             yp[j] = y[j];
@@ -143,7 +154,15 @@ impl Minimal {
                 let s: f64 = ra.iter().zip(dgq.iter()).map(|(x, y)| x * y).sum();
                 *out = s + (rho[0][a] - rho[1][a]) / hh;
             }
-            cholesky_solve(&w.mr, n, col);
+            match &self.loops {
+                None => cholesky_solve(&w.mr, n, col),
+                Some(l) => {
+                    for (d, (p, m)) in dsig.iter_mut().zip(sig[0].iter().zip(&sig[1])) {
+                        *d = (p - m) / hh;
+                    }
+                    l.column(col, &dsig);
+                }
+            }
             for (a, &v) in col.iter().enumerate() {
                 jac[(n + a, j)] = v;
             }

@@ -9,18 +9,21 @@
 //! ```
 //! Clearance joints and force elements are forces (Q), so the press, the pendulum and the
 //! clearance four-bar are trees: their ideal joints are satisfied by construction (the
-//! constraint violation is rounding), and the state holds the degrees of freedom only. A joint
-//! that closes a loop (or a driver of an integrated body) is refused with a scene error
-//! naming it; `auto` sends such a scene to the augmented Lagrangian.
+//! constraint violation is rounding), and the state holds the degrees of freedom only. The
+//! joints that close a loop (and drivers of integrated bodies) are kept as constraints on the
+//! reduced system, enforced by the augmented Lagrangian (loops.rs):
+//! (M̄ + Φ_θᵀαΦ_θ) θ̈ = Q̄ − Φ_θᵀλ* + Φ_θᵀαc̄ with M̄ = RᵀMR, Q̄ = Rᵀ(Q − M a_c), Φ_θ = Φ_q R.
 //!
 //! The constraint forces (outputs: the driver torques of prescribed bodies) are the
 //! multipliers of the ideal joints, Φ_qᵀ λ = Q − M q̈, solved by the normal equations in full
-//! evaluations only (Φ_q has full row rank on a tree).
+//! evaluations only (Φ_q has full row rank on a tree); with loops, the closing rows'
+//! multipliers are the iteration's λ* and the tree's rows take Q − M q̈ − Φ_closingᵀλ*.
 //!
 //! R is dense (n_q × n) and Rᵀ M R is factored densely: O(n_q n²) per right-hand side, which
 //! is why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
 
 mod jacobian;
+pub(crate) mod loops;
 pub(crate) mod tree;
 
 use std::cell::RefCell;
@@ -30,8 +33,9 @@ use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::{describe, eval_row, Constraints};
 use crate::mechanism::scratch::Scratch;
 use crate::scene::error::SceneError;
-use crate::scene::format::Scene;
+use crate::scene::format::{AugmentedLagrangianParams, Scene};
 
+use self::loops::Loops;
 use self::tree::{Link, Tree};
 
 /// The buffers of one evaluation.
@@ -81,34 +85,40 @@ pub(crate) struct Minimal {
     mass: Vec<f64>,
     work: RefCell<Work>,
     jac_work: RefCell<JacWork>,
+    /// The closing joints' constraints (None on a tree).
+    loops: Option<Loops>,
 }
 
 impl Minimal {
-    /// The tree of `scene`'s ideal joints; an error naming the joints that close a loop.
+    /// The tree of `scene`'s ideal joints, its closing joints kept as constraints (loops.rs).
+    /// (Contradictory closures are refused at assembly, naming the joints.)
     pub(crate) fn new(
         scene: &Scene,
         cons: &Constraints,
         bodies: &Bodies,
     ) -> Result<Self, SceneError> {
         let tree = Tree::build(scene, bodies);
-        if let Some(&first) = tree.closing.first() {
-            let names: Vec<String> = tree
-                .closing
-                .iter()
-                .map(|&j| format!("'{}'", scene.joints[j].name()))
-                .collect();
-            return Err(SceneError::Invalid {
-                path: format!("joints[{first}]"),
-                reason: format!(
-                    "{} closes a kinematic loop (joints outside the spanning tree of the ideal \
-                     joints: {}): the minimal formulation takes trees only; use \
-                     \"augmented_lagrangian\" or \"auto\"",
-                    scene.joints[first],
-                    names.join(", ")
-                ),
-            });
+        Ok(Minimal::with_loops(
+            tree,
+            cons,
+            bodies,
+            &scene.augmented_lagrangian,
+        ))
+    }
+
+    /// The formulation on `tree`, its closing joints (if any) kept as constraints enforced
+    /// with the augmented Lagrangian's `params`.
+    pub(crate) fn with_loops(
+        tree: Tree,
+        cons: &Constraints,
+        bodies: &Bodies,
+        params: &AugmentedLagrangianParams,
+    ) -> Self {
+        let loops = Loops::new(&tree.closing, cons, bodies, tree.n, params);
+        Minimal {
+            loops,
+            ..Minimal::on_tree(tree, cons, bodies)
         }
-        Ok(Minimal::on_tree(tree, cons, bodies))
     }
 
     /// The formulation on a tree without closing joints.
@@ -134,6 +144,7 @@ impl Minimal {
                 term_jac: vec![[[0.0; 3]; 2]; m],
             }),
             jac_work: RefCell::default(),
+            loops: None,
         }
     }
 
@@ -141,6 +152,11 @@ impl Minimal {
     /// meet every constraint by construction.
     pub(crate) fn closes_no_loop(&self) -> bool {
         self.tree.closing.is_empty()
+    }
+
+    /// The closing joints' constraints (None on a tree).
+    pub(crate) fn loops(&self) -> Option<&Loops> {
+        self.loops.as_ref()
     }
 
     /// Number of coordinates θ.
@@ -183,6 +199,12 @@ impl Minimal {
 
     /// R, a_c and Rᵀ M R (factored) at the kinematics of `sc`; Err(j): pivot j not positive.
     fn factor(&self, w: &mut Work, sc: &Scratch) -> Result<(), usize> {
+        self.reduced_mass(w, sc);
+        factor_unrolled(&mut w.mr, self.tree.n, &w.all)
+    }
+
+    /// R, a_c and Rᵀ M R (lower triangle, not factored) at the kinematics of `sc`.
+    fn reduced_mass(&self, w: &mut Work, sc: &Scratch) {
         let (nq, n) = (self.nq, self.tree.n);
         self.tree.velocity_matrix(sc, nq, &mut w.r);
         self.tree.accelerations(sc, None, &mut w.ac);
@@ -197,7 +219,6 @@ impl Minimal {
                 w.mr[i * n + j] = s;
             }
         }
-        factor_unrolled(&mut w.mr, n, &w.all)
     }
 
     /// θ̈ (kept) and q̈ = R θ̈ + a_c into `sc.qdd` from the applied forces `sc.g`; in full
@@ -214,7 +235,9 @@ impl Minimal {
         let (nq, n) = (self.nq, self.tree.n);
         let mut guard = self.work.borrow_mut();
         let w = &mut *guard;
-        if self.factor(w, sc).is_err() {
+        if self.loops.is_some() {
+            self.reduced_mass(w, sc);
+        } else if self.factor(w, sc).is_err() {
             return false;
         }
         // Rᵀ (Q − M a_c).
@@ -226,7 +249,14 @@ impl Minimal {
             }
             w.thdd[j] = s;
         }
-        solve_unrolled(&w.mr, n, &mut w.thdd);
+        match &self.loops {
+            None => solve_unrolled(&w.mr, n, &mut w.thdd),
+            Some(l) => {
+                if !l.solve(t, sc, &w.r, &w.ac, &w.mr, &mut w.thdd) {
+                    return false;
+                }
+            }
+        }
         let qdd = &mut sc.qdd[..nq];
         qdd.copy_from_slice(&w.ac);
         for (j, &a) in w.thdd.iter().enumerate() {
@@ -268,11 +298,30 @@ impl Minimal {
                 }
             }
         }
-        let fc: Vec<f64> = (0..nq)
+        let mut fc: Vec<f64> = (0..nq)
             .map(|i| sc.g[i] - self.mass[i] * sc.qdd[i])
             .collect();
+        // With loops: the closing rows' multipliers are λ*, the tree's rows take the rest
+        // (their rows of the normal equations decoupled from the closing rows').
+        let mut closing = vec![false; m];
+        if let Some(l) = &self.loops {
+            let mut fl = vec![0.0; nq];
+            l.closing_forces(&mut fl, &mut w.phi, &mut w.term_jac, &mut w.lam);
+            for (f, v) in fc.iter_mut().zip(&fl) {
+                *f -= v;
+            }
+            for &r in &l.index {
+                closing[r] = true;
+                jd[r * nq..(r + 1) * nq].fill(0.0);
+            }
+        }
+        let lam_closing = w.lam.clone();
         let mut nm = vec![0.0; m * m];
         for a in 0..m {
+            if closing[a] {
+                nm[a * m + a] = 1.0;
+                continue;
+            }
             let ja = &jd[a * nq..(a + 1) * nq];
             w.lam[a] = ja.iter().zip(&fc).map(|(x, y)| x * y).sum();
             for b in 0..=a {
@@ -285,6 +334,11 @@ impl Minimal {
             cholesky_solve(&nm, m, &mut w.lam);
         } else {
             w.lam.iter_mut().for_each(|v| *v = f64::NAN);
+        }
+        for (a, l) in w.lam.iter_mut().enumerate() {
+            if closing[a] {
+                *l = lam_closing[a];
+            }
         }
     }
 
