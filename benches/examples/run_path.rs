@@ -11,12 +11,19 @@
 //!             press with error ≤ 1e-6 m/s², BENCHMARKS.md)
 //! prints      per repetition: run_in_memory's wall time, the integration's own (summary
 //!             wall_time_s) and the difference; then the minimum of each
+//! --library   instead: the library run with the run's options (`lash_benches::run_options`,
+//!             dense output on the 2001-point grid of the second revolution) and the
+//!             hand-written diffsol bdf at rtol 3.2e-10 (4 states), alternately, the minimum
+//!             of each, their counters and the cost per step, and a digest of the library
+//!             run's sampled accelerations (bit for bit comparisons of builds): the loop to
+//!             `perf record`
 //! ```
 
 use std::time::Instant;
 
 use lash_model::FormulationName;
 use lash_solver::Method;
+use lash_solver::OdeSystem;
 use lash_validation::{Case, RunOptions, SolverChoice};
 
 fn main() {
@@ -25,6 +32,7 @@ fn main() {
     let (mut method, mut rtol) = (Method::Bdf, 1e-10);
     let mut reps = 20;
     let mut formulation = None;
+    let mut library = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -46,8 +54,12 @@ fn main() {
                 let f = it.next().expect("--formulation takes a name");
                 formulation = Some(f.parse::<FormulationName>().expect("a formulation"));
             }
+            "--library" => library = true,
             s => stem = s.to_string(),
         }
+    }
+    if library {
+        return library_loop(&stem, method, rtol, reps, formulation);
     }
     let case = lash_benches::cases_dir().join(format!("{stem}.json"));
     let o = RunOptions {
@@ -84,5 +96,134 @@ fn main() {
         "minimum over {reps}: run_in_memory {:.3} ms, integration {:.3} ms",
         best_run * 1e3,
         best_int * 1e3
+    );
+}
+
+/// `--library`: the library run of the case at (method, rtol) with the run's options and the
+/// hand-written diffsol bdf (rtol 3.2e-10, atol 1e-3 rtol), `reps` alternating rounds.
+fn library_loop(
+    stem: &str,
+    method: Method,
+    rtol: f64,
+    reps: usize,
+    formulation: Option<FormulationName>,
+) {
+    use lash_benches::handwritten::{diffsol_bdf, HandPress};
+    let path = lash_benches::cases_dir().join(format!("{stem}.json"));
+    let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
+    scene.t_end = None;
+    scene.revolutions = Some(2.0);
+    let y_abs = {
+        let mut s = scene.clone();
+        s.formulation = FormulationName::LagrangeBaumgarte;
+        lash_model::Mechanism::from_scene(&s)
+            .expect("the scene assembles")
+            .initial_state()
+    };
+    if let Some(f) = formulation {
+        scene.formulation = f;
+    }
+    let m = lash_model::Mechanism::from_scene(&scene).expect("the scene assembles");
+    let per = lash_benches::crank_period(&m);
+    let times = lash_benches::grid(m.t_start() + per, m.t_start() + 2.0 * per, 2001);
+    let o = lash_benches::run_options(&m, method, rtol, 1e-4);
+    let hand = HandPress::paper(150.0, 1e-4, true);
+    let y0 = HandPress::minimal_state(&y_abs);
+    let hand_rtol = 3.2e-10;
+    let (mut best_lib, mut best_hand) = (f64::INFINITY, f64::INFINITY);
+    let (mut lib_stats, mut hand_counts) = (None, (0, 0));
+    let mut digest = 0u64;
+    for _ in 0..reps {
+        let s = lash_benches::sample(&m, m.t_start() + 2.0 * per, &o, &times)
+            .expect("the library run succeeds");
+        best_lib = best_lib.min(s.wall);
+        lib_stats = Some(s.stats);
+        // FNV-1a of the sampled accelerations' bits: equal digests, equal results.
+        digest = s.slider_a.iter().fold(0xcbf2_9ce4_8422_2325, |h, v| {
+            (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        });
+        let h = diffsol_bdf(
+            &hand,
+            m.t_start(),
+            y0,
+            hand_rtol,
+            [hand_rtol * 1e-3; 4],
+            &times,
+        )
+        .expect("the hand-written run succeeds");
+        best_hand = best_hand.min(h.wall);
+        hand_counts = (h.steps, h.rhs_evals);
+    }
+    // One right-hand side at the start of the second revolution (the lubricated film loaded),
+    // each side's, 100 000 calls a round, the minimum of five rounds.
+    let (t1, y_lib, y_hand) = {
+        let mut oo = o.clone();
+        oo.output = lash_solver::Output::Times(vec![times[0]]);
+        let s = lash_solver::solve(&m, (m.t_start(), times[0]), &m.initial_state(), &oo)
+            .expect("the library run succeeds");
+        let y = s.state(0).to_vec();
+        let mut oa = o.clone();
+        oa.atol = lash_solver::Atol::Scalar(1e-14);
+        let abs = {
+            let mut s2 = scene.clone();
+            s2.formulation = FormulationName::LagrangeBaumgarte;
+            lash_model::Mechanism::from_scene(&s2).expect("the scene assembles")
+        };
+        let sa = lash_solver::solve(&abs, (abs.t_start(), times[0]), &y_abs, &oa)
+            .expect("the absolute run succeeds");
+        (times[0], y, HandPress::minimal_state(sa.state(0)))
+    };
+    let (mut rhs_lib, mut rhs_hand) = (f64::INFINITY, f64::INFINITY);
+    let (mut dy, mut dh) = (vec![0.0; y_lib.len()], [0.0; 4]);
+    for _ in 0..5 {
+        let calls = 100_000;
+        let start = Instant::now();
+        for _ in 0..calls {
+            m.rhs(
+                std::hint::black_box(t1),
+                std::hint::black_box(&y_lib),
+                std::hint::black_box(&mut dy),
+            );
+        }
+        rhs_lib = rhs_lib.min(start.elapsed().as_secs_f64() / calls as f64);
+        let start = Instant::now();
+        for _ in 0..calls {
+            hand.rhs(
+                std::hint::black_box(t1),
+                std::hint::black_box(&y_hand),
+                std::hint::black_box(&mut dh),
+            );
+        }
+        rhs_hand = rhs_hand.min(start.elapsed().as_secs_f64() / calls as f64);
+    }
+    println!(
+        "one right-hand side at t = {t1:.4} s: library {:.1} ns, hand-written {:.1} ns ({:.2}×)",
+        rhs_lib * 1e9,
+        rhs_hand * 1e9,
+        rhs_lib / rhs_hand
+    );
+    let st = lib_stats.expect("reps > 0");
+    println!(
+        "library ({}, {} rtol {rtol:.1e}, the run's options): {:.3} ms, {} steps, {} RHS + {} \
+         Jacobians, {:.3} µs/step",
+        m.formulation_name(),
+        method.name(),
+        best_lib * 1e3,
+        st.accepted,
+        st.rhs_evals,
+        st.jac_evals,
+        best_lib * 1e6 / st.accepted as f64
+    );
+    println!("  digest of the sampled slider accelerations' bits: {digest:016x}");
+    println!(
+        "hand-written diffsol bdf rtol {hand_rtol:.1e}: {:.3} ms, {} steps, {} RHS, {:.3} µs/step",
+        best_hand * 1e3,
+        hand_counts.0,
+        hand_counts.1,
+        best_hand * 1e6 / hand_counts.0 as f64
+    );
+    println!(
+        "minimum over {reps} alternating rounds: library / hand-written = {:.2}×",
+        best_lib / best_hand
     );
 }

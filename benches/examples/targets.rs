@@ -48,7 +48,7 @@ use lash_benches::{
     contact_and_free_states, crank_period, grid, max_abs_diff, options, press, sample, Sampled,
 };
 use lash_model::{FormulationName, Mechanism};
-use lash_solver::{Atol, Method, OdeSystem, Output, SolverOptions};
+use lash_solver::{Method, OdeSystem, Output, SolverOptions};
 use lash_validation::{Case, NoProgress, RunOptions, SolverChoice};
 
 /// Grid points of a window (docs/outputs.md, "`metrics`").
@@ -951,25 +951,6 @@ impl RunPath<'_> {
     }
 }
 
-/// The library options of a `lash run` of a press at (method, rtol) (the engine's defaults,
-/// `crates/validation/src/run/prepare.rs`): atol rtol·c for positions and rtol·c·ω for
-/// velocities, 4 event samples, the step limit near contact T/100.
-fn run_like_options(m: &Mechanism, method: Method, rtol: f64, c: f64) -> SolverOptions {
-    let w = m.crank_speed().expect("a press has a crank").abs();
-    let n = m.dim();
-    let mut o = SolverOptions::with_method(method);
-    o.rtol = rtol;
-    o.atol = Atol::Vector(
-        (0..n)
-            .map(|k| if k < n / 2 { rtol * c } else { rtol * c * w })
-            .collect(),
-    );
-    o.event_samples = 4;
-    o.h_max_near_events = crank_period(m) / 100.0;
-    o.max_steps = 50_000_000;
-    o
-}
-
 /// (f), continued: the lubricated press through `lash run` against the hand-written run `h`,
 /// and where the time of the path goes.
 fn lubricated_through_lash_run(
@@ -1061,7 +1042,7 @@ fn path_side_by_side(
     // The hand-written press starts from the absolute state (lash's side may be minimal).
     let y0 = HandPress::minimal_state(&absolute_initial_state(path.stem));
     let lib = |o: &SolverOptions| sample(lm, path.t_end, o, times).map(|s| s.wall).ok();
-    let o_run = run_like_options(lm, method, rtol, 1e-4);
+    let o_run = lash_benches::run_options(lm, method, rtol, 1e-4);
     let mut o_blanket = o_run.clone();
     o_blanket.h_max_near_events = f64::INFINITY;
     o_blanket.h_max = per / 100.0;

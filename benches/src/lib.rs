@@ -70,6 +70,26 @@ pub fn test_options(method: Method, stem: &str) -> SolverOptions {
     options(method, 1e-6, 1e-9, step, Output::Final)
 }
 
+/// The library options of a `lash run` of a press at (method, rtol), clearance `c` (m): the
+/// engine's defaults (`crates/validation/src/run/prepare.rs`), atol rtol·c for positions and
+/// rtol·c·ω for velocities, 4 event samples, the step limit near contact T/100.
+pub fn run_options(m: &Mechanism, method: Method, rtol: f64, c: f64) -> SolverOptions {
+    use lash_solver::OdeSystem;
+    let w = m.crank_speed().expect("a press has a crank").abs();
+    let n = m.dim();
+    let mut o = SolverOptions::with_method(method);
+    o.rtol = rtol;
+    o.atol = Atol::Vector(
+        (0..n)
+            .map(|k| if k < n / 2 { rtol * c } else { rtol * c * w })
+            .collect(),
+    );
+    o.event_samples = 4;
+    o.h_max_near_events = crank_period(m) / 100.0;
+    o.max_steps = 50_000_000;
+    o
+}
+
 /// `n` equally spaced times from `a` to `b`, both included.
 pub fn grid(a: f64, b: f64, n: usize) -> Vec<f64> {
     (0..n)

@@ -849,6 +849,9 @@ fn drive<S: OdeSystem + ?Sized>(
         _ => &[],
     };
     let mut next_time = 0usize;
+    // The rows of a grid are known: no growth of the record while integrating.
+    sol.t.reserve(times.len());
+    sol.y.reserve(times.len().saturating_mul(n));
     // Output times at or before the start.
     while next_time < times.len() && times[next_time] <= t0 {
         sol.t.push(times[next_time]);

@@ -9,6 +9,7 @@
 //! budget    = max_memory when given, else SHARE · available      (SHARE = 1/2)
 //! need      = 8 · k · n² bytes for k dense n × n f64 matrices  (dense_matrices(method))
 //! need > budget  →  MemoryError { what, needed, budget, basis }
+//! need ≤ SMALL and no max_memory  →  admitted without reading the files (SMALL = 1 MiB)
 //! ```
 //!
 //! The share leaves the other half of what is free to everything that grows linearly (the
@@ -47,6 +48,14 @@ use crate::method::Method;
 /// The share of the available memory that the n² allocations of one integration may use
 /// when no `max_memory` is given.
 pub const SHARE: f64 = 0.5;
+
+/// Needs at or under this many bytes are admitted without reading the system's figures when
+/// no `max_memory` is given. Reading them (five files of /proc and /sys) took 0.16 ms per
+/// integration, 9 % of the lubricated press's bdf run under the minimal formulation
+/// (BENCHMARKS.md, "The press targets through `lash run`"), for matrices of a few hundred
+/// bytes; 1 MiB is bdf's four matrices up to n = 181, and a process with less than twice
+/// that free would not have got this far. A `max_memory` is always compared.
+pub const SMALL: u64 = 1 << 20;
 
 /// Bytes of one f64.
 const F64: u64 = 8;
@@ -169,6 +178,9 @@ pub fn check(
     what: impl FnOnce() -> String,
     max_memory: Option<u64>,
 ) -> Result<(), MemoryError> {
+    if max_memory.is_none() && needed <= SMALL {
+        return Ok(());
+    }
     match budget(max_memory) {
         Some((b, basis)) if needed > b => Err(MemoryError {
             what: what(),
@@ -323,6 +335,18 @@ mod tests {
         assert!(e.to_string().contains("648000 entries"), "{e}");
         assert!(check_method(Method::Bdf, 18_000, Some(1 << 30)).is_err());
         assert_eq!(sparse_bytes(usize::MAX, usize::MAX), u64::MAX);
+    }
+
+    #[test]
+    fn a_small_need_is_admitted_unread_but_a_max_memory_still_binds() {
+        // bdf at n = 181: 4 · 181² · 8 = 1 048 352 bytes ≤ SMALL, admitted without a budget;
+        // n = 182 (1 059 968 bytes) is over SMALL and goes through the figures again.
+        assert!(dense_bytes(181, 4) <= SMALL && dense_bytes(182, 4) > SMALL);
+        assert!(check_method(Method::Bdf, 181, None).is_ok());
+        // A max_memory is compared whatever the size: 4 · 4² · 8 = 512 bytes.
+        let e = check_method(Method::Bdf, 4, Some(511)).unwrap_err();
+        assert_eq!((e.needed, e.budget), (512, 511));
+        assert!(check_method(Method::Bdf, 4, Some(512)).is_ok());
     }
 
     #[test]

@@ -384,14 +384,18 @@ impl Revolute {
         ev
     }
 
-    /// The loads of one evaluation on the joint's bodies, in the order they are applied: the
-    /// contact pair at the contact points Q_J, Q_B (δ > 0), then the film pair at the joint
-    /// centres (lubricated). Returns them and their number.
+    /// The loads of one evaluation on the joint's bodies, handed to `apply` in the order they
+    /// are applied: the contact pair at the contact points Q_J, Q_B (δ > 0), then the film
+    /// pair at the joint centres (lubricated). (Handed over one by one: an array of them
+    /// returned was copied by memcpy in every right-hand side.)
     #[inline]
-    pub(crate) fn loads(&self, ev: &RevoluteEval, cs: &[[f64; 2]]) -> ([PointLoad; 4], usize) {
+    pub(crate) fn each_load(
+        &self,
+        ev: &RevoluteEval,
+        cs: &[[f64; 2]],
+        mut apply: impl FnMut(PointLoad),
+    ) {
         let st = &ev.st;
-        let mut out = [(0, [0.0; 2], [0.0; 2]); 4];
-        let mut n = 0;
         // Dry contact.
         if st.delta > 0.0 {
             let f_j = [
@@ -401,14 +405,12 @@ impl Revolute {
             if let Some(kj) = self.journal.body {
                 let a = rot(cs[kj], self.journal.s);
                 let arm = [a[0] + self.rj * st.n[0], a[1] + self.rj * st.n[1]];
-                out[n] = (kj, arm, f_j);
-                n += 1;
+                apply((kj, arm, f_j));
             }
             if let Some(kb) = self.bearing.body {
                 let a = rot(cs[kb], self.bearing.s);
                 let arm = [a[0] + self.rb * st.n[0], a[1] + self.rb * st.n[1]];
-                out[n] = (kb, arm, [-f_j[0], -f_j[1]]);
-                n += 1;
+                apply((kb, arm, [-f_j[0], -f_j[1]]));
             }
         }
         // Oil film.
@@ -416,15 +418,12 @@ impl Revolute {
             let (fr, ft) = (ev.f_r, ev.f_tf);
             let f_j = [fr * st.n[0] + ft * st.t[0], fr * st.n[1] + ft * st.t[1]];
             if let Some(kj) = self.journal.body {
-                out[n] = (kj, rot(cs[kj], self.journal.s), f_j);
-                n += 1;
+                apply((kj, rot(cs[kj], self.journal.s), f_j));
             }
             if let Some(kb) = self.bearing.body {
-                out[n] = (kb, rot(cs[kb], self.bearing.s), [-f_j[0], -f_j[1]]);
-                n += 1;
+                apply((kb, rot(cs[kb], self.bearing.s), [-f_j[0], -f_j[1]]));
             }
         }
-        (out, n)
     }
 
     /// The joint's event functions besides δ: ε − ε_cap when its film is capped.

@@ -244,19 +244,34 @@ impl Bodies {
     /// integrated, and (full evaluations) to its applied forces.
     #[inline]
     pub(crate) fn apply(&self, k: usize, arm: [f64; 2], f: [f64; 2], sc: &mut Scratch, full: bool) {
+        self.apply_to(k, arm, f, &mut sc.g, &mut sc.gb, full);
+    }
+
+    /// [`Bodies::apply`] into the force buffers `g` and `gb` of a scratch (the rest of it may
+    /// be borrowed meanwhile).
+    #[inline]
+    pub(crate) fn apply_to(
+        &self,
+        k: usize,
+        arm: [f64; 2],
+        f: [f64; 2],
+        g: &mut [f64],
+        gb: &mut [[f64; 3]],
+        full: bool,
+    ) {
         let mz = cross(arm, f);
         match self.info[k].owner {
             Owner::Int(i) => {
-                sc.g[3 * i] += f[0];
-                sc.g[3 * i + 1] += f[1];
-                sc.g[3 * i + 2] += mz;
+                g[3 * i] += f[0];
+                g[3 * i + 1] += f[1];
+                g[3 * i + 2] += mz;
             }
             Owner::Pres(_) => {}
         }
         if full {
-            sc.gb[k][0] += f[0];
-            sc.gb[k][1] += f[1];
-            sc.gb[k][2] += mz;
+            gb[k][0] += f[0];
+            gb[k][1] += f[1];
+            gb[k][2] += mz;
         }
     }
 

@@ -153,6 +153,12 @@ impl Minimal {
         &self.tree
     }
 
+    /// Whether every ideal joint is a tree joint (no joint closes a loop): the positions then
+    /// meet every constraint by construction.
+    pub(crate) fn closes_no_loop(&self) -> bool {
+        self.tree.closing.is_empty()
+    }
+
     /// The closing joints' constraints (None on a tree).
     pub(crate) fn loops(&self) -> Option<&Loops> {
         self.loops.as_ref()
@@ -199,7 +205,7 @@ impl Minimal {
     /// R, a_c and Rᵀ M R (factored) at the kinematics of `sc`; Err(j): pivot j not positive.
     fn factor(&self, w: &mut Work, sc: &Scratch) -> Result<(), usize> {
         self.reduced_mass(w, sc);
-        block_cholesky_inv(&mut w.mr, self.tree.n, &w.all)
+        factor_unrolled(&mut w.mr, self.tree.n, &w.all)
     }
 
     /// R, a_c and Rᵀ M R (lower triangle, not factored) at the kinematics of `sc`.
@@ -249,7 +255,7 @@ impl Minimal {
             w.thdd[j] = s;
         }
         match &self.loops {
-            None => cholesky_solve(&w.mr, n, &mut w.thdd),
+            None => solve_unrolled(&w.mr, n, &mut w.thdd),
             Some(l) => {
                 if !l.solve(t, sc, &w.r, &w.ac, &w.mr, &mut w.thdd) {
                     return false;
@@ -412,5 +418,136 @@ impl Minimal {
             });
         }
         Ok(())
+    }
+}
+
+/// [`block_cholesky_inv`] of the whole n × n matrix (blocks `all` = 0..n), unrolled for
+/// n ≤ 4: the same operations in the same order, so the same bits, without the index lists
+/// and bounds checks of the general loops (a third of the reduced right-hand side of the
+/// press, n = 2).
+#[inline]
+fn factor_unrolled(s: &mut [f64], n: usize, all: &[usize]) -> Result<(), usize> {
+    match n {
+        1 => factor_fixed::<1>(s),
+        2 => factor_fixed::<2>(s),
+        3 => factor_fixed::<3>(s),
+        4 => factor_fixed::<4>(s),
+        _ => block_cholesky_inv(s, n, all),
+    }
+}
+
+/// [`block_cholesky_inv`] with m = N and every block in order.
+#[inline(always)]
+fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
+    let s = &mut s[..N * N];
+    for j in 0..N {
+        let mut d = s[j * N + j];
+        for k in 0..j {
+            let v = s[j * N + k];
+            d -= v * v;
+        }
+        if !(d > 0.0) {
+            s[j * N + j] = d;
+            return Err(j);
+        }
+        let r = 1.0 / d.sqrt();
+        s[j * N + j] = r;
+        for i in j + 1..N {
+            let mut x = s[i * N + j];
+            for k in 0..j {
+                x -= s[i * N + k] * s[j * N + k];
+            }
+            s[i * N + j] = x * r;
+        }
+    }
+    Ok(())
+}
+
+/// [`cholesky_solve`] unrolled for n ≤ 4 (the same operations in the same order).
+#[inline]
+fn solve_unrolled(l: &[f64], n: usize, b: &mut [f64]) {
+    match n {
+        1 => solve_fixed::<1>(l, b),
+        2 => solve_fixed::<2>(l, b),
+        3 => solve_fixed::<3>(l, b),
+        4 => solve_fixed::<4>(l, b),
+        _ => cholesky_solve(l, n, b),
+    }
+}
+
+/// [`cholesky_solve`] with m = N.
+#[inline(always)]
+fn solve_fixed<const N: usize>(l: &[f64], b: &mut [f64]) {
+    let l = &l[..N * N];
+    let b = &mut b[..N];
+    for i in 0..N {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[i * N + k] * b[k];
+        }
+        b[i] = s * l[i * N + i];
+    }
+    for i in (0..N).rev() {
+        let mut s = b[i];
+        for k in i + 1..N {
+            s -= l[k * N + i] * b[k];
+        }
+        b[i] = s * l[i * N + i];
+    }
+}
+
+#[cfg(test)]
+mod unrolled_tests {
+    //! The unrolled factor and solve give the general ones' bits (n = 1…4 and a failing
+    //! pivot), on symmetric positive definite matrices with entries of mixed magnitude.
+    use super::*;
+
+    fn spd(n: usize, seed: f64) -> Vec<f64> {
+        // A Aᵀ + n I with A_ij = sin(seed (i + 1) (j + 2)) · 10^(i − j).
+        let a: Vec<f64> = (0..n * n)
+            .map(|k| {
+                let (i, j) = (k / n, k % n);
+                (seed * (i + 1) as f64 * (j + 2) as f64).sin() * 10f64.powi(i as i32 - j as i32)
+            })
+            .collect();
+        let mut s = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                s[i * n + j] = (0..n).map(|k| a[i * n + k] * a[j * n + k]).sum::<f64>()
+                    + if i == j { n as f64 } else { 0.0 };
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn the_unrolled_cholesky_gives_the_general_bits() {
+        for n in 1..=5 {
+            for seed in [0.3, 1.7, 2.9] {
+                let all: Vec<usize> = (0..n).collect();
+                let (mut a, mut b) = (spd(n, seed), spd(n, seed));
+                assert_eq!(block_cholesky_inv(&mut a, n, &all), Ok(()));
+                assert_eq!(factor_unrolled(&mut b, n, &all), Ok(()));
+                assert_eq!(bits(&a), bits(&b));
+                let rhs: Vec<f64> = (0..n).map(|i| (i as f64 + seed).cos() * 1e3).collect();
+                let (mut x, mut y) = (rhs.clone(), rhs);
+                cholesky_solve(&a, n, &mut x);
+                solve_unrolled(&b, n, &mut y);
+                assert_eq!(bits(&x), bits(&y));
+            }
+            // Not positive definite: the same failing pivot, the same pivot left in place.
+            let all: Vec<usize> = (0..n).collect();
+            let mut a = spd(n, 0.3);
+            a[(n - 1) * n + n - 1] = -1.0;
+            let mut b = a.clone();
+            let e = block_cholesky_inv(&mut a, n, &all);
+            assert_eq!(e, Err(n - 1));
+            assert_eq!(factor_unrolled(&mut b, n, &all), e);
+            assert_eq!(bits(&a), bits(&b));
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
     }
 }

@@ -63,6 +63,10 @@ pub(crate) enum Link {
         phi0: f64,
         /// The body's point on the line.
         s: [f64; 2],
+        /// (cos φ₀, sin φ₀) and A(φ₀) s, constant (computed once: the kinematics ran sin_cos
+        /// of the fixed angle at every evaluation).
+        cs0: [f64; 2],
+        a0: [f64; 2],
     },
 }
 
@@ -170,11 +174,16 @@ impl Tree {
                         let k = scene.body_index(&t.body).expect("validated");
                         (!placed[k]).then(|| {
                             let len = t.direction[0].hypot(t.direction[1]);
+                            let phi0 = t.angle.unwrap_or(scene.bodies[k].angle);
+                            let s = scene.bodies[k].points[&t.point];
+                            let (sn, co) = phi0.sin_cos();
                             let link = Link::Slider {
                                 origin: t.origin,
                                 u: [t.direction[0] / len, t.direction[1] / len],
-                                phi0: t.angle.unwrap_or(scene.bodies[k].angle),
-                                s: scene.bodies[k].points[&t.point],
+                                phi0,
+                                s,
+                                cs0: [co, sn],
+                                a0: rot([co, sn], s),
                             };
                             (k, link)
                         })
@@ -234,11 +243,16 @@ impl Tree {
                     let (s, co) = th[c + 2].sin_cos();
                     sc.cs[k] = [co, s];
                 }
-                Link::Slider { origin, u, phi0, s } => {
-                    let (sn, co) = phi0.sin_cos();
-                    let a = rot([co, sn], s);
+                Link::Slider {
+                    origin,
+                    u,
+                    phi0,
+                    cs0,
+                    a0: a,
+                    ..
+                } => {
                     let sig = th[c];
-                    sc.cs[k] = [co, sn];
+                    sc.cs[k] = cs0;
                     sc.pose[k] = [
                         origin[0] + sig * u[0] - a[0],
                         origin[1] + sig * u[1] - a[1],
