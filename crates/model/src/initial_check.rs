@@ -120,25 +120,31 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
         for i in nq..n {
             let v = jac[(i, j)];
             if !v.is_finite() {
-                let (k, what) = component(mech, i - nq, ["ẍ", "ÿ", "φ̈"]);
-                let by = if j < nq {
-                    ["x", "y", "φ"]
-                } else {
-                    ["ẋ", "ẏ", "φ̇"]
-                };
-                let (_, by) = component(mech, j % nq, by);
-                return Err(fail(
-                    format!("bodies[{k}]"),
-                    format!(
-                        "the Jacobian entry ∂({what})/∂({by}) that the implicit methods need \
-                         is {v} ({})",
-                        mech.body_info()[k].describe()
-                    ),
-                ));
+                return Err(jacobian_entry_error(mech, i, j, v));
             }
         }
     }
     Ok(())
+}
+
+/// The error of a non-finite entry `v` = ∂f_i/∂y_j of the Jacobian's lower half (i ≥ n_q):
+/// the body and the components named, for the dense and the sparse checks alike.
+fn jacobian_entry_error(mech: &Mechanism, i: usize, j: usize, v: f64) -> SceneError {
+    let nq = mech.dim() / 2;
+    let (k, what) = component(mech, i - nq, ["ẍ", "ÿ", "φ̈"]);
+    let by = if j < nq {
+        ["x", "y", "φ"]
+    } else {
+        ["ẋ", "ẏ", "φ̇"]
+    };
+    let (_, by) = component(mech, j % nq, by);
+    fail(
+        format!("bodies[{k}]"),
+        format!(
+            "the Jacobian entry ∂({what})/∂({by}) that the implicit methods need is {v} ({})",
+            mech.body_info()[k].describe()
+        ),
+    )
 }
 
 /// The Jacobian as the sparse path computes it (coloured forward differences on `pattern`,
@@ -179,21 +185,7 @@ fn check_sparse_jacobian(
         for k in col_ptr[j]..col_ptr[j + 1] {
             let (i, v) = (row_idx[k], values[k]);
             if i >= nq && !v.is_finite() {
-                let (b, what) = component(mech, i - nq, ["ẍ", "ÿ", "φ̈"]);
-                let by = if j < nq {
-                    ["x", "y", "φ"]
-                } else {
-                    ["ẋ", "ẏ", "φ̇"]
-                };
-                let (_, by) = component(mech, j % nq, by);
-                return Err(fail(
-                    format!("bodies[{b}]"),
-                    format!(
-                        "the Jacobian entry ∂({what})/∂({by}) that the implicit methods need \
-                         is {v} ({})",
-                        mech.body_info()[b].describe()
-                    ),
-                ));
+                return Err(jacobian_entry_error(mech, i, j, v));
             }
         }
     }
