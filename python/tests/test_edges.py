@@ -68,14 +68,16 @@ def memory_child(call: str) -> dict:
 
 
 def test_a_3000_body_scene_under_6_gib_raises_memory_error_not_abort():
-    # Before: "memory allocation of 2592000000 bytes failed" and SIGABRT. BDF needs four
-    # 18000 x 18000 matrices: 4 * 18000**2 * 8 = 10 368 000 000 bytes, refused up front.
-    out = memory_child(f"lash.run({free_bodies(3000)}, name='free3000')")
+    # Before: "memory allocation of 2592000000 bytes failed" and SIGABRT. BDF now takes the
+    # sparse path on 3000 free bodies (a block-diagonal Jacobian), so the dense-only Rodas5P
+    # is the one refused up front: three 18000 x 18000 matrices, 3 * 18000**2 * 8 =
+    # 7 776 000 000 bytes.
+    out = memory_child(f"lash.run({free_bodies(3000)}, method='rodas5p', name='free3000')")
     kind, is_memory, is_lash, needed, budget = out["RESULT"].split()
     assert (kind, is_memory, is_lash) == ("OutOfMemoryError", "True", "True"), out
-    assert int(needed) == 4 * 18000 ** 2 * 8
+    assert int(needed) == 3 * 18000 ** 2 * 8
     assert 0 < int(budget) <= LIMIT // 2
-    assert "bdf's dense Jacobian and LU" in out["MESSAGE"]
+    assert "rodas5p's dense Jacobian and LU" in out["MESSAGE"]
     assert "RLIMIT_AS" in out["MESSAGE"]
 
 
