@@ -328,3 +328,20 @@ fn the_memory_budget_of_the_sparse_path_counts_entries() {
         other => panic!("sparse path over budget admitted: {:?}", other.err()),
     }
 }
+
+/// A mechanism without constraint rows (free bodies) reports a constraint violation of +0 in
+/// every formulation: ‖Φ‖₂ of no rows is the empty sum, which `Iterator::sum` starts from −0
+/// (it printed "-0" in trajectory.csv and "max ‖Φ‖ -0.0e0" after `lash run`).
+#[test]
+fn no_constraint_rows_is_a_violation_of_plus_zero() {
+    for formulation in ["lagrange_baumgarte", "augmented_lagrangian", "minimal"] {
+        let v = json!({
+            "bodies": [{"name": "b", "mass": 1.0, "inertia": 0.1, "position": [0.0, 0.0],
+                        "velocity": [0.0, 1.0]}],
+            "gravity": [0.0, -9.81], "t_end": 0.01, "formulation": formulation
+        });
+        let m = Mechanism::from_scene(&Scene::from_json_str(&v.to_string()).unwrap()).unwrap();
+        let cv = m.outputs(0.0, &m.initial_state()).constraint_violation;
+        assert!(cv == 0.0 && cv.is_sign_positive(), "{formulation}: {cv:?}");
+    }
+}

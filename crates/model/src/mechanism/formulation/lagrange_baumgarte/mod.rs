@@ -386,7 +386,8 @@ impl LagrangeBaumgarte {
     /// ‖Φ(q, t)‖₂ of the last evaluation.
     pub(crate) fn constraint_violation(&self) -> f64 {
         let w = self.work.borrow();
-        w.phi.iter().map(|v| v * v).sum::<f64>().sqrt()
+        // From +0: an empty sum (no constraint rows) is +0, not `Sum`'s −0 (printed "-0").
+        w.phi.iter().fold(0.0, |a, v| a + v * v).sqrt()
     }
 }
 

@@ -374,7 +374,8 @@ impl Minimal {
     /// ‖Φ(q, t)‖₂ of the last full evaluation (rounding on a tree).
     pub(crate) fn constraint_violation(&self) -> f64 {
         let w = self.work.borrow();
-        w.phi.iter().map(|v| v * v).sum::<f64>().sqrt()
+        // From +0: an empty sum (no constraint rows) is +0, not `Sum`'s −0 (printed "-0").
+        w.phi.iter().fold(0.0, |a, v| a + v * v).sqrt()
     }
 
     /// The checks at the initial state (after the kinematics in `sc`): every constraint row
