@@ -78,6 +78,20 @@ fn max_memory_refuses_the_dense_matrices_with_exit_3() {
     assert_eq!(o.status.code(), Some(2));
 }
 
+/// `lash ARGS` in `cwd` under an address-space limit of `kib` KiB, set through the shell as a
+/// user would (`ulimit -v`).
+fn under_address_limit(cwd: &std::path::Path, kib: u64, args: &str) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {kib} && exec '{}' {args}",
+            env!("CARGO_BIN_EXE_lash")
+        ))
+        .current_dir(cwd)
+        .output()
+        .expect("run sh")
+}
+
 /// 3 000 free bodies under a 6 GiB address space: Rodas5P has only the dense path (3 matrices
 /// of 18 000 × 18 000 f64, 7.8 GB), so it is refused before allocating (exit 3), not aborted.
 #[test]
@@ -85,16 +99,7 @@ fn three_thousand_bodies_under_a_6_gib_address_space_exit_3_not_abort() {
     let d = tempfile::tempdir().unwrap();
     let cwd = d.path();
     std::fs::write(cwd.join("free3000.json"), free_bodies(3000)).unwrap();
-    // The limit through the shell, as a user would set it (ulimit -v counts KiB).
-    let o = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v 6291456 && exec '{}' run free3000.json --method rodas5p --out r",
-            env!("CARGO_BIN_EXE_lash")
-        ))
-        .current_dir(cwd)
-        .output()
-        .expect("run sh");
+    let o = under_address_limit(cwd, 6291456, "run free3000.json --method rodas5p --out r");
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{err}");
     // 3 matrices of 18000 × 18000 f64.
@@ -112,15 +117,7 @@ fn three_thousand_bodies_run_within_2_gib_on_the_sparse_path() {
     let d = tempfile::tempdir().unwrap();
     let cwd = d.path();
     std::fs::write(cwd.join("free3000.json"), free_bodies(3000)).unwrap();
-    let o = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v 2097152 && exec '{}' run free3000.json --out r",
-            env!("CARGO_BIN_EXE_lash")
-        ))
-        .current_dir(cwd)
-        .output()
-        .expect("run sh");
+    let o = under_address_limit(cwd, 2097152, "run free3000.json --out r");
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let s = json(&cwd.join("r/summary.json"));
