@@ -21,6 +21,33 @@
 //!         starting-step algorithm of HNW I §II.4 from (t*, y*))
 //! ```
 //!
+//! # Exact event steps
+//!
+//! With `exact_event_steps` (one-step methods; [`Stepper::retake`]) the state at an event
+//! is not read off the dense output of the step [t_a, t_b] that contains it: that step is
+//! taken again from t_a with h = t* − t_a, and y* is its end (`integrator/exact.rs`).
+//!
+//! ```text
+//! y* = y_a + (t* − t_a) Σ b_i k_i    stages at t_a + c_i (t* − t_a) ≤ t*: one side of the event
+//! its error norm ≤ 1  → y* and its dense output replace the step's (rows in [t_a, t*] too)
+//! its error norm > 1  → the original step is taken again (the same stages, bit for bit) and
+//!                       y* is its dense output, as without the option
+//! t* corrected by Newton's method on g along retaken steps, at most twice, where the
+//!   correction moves the state by more than the tolerance (exact.rs, refine_retaken)
+//! first step after the restart = min(fresh first step, the original step [t_a, t_b]'s length)
+//! ```
+//!
+//! Where an event function marks a point at which the right-hand side is not smooth (a
+//! contact onset, a kink of a force law: docs/model.md §7), a step across it has the
+//! local error of the smoothness there (h² at a C⁰ kink, not h^{p+1}), and so has the dense
+//! output inside it; the retaken step sees only the smooth piece before t*, and the restart
+//! only the piece after. The fresh first step alone would be a guess from ‖f‖ and one
+//! difference of f; the step of the motion just before the event is the better bound, and
+//! taking the smaller keeps the first step at most the fresh one (the argument below).
+//! A retaken step that ends a rounding short of the crossing (g* still on the old side,
+//! not moved there by the hook) keeps the crossing's sign, so the same crossing is not
+//! reported twice.
+//!
 //! Why events are never missed (at the default options): a crossing pair g: − → + → −
 //! inside one step is invisible at the step's ends. Two things prevent it. After an event
 //! the method restarts with a fresh first step, a small fraction of the local time scale
@@ -70,6 +97,8 @@
 //! point of the root finder or after a hook) ends the integration with
 //! [`SolveError::EventNan`] naming it: NaN has no sign, so skipping it could miss a crossing
 //! silently.
+
+mod exact;
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
@@ -720,10 +749,31 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         Ok(root.unwrap_or(if sign(fb) == new_sign { b } else { c }))
     }
 
-    fn handle_event(&mut self, t_ev: f64, hits: Vec<EventHit>) -> Result<StepOutcome, SolveError> {
+    fn handle_event(
+        &mut self,
+        mut t_ev: f64,
+        mut hits: Vec<EventHit>,
+    ) -> Result<StepOutcome, SolveError> {
         let n = self.ybuf.len();
         let mut y = vec![0.0; n];
-        self.stepper.interpolate(t_ev, &mut y);
+        let retaken = self.opts.exact_event_steps && self.stepper.retake(t_ev)?;
+        if retaken {
+            t_ev = self.refine_retaken(t_ev, hits[0].index)?;
+            for h in &mut hits {
+                h.t = t_ev;
+            }
+        }
+        if retaken {
+            y.copy_from_slice(self.stepper.y());
+        } else {
+            self.stepper.interpolate(t_ev, &mut y);
+        }
+        let m = self.specs.len();
+        let mut g_pre = vec![0.0; m];
+        if retaken {
+            self.sys.events(t_ev, &y, &mut g_pre);
+            self.event_evals += 1;
+        }
         let mut stop = false;
         for h in &hits {
             if self.sys.on_event(h, &mut y) == EventAction::Stop {
@@ -732,7 +782,6 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         }
         self.events += hits.len();
         // Signs after the hook (the hook may move the state across a surface).
-        let m = self.specs.len();
         let mut g = vec![0.0; m];
         if self.rates {
             self.sys.event_rates(t_ev, &y, &mut g, &mut self.gd_a);
@@ -753,7 +802,12 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         for h in &hits {
             // Record the post-crossing sign for the triggering components when g was nonzero.
             let s = sign(g[h.index]);
-            if s != 0 {
+            let post: i8 = if h.rising { 1 } else { -1 };
+            if retaken && s == -post && sign(g_pre[h.index]) != post {
+                // The retaken step ends a rounding short of the crossing (not the hook's
+                // doing): the crossing stands.
+                self.signs[h.index] = post;
+            } else if s != 0 {
                 self.signs[h.index] = s;
             }
         }

@@ -13,6 +13,8 @@
 //!   controller = the configuration's (the options' choice, else the method's default:
 //!                Method::default_controller)
 //!   h  = h0, else the starting-step algorithm (HNW I §II.4)          at t0 and after a restart
+//!        (after a restart that follows a retaken step: min(that, the retaken step's
+//!        original length); Stepper::retake, crate::integrator "Exact event steps")
 //!   loop: budgets; (h_try, lands) = landing_step(t, t_stop, h); h_try ≥ floor or fail
 //!         ε = attempt(h_try)
 //!         ε ≤ 1 → accept; t ← t_stop if lands else t + h_try; h ← clamp(controller, h_min, h_max)
@@ -93,6 +95,11 @@ pub trait OneStepMethod<S: OdeSystem + ?Sized> {
     );
     /// Forgets everything tied to the current state (a restart).
     fn reset(&mut self);
+    /// Returns to the start of the last accepted step (the driver restores t and y), keeping
+    /// what is still valid there. The default forgets everything ([`OneStepMethod::reset`]).
+    fn rewind(&mut self) {
+        self.reset();
+    }
     /// RHS evaluations made by [`OneStepMethod::interpolate`] so far (lazy dense stages),
     /// which the driver adds to its counters when they are read.
     fn lazy_rhs_evals(&self) -> usize {
@@ -130,6 +137,15 @@ pub struct OneStepDriver<'a, S: OdeSystem + ?Sized, M> {
     h_next: Option<f64>,
     /// Whether `m.start` has run for the current (t, y).
     started: bool,
+    /// The step size h of the last accepted step, as attempted (t − t_prev may differ from it
+    /// by a rounding).
+    h_step: f64,
+    /// The length of the last accepted step as first taken, when it was retaken to end on an
+    /// event ([`Stepper::retake`]); None after any other step.
+    h_taken: Option<f64>,
+    /// After a restart that follows a retaken step: that step's length as first taken, which
+    /// bounds the first step from the restart (module documentation).
+    h_before_event: Option<f64>,
     stats: Stats,
 }
 
@@ -163,6 +179,9 @@ impl<'a, S: OdeSystem + ?Sized, M: OneStepMethod<S>> OneStepDriver<'a, S, M> {
             y_prev: y0.to_vec(),
             h_next: None,
             started: false,
+            h_step: 0.0,
+            h_taken: None,
+            h_before_event: None,
             stats: Stats::default(),
         }
     }
@@ -235,7 +254,13 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
         let p_hat = self.m.error_order();
         let mut h = match self.h_next {
             Some(h) => h,
-            None => self.first_step(t_stop),
+            None => {
+                let fresh = self.first_step(t_stop);
+                match self.h_before_event.take() {
+                    Some(h_before) => fresh.min(h_before),
+                    None => fresh,
+                }
+            }
         };
         if adaptive {
             h = h.min(h_max).max(h_min);
@@ -280,6 +305,8 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
                 }
             };
             // Accepted.
+            self.h_taken = None;
+            self.h_step = h_try;
             self.t_prev = self.t;
             self.t = if lands { t_stop } else { self.t + h_try };
             std::mem::swap(&mut self.y_prev, &mut self.y);
@@ -315,6 +342,9 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
     }
 
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        // After a retaken step (an event located exactly, `retake`), the step size of the
+        // motion before the event bounds the first step after it.
+        self.h_before_event = self.h_taken.take();
         self.t = t;
         self.t_prev = t;
         self.y.copy_from_slice(y);
@@ -326,6 +356,49 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
         self.started = false;
         self.h_next = None;
         Ok(())
+    }
+
+    fn retake(&mut self, t: f64) -> Result<bool, SolveError> {
+        let (t0, h1) = (self.t_prev, self.h_step);
+        // The step as first taken bounds every retake of it.
+        let h_orig = self.h_taken.unwrap_or(h1);
+        if !(t > t0 && t < t0 + h_orig) {
+            return Ok(false);
+        }
+        // Without error control (fixed steps) the shorter step is taken as it comes.
+        let estimate = self.control.is_some();
+        self.budget.check(self.stats.steps, self.t, &self.y)?;
+        self.m.rewind();
+        self.m.start(self.sys, t0, &self.y_prev, &mut self.stats)?;
+        self.stats.steps += 1;
+        let outcome = self.m.attempt(
+            self.sys,
+            t0,
+            &self.y_prev,
+            t - t0,
+            estimate,
+            &mut self.stats,
+        );
+        if matches!(outcome, Attempt::Error(err) if err <= 1.0) {
+            self.t = t;
+            self.h_taken = Some(h_orig);
+            self.h_step = t - t0;
+            self.y.copy_from_slice(self.m.y_new());
+            self.m.accept(t - t0);
+            self.started = false;
+            return Ok(true);
+        }
+        // The shorter step fails its error test: take the last accepted one again (the same
+        // stages, bit for bit) and keep its dense output.
+        self.stats.rejected_error += 1;
+        self.stats.steps += 1;
+        let again = self
+            .m
+            .attempt(self.sys, t0, &self.y_prev, h1, estimate, &mut self.stats);
+        debug_assert!(matches!(again, Attempt::Error(err) if err <= 1.0));
+        self.m.accept(h1);
+        self.started = false;
+        Ok(false)
     }
 
     fn stats(&self) -> Stats {

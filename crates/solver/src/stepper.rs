@@ -57,6 +57,20 @@ pub trait Stepper {
     /// [`crate::Integrator`], already capped by the options' `h_max`). Fixed-step methods
     /// ignore it.
     fn set_h_max(&mut self, h_max: f64);
+    /// Takes the last accepted step again from its start, ending exactly at `t`
+    /// (t_prev < t < t_prev + the step's length as first taken, so a retaken step can be
+    /// retaken again, longer or shorter), so that the state at `t` is a step's end rather
+    /// than a point of the dense output (`exact_event_steps`, [`crate::integrator`] "Exact
+    /// event steps"). Returns true when t() = `t` afterwards, its state and dense output
+    /// those of the new step; false when the method cannot (the default: fixed-step and
+    /// diffsol's methods, and `t` outside the step) or the new step failed its error test,
+    /// the last step and its dense output then being as before. Counts one attempt, two when
+    /// the new step fails (the last one is taken again); the count of accepted steps does
+    /// not change.
+    fn retake(&mut self, t: f64) -> Result<bool, SolveError> {
+        let _ = t;
+        Ok(false)
+    }
 }
 
 /// The landing rule of every stepper: the step to try from `t` towards `t_stop` with the

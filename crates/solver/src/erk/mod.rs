@@ -361,6 +361,13 @@ impl<S: OdeSystem + ?Sized> OneStepMethod<S> for ErkMethod {
         self.dense.borrow_mut().ready = false;
     }
 
+    fn rewind(&mut self) {
+        // The last accepted step's first stage is f at its start.
+        self.f0.copy_from_slice(&self.k[0]);
+        self.f0_valid = true;
+        self.dense.borrow_mut().ready = false;
+    }
+
     fn lazy_rhs_evals(&self) -> usize {
         self.lazy_rhs.get()
     }

@@ -24,6 +24,7 @@
 //! limits                     ignored            used                        ignored
 //! adaptive = false           (always fixed)     needs h0: every step h0     rejected
 //! rk4_instability_steps      used               ignored                     ignored
+//! exact_event_steps          ignored            used                        ignored
 //! max_steps, max_wall_time, output, events, event_rtol, event_samples, divergence_bound: every method
 //! ```
 //!
@@ -157,6 +158,16 @@ pub struct SolverOptions {
     /// that give a sparse Jacobian pattern. Ignored by the other methods.
     #[serde(skip_serializing_if = "crate::linear_algebra::LinearAlgebra::is_auto")]
     pub linear_algebra: crate::linear_algebra::LinearAlgebra,
+    /// Whether an adaptive one-step method (the explicit pairs, Rodas5P) takes the step in
+    /// which an event was located again from its start, ending exactly at the event, and
+    /// restarts from that step's end instead of from the dense output there
+    /// ([`crate::integrator`], module documentation "Exact event steps"). For event functions
+    /// placed where the right-hand side is not smooth (a mechanism's contact onsets and
+    /// kinks), the state at the event and the step before it then see one smooth piece of
+    /// the right-hand side only. Costs one step attempt per event. Default false; ignored by
+    /// `rk4` and diffsol's methods; `lash` turns it on for scenes with `kink_events`.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub exact_event_steps: bool,
     /// Divergence bound: a state component larger in magnitude than this is treated as
     /// non-finite (`NonFiniteState`). Default 1e100.
     pub divergence_bound: f64,
@@ -190,6 +201,7 @@ impl Default for SolverOptions {
             max_wall_time: None,
             max_memory: None,
             linear_algebra: Default::default(),
+            exact_event_steps: false,
             divergence_bound: 1e100,
             rk4_instability_steps: 0,
         }
