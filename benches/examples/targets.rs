@@ -159,8 +159,15 @@ fn print_run(r: &Run) {
 /// estimate of the reference's own error. (DOP853 at 1e-14 is no better on the lubricated
 /// press: a million stability-bound steps there add up rounding errors of ~5e-7 m/s².)
 fn reference(m: &Mechanism, t_end: f64, times: &[f64]) -> Vec<f64> {
+    reference_with(m, t_end, times, false)
+}
+
+/// [`reference`], with `exact_event_steps` as given (q: on, as `lash run` of a scene with
+/// kink events).
+fn reference_with(m: &Mechanism, t_end: f64, times: &[f64], exact: bool) -> Vec<f64> {
     let run = |method: Method, rtol: f64| {
-        let o = options(method, rtol, rtol * 1e-3, 0.0, Output::Final);
+        let mut o = options(method, rtol, rtol * 1e-3, 0.0, Output::Final);
+        o.exact_event_steps = exact;
         let start = Instant::now();
         let s = sample(m, t_end, &o, times).expect("the reference run succeeds");
         (s.slider_a, start.elapsed().as_secs_f64())
@@ -1118,8 +1125,8 @@ fn dry_through_lash_run(ctx: &Ctx) {
     kinked.set_kink_events(true);
     let half = 0.5 * crank_period(&kinked);
     let times = grid(0.0, half, N_GRID);
-    println!("  reference with kink events:");
-    let reference = reference(&kinked, kinked.t_end(), &times);
+    println!("  reference with kink events and exact event steps:");
+    let reference = reference_with(&kinked, kinked.t_end(), &times, true);
     // The dimension `lash run` integrates: the scene's own formulation (`auto` resolves to
     // `minimal` for the press, 4 states) unless `--formulation` names one.
     let n = {

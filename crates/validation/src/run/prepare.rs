@@ -26,6 +26,11 @@
 //!                proportionality holds down to rtol = 1e-13.
 //!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
+//! exact event    on for scenes with `kink_events` (off otherwise): the step that contains an
+//!  steps         event is taken again to end exactly on it and the run restarts from that
+//!                step's end (lash_solver::integrator, "Exact event steps"), so that no step
+//!                of a one-step method spans a kink; the kink events exist for that
+//!                (docs/model.md §7)
 //! h_max          ∞
 //! step limit     h_max_near_events = T/100 (T the crank period; off without a crank driver
 //!  near contact  or without a clearance joint, where nothing can be stepped over): the
@@ -378,6 +383,7 @@ impl Prepared {
                     .atol
                     .map_or_else(|| self.default_atol(rtol), Atol::Scalar);
                 o.event_samples = DEFAULT_EVENT_SAMPLES;
+                o.exact_event_steps = self.scene().is_some_and(|s| s.kink_events);
                 o.h_max_near_events = match (i.period, i.clearance_min) {
                     (Some(t), Some(_)) => t * H_MAX_PER_PERIOD,
                     _ => f64::INFINITY,
