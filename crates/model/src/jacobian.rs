@@ -207,6 +207,97 @@ fn body_clusters(mech: &Mechanism) -> Vec<usize> {
     out
 }
 
+/// For each force node of the mechanism, the integrated bodies whose applied forces it may
+/// set or read, ascending: every force element, every joint without constraint rows (a
+/// clearance joint, a driver of a prescribed body) and every integrated body (its own
+/// forces). A node reaches the integrated bodies it names (its JSON form's strings, as
+/// [`pattern`] reads them) and, transitively, those of the joints and elements it names;
+/// never through a body (a body's name is the body, not what acts on it).
+pub(crate) fn force_reach(mech: &Mechanism) -> Vec<Vec<usize>> {
+    let scene = mech.scene();
+    let info = mech.body_info();
+    let (nb, nj) = (scene.bodies.len(), scene.joints.len());
+    let mut names: std::collections::HashMap<&str, Vec<usize>> = Default::default();
+    for (k, b) in info.iter().enumerate() {
+        if matches!(b.owner, Owner::Int(_)) {
+            names.entry(b.name.as_str()).or_default().push(k);
+        }
+    }
+    for (j, joint) in scene.joints.iter().enumerate() {
+        names.entry(joint.name()).or_default().push(nb + j);
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        names.entry(element.name()).or_default().push(nb + nj + e);
+    }
+    let named = |value: serde_json::Value| -> Vec<usize> {
+        let mut out = Vec::new();
+        let mut stack = vec![value];
+        while let Some(v) = stack.pop() {
+            match v {
+                serde_json::Value::String(s) => {
+                    out.extend(names.get(s.as_str()).into_iter().flatten());
+                }
+                serde_json::Value::Array(a) => stack.extend(a),
+                serde_json::Value::Object(o) => stack.extend(o.into_iter().map(|(_, v)| v)),
+                _ => {}
+            }
+        }
+        out
+    };
+    let json = |v: Result<serde_json::Value, serde_json::Error>| v.unwrap_or_default();
+    // Direct names of each joint and element node (indices nb.. of the node numbering).
+    let mut direct: Vec<Vec<usize>> = vec![Vec::new(); nb + nj + scene.forces.len()];
+    for (j, joint) in scene.joints.iter().enumerate() {
+        direct[nb + j] = named(json(serde_json::to_value(joint)));
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        direct[nb + nj + e] = named(json(serde_json::to_value(element)));
+    }
+    for (k, body) in scene.bodies.iter().enumerate() {
+        if matches!(info[k].owner, Owner::Int(_)) {
+            direct[k] = named(json(serde_json::to_value(body)));
+            direct[k].push(k);
+        }
+    }
+    let mut constrained = vec![false; nj];
+    for row in &mech.constraints().rows {
+        constrained[row.joint] = true;
+    }
+    let int_of = |k: usize| match info[k].owner {
+        Owner::Int(i) => Some(i),
+        Owner::Pres(_) => None,
+    };
+    let reach_of = |start: usize| -> Vec<usize> {
+        let mut seen = std::collections::HashSet::from([start]);
+        let mut stack = vec![start];
+        let mut out = Vec::new();
+        while let Some(node) = stack.pop() {
+            for &other in &direct[node] {
+                if other < nb {
+                    out.extend(int_of(other));
+                } else if seen.insert(other) {
+                    stack.push(other);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    };
+    let mut reach = Vec::new();
+    for j in (0..nj).filter(|&j| !constrained[j]) {
+        reach.push(reach_of(nb + j));
+    }
+    for e in 0..scene.forces.len() {
+        reach.push(reach_of(nb + nj + e));
+    }
+    for k in (0..nb).filter(|&k| int_of(k).is_some()) {
+        reach.push(reach_of(k));
+    }
+    reach.retain(|r| !r.is_empty());
+    reach
+}
+
 /// Disjoint sets with path halving.
 struct UnionFind(Vec<usize>);
 
