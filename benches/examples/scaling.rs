@@ -5,7 +5,7 @@
 //! ```text
 //! cargo build --release -p lash-cli
 //! cargo run --release -p lash-benches --example scaling -- [chain N…] [free N…] [clearance N…]
-//!     [crossover N…] [--lash PATH]…
+//!     [crossover N…] [kkt-crossover N…] [--lash PATH]…
 //! chain N      N pendulum links (0.1 m, 1 kg) pinned end to end, the first to the ground,
 //!              released horizontal under gravity: 2N revolute equations; --t-end 1e-3
 //! free N       N free bodies (1 kg, 0.1 kg m²) moving up under gravity, no joint; t_end 0.01
@@ -17,6 +17,9 @@
 //!              (SolverOptions::linear_algebra, lash_solver::linear_algebra), the integration
 //!              alone timed (best of 3), with the steps and LU factorisations of each: where
 //!              the sparse path starts to win (SPARSE_FROM)
+//! kkt-crossover N  the same for the `chain N` scene (one cluster, the augmented Lagrangian
+//!              by `auto`) on dense matrices and on the `kkt` path (lash_solver::kkt): where
+//!              the sparse KKT Newton starts to win (KKT_FROM)
 //! Without arguments: chain 30 100 200 300, free 100 300 1000, clearance 10 25 50. Each case
 //! is one `lash run` at default settings (method bdf) in a child process, its scene written to
 //! a temporary directory; the table gives its exit code, the wall time of the whole process,
@@ -153,14 +156,19 @@ fn measure(
     std::io::stdout().flush().ok();
 }
 
-/// The `crossover N` case (module doc): one table row.
-fn crossover(n: usize) {
+/// The `crossover N` case (module doc): one table row; `kkt`: the `kkt-crossover N` case.
+fn crossover(n: usize, kkt: bool) {
     use lash_solver::{LinearAlgebra, Method, OdeSystem, Output, Problem, SolverOptions};
-    let scene = lash_model::Scene::from_json_str(&free(n)).expect("the free-body scene");
+    let (json, other) = if kkt {
+        (chain(n, false), LinearAlgebra::Kkt)
+    } else {
+        (free(n), LinearAlgebra::Sparse)
+    };
+    let scene = lash_model::Scene::from_json_str(&json).expect("the scene");
     let mech = lash_model::Mechanism::from_scene(&scene).expect("its mechanism");
     let y0 = mech.initial_state();
     let mut row = format!("| {n} | {} |", mech.dim());
-    for la in [LinearAlgebra::Dense, LinearAlgebra::Sparse] {
+    for la in [LinearAlgebra::Dense, other] {
         let mut o = SolverOptions::with_method(Method::Bdf);
         o.output = Output::Final;
         o.linear_algebra = la;
@@ -183,14 +191,17 @@ fn crossover(n: usize) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.first().map(String::as_str) == Some("crossover") {
+    let first = args.first().map(String::as_str);
+    if first == Some("crossover") || first == Some("kkt-crossover") {
+        let kkt = first == Some("kkt-crossover");
         println!(
-            "| N | n | dense (s) | steps | LUs | sparse (s) | steps | LUs |\n\
-             |---|---|---|---|---|---|---|---|"
+            "| N | n | dense (s) | steps | LUs | {} (s) | steps | LUs |\n\
+             |---|---|---|---|---|---|---|---|",
+            if kkt { "kkt" } else { "sparse" }
         );
         for a in &args[1..] {
             match a.parse::<usize>() {
-                Ok(n) if n >= 1 => crossover(n),
+                Ok(n) if n >= 1 => crossover(n, kkt),
                 _ => {
                     eprintln!("usage: scaling crossover N… (N ≥ 1)");
                     std::process::exit(2);

@@ -22,7 +22,10 @@
 //!                        lash_solver::linear_algebra::SPARSE_FROM unknowns, a mechanism of
 //!                        several clusters (crate::jacobian) instead checks the coloured
 //!                        differences of its sparse pattern, the Jacobian that diffsol's
-//!                        sparse path computes (O(nnz), no n² matrix)
+//!                        sparse path computes (O(nnz), no n² matrix); one cluster
+//!                        from lash_solver::linear_algebra::KKT_FROM unknowns under an
+//!                        absolute formulation checks its KKT linearisation instead
+//!                        (crate::kkt: K regular, ∂ρ/∂y finite)
 //! ```
 //! The formulation's checks, with the reasons for their bounds, are in
 //! mechanism/formulation/lagrange_baumgarte/check.rs.
@@ -109,6 +112,11 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
             return check_sparse_jacobian(mech, t, &y, &dy, pattern);
         }
     }
+    // One large cluster under an absolute formulation: the `kkt` path (lash_solver::kkt)
+    // never forms ∂f/∂y; its linearisation is checked instead (crate::kkt).
+    if lash_solver::linear_algebra::uses_kkt(mech, lash_solver::LinearAlgebra::Auto, false) {
+        return crate::kkt::check(mech, t, &y);
+    }
     let fits =
         lash_solver::memory::check(lash_solver::memory::dense_bytes(n, 2), String::new, None);
     let Ok(mut jac) = fits.and_then(|()| lash_solver::memory::try_zeros(n, n)) else {
@@ -129,7 +137,7 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
 
 /// The error of a non-finite entry `v` = ∂f_i/∂y_j of the Jacobian's lower half (i ≥ n_q):
 /// the body and the components named, for the dense and the sparse checks alike.
-fn jacobian_entry_error(mech: &Mechanism, i: usize, j: usize, v: f64) -> SceneError {
+pub(crate) fn jacobian_entry_error(mech: &Mechanism, i: usize, j: usize, v: f64) -> SceneError {
     let nq = mech.dim() / 2;
     let (k, what) = component(mech, i - nq, ["ẍ", "ÿ", "φ̈"]);
     let by = if j < nq {

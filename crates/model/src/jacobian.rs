@@ -53,15 +53,15 @@ pub(crate) fn time_derivative(mech: &Mechanism, t: f64, y: &[f64], out: &mut [f6
 
 impl Mechanism {
     /// The sparsity pattern of ∂f/∂y: for each column j of the state, the rows where ∂f/∂y_j
-    /// may be nonzero, ascending (block diagonal over the mechanism's clusters of bodies that
-    /// joints and force elements join; crate::jacobian). Dense (every row in every column)
-    /// when the mechanism is one cluster, as a chain or the press.
+    /// may be nonzero, ascending (dense blocks over the mechanism's constraint clusters,
+    /// coupled in pairs by the force elements between them; crate::jacobian). Dense (every
+    /// row in every column) when the mechanism is one cluster, as a chain or the press.
     pub fn jacobian_pattern(&self) -> Vec<Vec<usize>> {
         pattern(self)
     }
 
     /// [`OdeSystem::jacobian_sparsity`]: the pattern of [`Mechanism::jacobian_pattern`] when
-    /// the mechanism has more than one cluster, None (dense) when it has one.
+    /// it is not full, None (dense) when it is (one cluster, or clusters all coupled).
     ///
     /// [`OdeSystem::jacobian_sparsity`]: lash_solver::OdeSystem::jacobian_sparsity
     pub(crate) fn sparsity(&self) -> Option<Vec<Vec<usize>>> {
@@ -71,30 +71,43 @@ impl Mechanism {
 }
 
 /// The sparsity pattern of ∂f/∂y (for each column j of y, the rows i where ∂f_i/∂y_j may be
-/// nonzero, ascending): block diagonal over the mechanism's clusters.
+/// nonzero, ascending): dense blocks over the mechanism's constraint clusters, coupled in
+/// pairs by the force elements between them.
 ///
 /// ```text
-/// cluster   integrated bodies joined by a joint (ideal, driver or clearance) or a force element
-///           (the bodies, joints and elements it names), transitively; the ground and the
-///           prescribed bodies (functions of t) join nothing
-/// pattern   every state component of a cluster (its bodies' q and q̇ under the absolute
-///           formulations, its tree coordinates θ and θ̇ under minimal) depends on every other
-///           of the same cluster and on none outside it
+/// absolute formulations (Lagrange–Baumgarte, augmented Lagrangian):
+///   cluster   integrated bodies joined by constraint rows (the ideal joints and the drivers
+///             of integrated bodies), transitively; every other integrated body alone
+///   coupling  a force node (an element, a joint without constraint rows — a clearance joint
+///             —, a body's own forces) reaching bodies of clusters A and B couples A × B and
+///             B × A (force_reach: the bodies it names, transitively through the joints and
+///             elements it names)
+///   pattern   the state components (q, q̇) of cluster A depend on those of A and of every
+///             cluster coupled with A, on no other
+/// minimal:    one block per cluster of bodies joined by a joint (ideal, driver or clearance)
+///             or a force element, transitively (a body's θ moves its whole tree, and a force
+///             on it reaches the tree's root through the mass matrix); no couplings between
+///             blocks
 /// ```
-/// Why it covers ∂f/∂y: a body's applied forces come from the elements and clearance joints
-/// that name it, which read only the bodies (and joints, elements) they name; the constraint
-/// solve couples the bodies of one connected set of joints (S = Φ_q M⁻¹ Φ_qᵀ, and M + Φ_qᵀαΦ_q,
-/// are block diagonal over them; minimal's mass matrix over one tree); a prescribed body is a
-/// function of t. The names are read from the scene's JSON form of each joint, element and
-/// body (every string equal to a body, joint or element name), so a reference of a kind added
-/// later is counted without code here. The augmented Lagrangian's multiplier iteration stops on
-/// a global test, which couples clusters only through when it stops (below its tolerance).
+/// Why it covers ∂f/∂y: a body's applied forces come from the force nodes that reach it,
+/// which read only the bodies they reach; the constraint solve couples the bodies of one
+/// connected set of constraint rows (S = Φ_q M⁻¹ Φ_qᵀ, and M + Φ_qᵀαΦ_q, are block diagonal
+/// over them), so q̈ of cluster A reads g of A's bodies only; a prescribed body is a function
+/// of t. A chain of N links whose elbows are clearance joints is N clusters, block
+/// tridiagonal (36 (3N − 2) entries instead of 36 N²). The names are read from the scene's
+/// JSON form of each joint, element and body (every string equal to a body, joint or element
+/// name), so a reference of a kind added later is counted without code here. The augmented
+/// Lagrangian's multiplier iteration stops on a global test, which couples clusters only
+/// through when it stops (below its tolerance).
 fn pattern(mech: &Mechanism) -> Vec<Vec<usize>> {
-    let blocks = state_blocks(mech);
+    let (blocks, coupled) = coupled_blocks(mech);
     let n = blocks.iter().map(Vec::len).sum::<usize>();
     let mut pattern = vec![Vec::new(); n];
-    for block in &blocks {
-        let mut rows = block.clone();
+    for (b, block) in blocks.iter().enumerate() {
+        let mut rows: Vec<usize> = coupled[b]
+            .iter()
+            .flat_map(|&a| blocks[a].iter().copied())
+            .collect();
         rows.sort_unstable();
         for &j in block {
             pattern[j] = rows.clone();
@@ -103,14 +116,25 @@ fn pattern(mech: &Mechanism) -> Vec<Vec<usize>> {
     pattern
 }
 
-/// Entries of [`pattern`] (Σ over clusters of its size²) without building it.
+/// Entries of [`pattern`] without building it.
 fn pattern_nnz(mech: &Mechanism) -> usize {
-    state_blocks(mech).iter().map(|b| b.len() * b.len()).sum()
+    let (blocks, coupled) = coupled_blocks(mech);
+    coupled
+        .iter()
+        .zip(&blocks)
+        .map(|(with, block)| block.len() * with.iter().map(|&a| blocks[a].len()).sum::<usize>())
+        .sum()
 }
 
-/// The state components of each cluster ([`pattern`]), clusters in order of their first body.
-fn state_blocks(mech: &Mechanism) -> Vec<Vec<usize>> {
-    let clusters = body_clusters(mech);
+/// The state components of each cluster ([`pattern`]), clusters in order of their first
+/// body, and for each cluster the clusters it is coupled with (itself included, ascending).
+fn coupled_blocks(mech: &Mechanism) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+    let absolute = !matches!(mech.formulation(), Formulation::Minimal(_));
+    let clusters = if absolute {
+        constraint_clusters(mech)
+    } else {
+        body_clusters(mech)
+    };
     // State components of each integrated body.
     let nint = clusters.len();
     let mut of_body: Vec<Vec<usize>> = vec![Vec::new(); nint];
@@ -133,16 +157,75 @@ fn state_blocks(mech: &Mechanism) -> Vec<Vec<usize>> {
     }
     let mut index_of_root = vec![usize::MAX; nint];
     let mut blocks: Vec<Vec<usize>> = Vec::new();
+    let mut block_of_body = vec![0; nint];
     for (i, comps) in of_body.into_iter().enumerate() {
         let root = clusters[i];
         if index_of_root[root] == usize::MAX {
             index_of_root[root] = blocks.len();
             blocks.push(Vec::new());
         }
+        block_of_body[i] = index_of_root[root];
         blocks[index_of_root[root]].extend(comps);
     }
+    let mut coupled: Vec<Vec<usize>> = (0..blocks.len()).map(|b| vec![b]).collect();
+    if absolute {
+        for reach in force_reach(mech) {
+            let mut bs: Vec<usize> = reach.iter().map(|&i| block_of_body[i]).collect();
+            bs.sort_unstable();
+            bs.dedup();
+            for &a in &bs {
+                coupled[a].extend(&bs);
+            }
+        }
+    }
+    for with in &mut coupled {
+        with.sort_unstable();
+        with.dedup();
+    }
+    // Blocks without state components (bodies of no coordinates) are dropped, their indices
+    // kept consistent.
+    let keep: Vec<bool> = blocks.iter().map(|b| !b.is_empty()).collect();
+    if keep.iter().all(|&k| k) {
+        return (blocks, coupled);
+    }
+    let mut new_index = vec![usize::MAX; blocks.len()];
+    let mut count = 0;
+    for (b, &k) in keep.iter().enumerate() {
+        if k {
+            new_index[b] = count;
+            count += 1;
+        }
+    }
+    let coupled = coupled
+        .into_iter()
+        .zip(&keep)
+        .filter(|(_, &k)| k)
+        .map(|(with, _)| {
+            with.into_iter()
+                .filter(|&a| keep[a])
+                .map(|a| new_index[a])
+                .collect()
+        })
+        .collect();
     blocks.retain(|b| !b.is_empty());
-    blocks
+    (blocks, coupled)
+}
+
+/// For each integrated body, a representative integrated body of its constraint cluster
+/// (integrated bodies joined by constraint rows, [`pattern`]).
+fn constraint_clusters(mech: &Mechanism) -> Vec<usize> {
+    let nint = mech.nq() / 3;
+    let mut uf = UnionFind::new(nint);
+    let cons = mech.constraints();
+    for (row, ints) in cons.rows.iter().zip(&cons.row_int) {
+        let mut on = ints[..row.n_terms].iter().flatten();
+        if let Some(&first) = on.next() {
+            for &other in on {
+                uf.union(first, other);
+            }
+        }
+    }
+    (0..nint).map(|i| uf.find(i)).collect()
 }
 
 /// For each integrated body, a representative integrated body of its cluster ([`pattern`]).
@@ -205,6 +288,97 @@ fn body_clusters(mech: &Mechanism) -> Vec<usize> {
         }
     }
     out
+}
+
+/// For each force node of the mechanism, the integrated bodies whose applied forces it may
+/// set or read, ascending: every force element, every joint without constraint rows (a
+/// clearance joint, a driver of a prescribed body) and every integrated body (its own
+/// forces). A node reaches the integrated bodies it names (its JSON form's strings, as
+/// [`pattern`] reads them) and, transitively, those of the joints and elements it names;
+/// never through a body (a body's name is the body, not what acts on it).
+pub(crate) fn force_reach(mech: &Mechanism) -> Vec<Vec<usize>> {
+    let scene = mech.scene();
+    let info = mech.body_info();
+    let (nb, nj) = (scene.bodies.len(), scene.joints.len());
+    let mut names: std::collections::HashMap<&str, Vec<usize>> = Default::default();
+    for (k, b) in info.iter().enumerate() {
+        if matches!(b.owner, Owner::Int(_)) {
+            names.entry(b.name.as_str()).or_default().push(k);
+        }
+    }
+    for (j, joint) in scene.joints.iter().enumerate() {
+        names.entry(joint.name()).or_default().push(nb + j);
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        names.entry(element.name()).or_default().push(nb + nj + e);
+    }
+    let named = |value: serde_json::Value| -> Vec<usize> {
+        let mut out = Vec::new();
+        let mut stack = vec![value];
+        while let Some(v) = stack.pop() {
+            match v {
+                serde_json::Value::String(s) => {
+                    out.extend(names.get(s.as_str()).into_iter().flatten());
+                }
+                serde_json::Value::Array(a) => stack.extend(a),
+                serde_json::Value::Object(o) => stack.extend(o.into_iter().map(|(_, v)| v)),
+                _ => {}
+            }
+        }
+        out
+    };
+    let json = |v: Result<serde_json::Value, serde_json::Error>| v.unwrap_or_default();
+    // Direct names of each joint and element node (indices nb.. of the node numbering).
+    let mut direct: Vec<Vec<usize>> = vec![Vec::new(); nb + nj + scene.forces.len()];
+    for (j, joint) in scene.joints.iter().enumerate() {
+        direct[nb + j] = named(json(serde_json::to_value(joint)));
+    }
+    for (e, element) in scene.forces.iter().enumerate() {
+        direct[nb + nj + e] = named(json(serde_json::to_value(element)));
+    }
+    for (k, body) in scene.bodies.iter().enumerate() {
+        if matches!(info[k].owner, Owner::Int(_)) {
+            direct[k] = named(json(serde_json::to_value(body)));
+            direct[k].push(k);
+        }
+    }
+    let mut constrained = vec![false; nj];
+    for row in &mech.constraints().rows {
+        constrained[row.joint] = true;
+    }
+    let int_of = |k: usize| match info[k].owner {
+        Owner::Int(i) => Some(i),
+        Owner::Pres(_) => None,
+    };
+    let reach_of = |start: usize| -> Vec<usize> {
+        let mut seen = std::collections::HashSet::from([start]);
+        let mut stack = vec![start];
+        let mut out = Vec::new();
+        while let Some(node) = stack.pop() {
+            for &other in &direct[node] {
+                if other < nb {
+                    out.extend(int_of(other));
+                } else if seen.insert(other) {
+                    stack.push(other);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    };
+    let mut reach = Vec::new();
+    for j in (0..nj).filter(|&j| !constrained[j]) {
+        reach.push(reach_of(nb + j));
+    }
+    for e in 0..scene.forces.len() {
+        reach.push(reach_of(nb + nj + e));
+    }
+    for k in (0..nb).filter(|&k| int_of(k).is_some()) {
+        reach.push(reach_of(k));
+    }
+    reach.retain(|r| !r.is_empty());
+    reach
 }
 
 /// Disjoint sets with path halving.

@@ -91,6 +91,7 @@ pub mod elements;
 pub mod iftomm;
 mod initial_check;
 mod jacobian;
+mod kkt;
 mod labels;
 pub mod law_range;
 mod linalg;

@@ -345,3 +345,64 @@ fn no_constraint_rows_is_a_violation_of_plus_zero() {
         assert!(cv == 0.0 && cv.is_sign_positive(), "{formulation}: {cv:?}");
     }
 }
+
+/// A chain of `n` links (0.1 m, 1 kg) whose first is pinned to the ground and whose n − 1
+/// elbows are dry clearance joints (c = 1 mm), each journal 1.5 mm off its bearing's centre
+/// (in contact: 0.5 mm deep), as benches/examples/scaling.rs's `clearance N` with contact.
+fn clearance_chain(n: usize, formulation: &str) -> Value {
+    let l = 0.1;
+    let mut bodies = Vec::new();
+    let mut joints = vec![json!({"type": "revolute", "name": "j0",
+        "a": {"body": "l0", "point": "A"}, "b": {"body": "ground", "at": [0.0, 0.0]}})];
+    for i in 0..n {
+        bodies.push(
+            json!({"name": format!("l{i}"), "mass": 1.0, "inertia": l * l / 12.0,
+            "position": [l * i as f64 + l / 2.0 + 0.0015 * i as f64, 0.0],
+            "angular_velocity": 0.3,
+            "points": {"A": [-l / 2.0, 0.0], "B": [l / 2.0, 0.0]}}),
+        );
+        if i > 0 {
+            joints.push(json!({"type": "clearance", "name": format!("j{i}"),
+                "bearing": {"body": format!("l{}", i - 1), "point": "B", "radius": 0.01},
+                "journal": {"body": format!("l{i}"), "point": "A", "radius": 0.009},
+                "normal": {"law": "impact", "k": 1e9, "c_max": 2000.0, "d_max": 1e-5},
+                "friction": {"law": "coulomb", "mu": 0.1, "v0": 1e-4, "v1": 2e-4}}));
+        }
+    }
+    json!({"bodies": bodies, "joints": joints, "gravity": [0.0, -9.81], "t_end": 1.0,
+           "formulation": formulation})
+}
+
+/// A chain of clearance joints is one cluster of bodies but N constraint clusters (each link
+/// alone; the first with its ground pin): under the absolute formulations its pattern is
+/// block tridiagonal, 36 (3N − 2) entries (each link's 6 × 6 block and its two neighbours'),
+/// and covers every entry of the closed-form Jacobian and of the differences with every
+/// elbow in contact (dropping the clearance joints' couplings fails `check`); under minimal
+/// it stays one block (a link's force reaches its tree's root through the mass matrix).
+#[test]
+fn a_chain_of_clearance_joints_is_block_tridiagonal() {
+    let n = 6;
+    for formulation in ["lagrange_baumgarte", "augmented_lagrangian"] {
+        let m = mech(&clearance_chain(n, formulation));
+        assert_eq!(m.dim(), 6 * n);
+        assert_eq!(check(&m, formulation), 36 * (3 * n - 2), "{formulation}");
+        assert!(m.jacobian_sparsity().is_some(), "{formulation}");
+    }
+    let m = mech(&clearance_chain(n, "minimal"));
+    let nnz: usize = m.jacobian_pattern().iter().map(Vec::len).sum();
+    assert_eq!(nnz, m.dim() * m.dim());
+    assert!(m.jacobian_sparsity().is_none());
+}
+
+/// From 100 links (n = 600, lash_solver::linear_algebra::SPARSE_FROM) `auto` runs a chain of
+/// clearance joints on the sparse path; 99 links stay dense (their numbers unchanged).
+#[test]
+fn a_long_chain_of_clearance_joints_takes_the_sparse_path() {
+    use lash_solver::{Method, Problem, SolverOptions};
+    let o = SolverOptions::with_method(Method::Bdf);
+    for (links, sparse) in [(99, false), (100, true)] {
+        let m = mech(&clearance_chain(links, "lagrange_baumgarte"));
+        let p = Problem::new(&m, &o).unwrap();
+        assert_eq!(p.diffsol().unwrap().is_sparse(), sparse, "{links} links");
+    }
+}

@@ -79,6 +79,7 @@
 //! those made since this stepper was built (a problem may serve several integrations).
 
 use std::cell::RefCell;
+use std::rc::Rc;
 
 use diffsol::ode_solver::state::StateCommon;
 use diffsol::{
@@ -90,7 +91,8 @@ use diffsol_la::MatrixRef;
 
 use crate::error::SolveError;
 use crate::jacobian::{Colouring, JacobianEvaluator};
-use crate::linear_algebra::{sparse_pattern, Dense, La, LinearAlgebra, Sparse};
+use crate::kkt::KktNewton;
+use crate::linear_algebra::{sparse_pattern, uses_kkt, Dense, Kkt, La, LinearAlgebra, Sparse};
 use crate::method::{Family, Method};
 use crate::options::{Budgets, DiffsolConfig, OptionError, OptionField, Reason, SolverOptions};
 use crate::stats::Stats;
@@ -118,6 +120,7 @@ pub struct DiffsolProblem<'a, S: OdeSystem + ?Sized> {
 enum AnyProblem<'a, S: OdeSystem + ?Sized> {
     Dense(Problem<'a, S, Dense>),
     Sparse(Problem<'a, S, Sparse>),
+    Kkt(Problem<'a, S, Kkt>),
 }
 
 impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
@@ -141,10 +144,36 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
             // only.
             let jac_work = crate::memory::try_zeros(n, n).map_err(SolveError::OutOfMemory)?;
             Ok(AnyProblem::Dense(build::<S, Dense>(
-                sys, cfg, jac_work, None,
+                sys, cfg, jac_work, None, None,
             )?))
         };
-        let inner = match sparse_pattern(sys, choice) {
+        let pattern = sparse_pattern(sys, choice);
+        let kkt = sys
+            .kkt()
+            .filter(|_| uses_kkt(sys, choice, pattern.is_some()));
+        let inner = match pattern {
+            None if kkt.is_some() => {
+                let shape = kkt.map(|k| k.kkt_shape()).expect("checked");
+                crate::memory::check_kkt(method, &shape, max_memory)
+                    .map_err(SolveError::OutOfMemory)?;
+                let nq = shape.nq;
+                let newton = (2 * nq == n)
+                    .then(|| {
+                        KktNewton::new(shape, crate::kkt::increment_floors(diff_scale(cfg, n)))
+                    })
+                    .flatten();
+                let upper = crate::kkt::upper_pattern(nq);
+                match (newton, Kkt::sparsity(n, &upper)) {
+                    (Some(newton), Some(s)) => AnyProblem::Kkt(build::<S, Kkt>(
+                        sys,
+                        cfg,
+                        faer::Mat::zeros(0, 0),
+                        None,
+                        Some((s, Rc::new(RefCell::new(newton)))),
+                    )?),
+                    _ => dense()?,
+                }
+            }
             None => dense()?,
             Some(pattern) => {
                 let nnz = pattern.iter().map(Vec::len).sum::<usize>();
@@ -159,6 +188,7 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
                         cfg,
                         faer::Mat::zeros(0, 0),
                         Some(sparse),
+                        None,
                     )?),
                     None => dense()?,
                 }
@@ -171,6 +201,21 @@ impl<'a, S: OdeSystem + ?Sized> DiffsolProblem<'a, S> {
     pub fn is_sparse(&self) -> bool {
         matches!(self.inner, AnyProblem::Sparse(_))
     }
+
+    /// Whether the Newton solve goes through the system's KKT form ([`crate::kkt`]).
+    pub fn is_kkt(&self) -> bool {
+        matches!(self.inner, AnyProblem::Kkt(_))
+    }
+}
+
+/// The `kkt` path's parts of a problem: diffsol's sparsity of J's identity block and the
+/// shared linearisation (crate::kkt).
+type KktParts<B> = (<<B as La>::M as Matrix>::Sparsity, Rc<RefCell<KktNewton>>);
+
+/// Floors of the difference increments: atol_i / rtol (crate::jacobian).
+fn diff_scale(cfg: &DiffsolConfig, n: usize) -> Vec<f64> {
+    let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
+    (0..n).map(|i| atol.get(i) / rtol).collect()
 }
 
 /// diffsol's problem on the linear algebra `B`; `sparse` is the sparse path's coloured
@@ -181,14 +226,16 @@ fn build<'a, S: OdeSystem + ?Sized, B: La>(
     cfg: &DiffsolConfig,
     jac_work: faer::Mat<f64>,
     sparse: Option<(Colouring, <B::M as Matrix>::Sparsity)>,
+    kkt: Option<KktParts<B>>,
 ) -> Result<Problem<'a, S, B>, SolveError> {
     let n = sys.dim();
     let ctx = B::C::default();
     let (rtol, atol) = (cfg.tolerances().rtol(), cfg.tolerances().atol());
-    let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
-    let (colouring, sparsity) = match sparse {
-        Some((c, s)) => (Some(c), Some(s)),
-        None => (None, None),
+    let scale = diff_scale(cfg, n);
+    let (colouring, sparsity, kkt) = match (sparse, kkt) {
+        (Some((c, s)), _) => (Some(c), Some(s), None),
+        (None, Some((s, k))) => (None, Some(s), Some(k)),
+        (None, None) => (None, None, None),
     };
     let eqn = SysEqn {
         rhs: SysRhs {
@@ -200,6 +247,7 @@ fn build<'a, S: OdeSystem + ?Sized, B: La>(
             counts: RefCell::new(Stats::default()),
             colouring,
             sparsity,
+            kkt,
         },
         // Never evaluated: states are built directly from (t, y).
         init: SysInit {
@@ -252,6 +300,7 @@ pub struct DiffsolStepper<'p, 'a, S: OdeSystem + ?Sized> {
 enum AnyStepper<'p, 'a, S: OdeSystem + ?Sized> {
     Dense(Core<'p, 'a, S, Dense>),
     Sparse(Core<'p, 'a, S, Sparse>),
+    Kkt(Core<'p, 'a, S, Kkt>),
 }
 
 macro_rules! with_core {
@@ -259,6 +308,7 @@ macro_rules! with_core {
         match $stepper {
             AnyStepper::Dense($c) => $body,
             AnyStepper::Sparse($c) => $body,
+            AnyStepper::Kkt($c) => $body,
         }
     };
 }
@@ -275,6 +325,7 @@ impl<'p, 'a, S: OdeSystem + ?Sized> DiffsolStepper<'p, 'a, S> {
         let inner = match &problem.inner {
             AnyProblem::Dense(p) => AnyStepper::Dense(Core::new(p, t0, y0, opts)?),
             AnyProblem::Sparse(p) => AnyStepper::Sparse(Core::new(p, t0, y0, opts)?),
+            AnyProblem::Kkt(p) => AnyStepper::Kkt(Core::new(p, t0, y0, opts)?),
         };
         Ok(DiffsolStepper { inner })
     }
@@ -492,7 +543,7 @@ where
                 let mut state = BdfState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Bdf(Box::new(
-                    Bdf::new(problem, state, B::Lu::default()).map_err(err)?,
+                    Bdf::new(problem, state, B::lu(problem.eqn.rhs.kkt.as_ref())).map_err(err)?,
                 ))
             }
             m => {
@@ -504,7 +555,8 @@ where
                 let mut state = RkState::<B::V>::new_from_common(common);
                 Self::initial_h(&mut state, h, problem, order, &self.opts, span);
                 Solver::Sdirk(Box::new(
-                    Sdirk::new(problem, state, tableau, B::Lu::default()).map_err(err)?,
+                    Sdirk::new(problem, state, tableau, B::lu(problem.eqn.rhs.kkt.as_ref()))
+                        .map_err(err)?,
                 ))
             }
         };

@@ -70,6 +70,11 @@ impl Colouring {
     /// of whose columns has a row in common with it. None when a row index is out of range.
     pub fn new(pattern: Vec<Vec<usize>>) -> Option<Self> {
         let n = pattern.len();
+        Self::rectangular(pattern, n)
+    }
+
+    /// [`Colouring::new`] for a matrix of `n` rows (and `pattern.len()` columns).
+    pub fn rectangular(pattern: Vec<Vec<usize>>, n: usize) -> Option<Self> {
         if pattern.iter().flatten().any(|&i| i >= n) {
             return None;
         }
@@ -292,7 +297,7 @@ impl JacobianEvaluator {
 
 /// The forward-difference increment of a component y_j with floor s_j: √ε·max(|y_j|, s_j),
 /// rounded so that (y_j + δ) − y_j = δ exactly (module documentation).
-fn increment(yj: f64, scale: f64) -> f64 {
+pub(crate) fn increment(yj: f64, scale: f64) -> f64 {
     let mut delta = f64::EPSILON.sqrt() * yj.abs().max(scale);
     let yp = yj + delta;
     delta = yp - yj;

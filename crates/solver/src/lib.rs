@@ -119,6 +119,7 @@ pub mod error;
 pub mod integrator;
 pub mod interrupt;
 pub mod jacobian;
+pub mod kkt;
 pub mod linear_algebra;
 pub mod memory;
 pub mod method;

@@ -10,9 +10,14 @@
 //!         orthogonal column groups (crate::jacobian, one RHS evaluation per colour), I − hγJ
 //!         factored by faer's sparse LU (crate::sparse_lu)
 //!         memory O(nnz): crate::memory::sparse_bytes
+//! kkt     a second-order system whose accelerations solve a sparse KKT system
+//!         (OdeSystem::kkt): diffsol holds only J's exact identity block; the Newton solve
+//!         goes through K's sparse LU and an augmented sparse system (crate::kkt)
+//!         memory O(nnz(K) + nnz(∂ρ/∂y)) and the LU's fill: crate::memory::kkt_bytes
 //! auto    sparse when n ≥ SPARSE_FROM and the pattern has at most n²/SPARSE_DENSITY
-//!         entries, dense otherwise (every system below SPARSE_FROM unknowns, and every
-//!         system without a pattern, keeps the dense path and its numbers)
+//!         entries; else kkt when n ≥ KKT_FROM and the system has the KKT form; dense
+//!         otherwise (every system below SPARSE_FROM unknowns keeps the dense path and its
+//!         numbers)
 //! ```
 //! On the sparse path the system's own dense Jacobian is not used (it is n × n): a mechanism's
 //! closed-form blocks are replaced by differences, whose error (√ε relative) is far below what
@@ -25,6 +30,10 @@ use diffsol_la::{
 };
 use faer::MatMut;
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use crate::kkt::KktNewton;
 use crate::system::OdeSystem;
 
 /// Which linear algebra diffsol's implicit methods use (module doc). The other methods
@@ -40,6 +49,9 @@ pub enum LinearAlgebra {
     Dense,
     /// Sparse matrices on the system's pattern (a full pattern when it gives none).
     Sparse,
+    /// The Newton solve through the system's sparse KKT form (crate::kkt); dense when the
+    /// system has none.
+    Kkt,
 }
 
 impl LinearAlgebra {
@@ -51,6 +63,21 @@ impl LinearAlgebra {
 
 /// The number of unknowns from which `Auto` takes the sparse path (module doc).
 pub const SPARSE_FROM: usize = 600;
+
+/// The number of unknowns from which `Auto` takes the `kkt` path (module doc; measured:
+/// BENCHMARKS.md, "The sparse Newton of one cluster").
+pub const KKT_FROM: usize = 600;
+
+/// Whether `choice` puts `sys` on the `kkt` path (module doc), given whether the pattern
+/// path was chosen.
+pub fn uses_kkt<S: OdeSystem + ?Sized>(sys: &S, choice: LinearAlgebra, sparse: bool) -> bool {
+    let has = sys.kkt().is_some();
+    match choice {
+        LinearAlgebra::Kkt => has,
+        LinearAlgebra::Auto => has && !sparse && sys.dim() >= KKT_FROM,
+        LinearAlgebra::Dense | LinearAlgebra::Sparse => false,
+    }
+}
 
 /// `Auto` takes the sparse path only for a pattern with at most n²/SPARSE_DENSITY entries.
 pub const SPARSE_DENSITY: usize = 8;
@@ -75,7 +102,7 @@ pub fn sparse_pattern<S: OdeSystem + ?Sized>(
         Some(p)
     };
     match choice {
-        LinearAlgebra::Dense => None,
+        LinearAlgebra::Dense | LinearAlgebra::Kkt => None,
         LinearAlgebra::Sparse => {
             Some(pattern().unwrap_or_else(|| (0..n).map(|_| (0..n).collect()).collect()))
         }
@@ -122,6 +149,11 @@ pub(crate) trait La: 'static {
     fn sparsity(n: usize, pattern: &[Vec<usize>]) -> Option<<Self::M as Matrix>::Sparsity>;
     /// The matrix's entries to write.
     fn view(m: &mut Self::M) -> JacView<'_>;
+    /// The Newton matrix's solver, on the `kkt` path with its shared linearisation.
+    fn lu(kkt: Option<&Rc<RefCell<KktNewton>>>) -> Self::Lu {
+        let _ = kkt;
+        Self::Lu::default()
+    }
 }
 
 /// The dense path: nalgebra, crate::auto_lu.
@@ -186,5 +218,32 @@ impl La for Sparse {
             row_idx: symbolic.row_idx(),
             values,
         }
+    }
+}
+
+/// The `kkt` path: faer's vectors and compressed columns for J's identity block, crate::kkt.
+pub(crate) struct Kkt;
+
+impl La for Kkt {
+    type V = FaerVec<f64>;
+    type M = FaerSparseMat<f64>;
+    type C = FaerContext;
+    type Lu = crate::kkt::KktLu;
+    const SYSTEM_PRODUCTS: bool = false;
+    fn slice(v: &Self::V) -> &[f64] {
+        Sparse::slice(v)
+    }
+    fn slice_mut(v: &mut Self::V) -> &mut [f64] {
+        Sparse::slice_mut(v)
+    }
+    fn sparsity(n: usize, pattern: &[Vec<usize>]) -> Option<<Self::M as Matrix>::Sparsity> {
+        Sparse::sparsity(n, pattern)
+    }
+    fn view(m: &mut Self::M) -> JacView<'_> {
+        Sparse::view(m)
+    }
+    fn lu(kkt: Option<&Rc<RefCell<KktNewton>>>) -> Self::Lu {
+        kkt.map(|k| crate::kkt::KktLu::new(k.clone()))
+            .unwrap_or_default()
     }
 }

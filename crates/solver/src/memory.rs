@@ -37,6 +37,17 @@
 //! Fill beyond that (a pattern whose LU fills in) is not foreseen by the estimate; the
 //! patterns of mechanisms are block diagonal, whose LU has no fill.
 //!
+//! The `kkt` path (crate::kkt) stores K (its triplets and values, n_K entries), R = ∂ρ/∂y
+//! (n_R entries, twice: the last linearisation and the factored one), the augmented matrix
+//! (2 n_q + n_R + n_K entries) and the two sparse LUs (K's and the augmented matrix's), each
+//! counted with as many entries again of fill, [`kkt_bytes`]:
+//!
+//! ```text
+//! need = SPARSE_BYTES_PER_ENTRY · (2 n_K + 2 n_R + 2 n_q + n)
+//! ```
+//! A chain's K and R are banded (COLAMD keeps their LUs' fill within the band): the estimate
+//! and the measured peak are compared in BENCHMARKS.md ("The sparse Newton of one cluster").
+//!
 //! Source: issue 23 ("No process death on memory"); proc(5) for the files read.
 
 use std::fmt;
@@ -227,6 +238,34 @@ pub fn check_sparse(
     check(
         sparse_bytes(n, nnz),
         || format!("{method}'s sparse Jacobian and LU ({nnz} entries, n = {n})"),
+        max_memory,
+    )
+}
+
+/// The `kkt` path's need for a system of `shape` (module doc), saturating.
+pub fn kkt_bytes(shape: &crate::kkt::KktShape) -> u64 {
+    let nnz_r: usize = shape.residual_pattern.iter().map(Vec::len).sum();
+    let entries = (shape.k_entries as u64)
+        .saturating_mul(2)
+        .saturating_add((nnz_r as u64).saturating_mul(2))
+        .saturating_add(4 * shape.nq as u64);
+    entries.saturating_mul(SPARSE_BYTES_PER_ENTRY)
+}
+
+/// Checks the `kkt` path's matrices of `method` for a system of `shape` against the budget.
+pub fn check_kkt(
+    method: Method,
+    shape: &crate::kkt::KktShape,
+    max_memory: Option<u64>,
+) -> Result<(), MemoryError> {
+    check(
+        kkt_bytes(shape),
+        || {
+            format!(
+                "{method}'s KKT Newton matrices (n_q = {}, m = {})",
+                shape.nq, shape.m
+            )
+        },
         max_memory,
     )
 }

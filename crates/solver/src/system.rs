@@ -113,6 +113,13 @@ pub trait OdeSystem {
         None
     }
 
+    /// The system's KKT form when its state is y = (q, v), q' = v and its accelerations solve
+    /// a sparse linear system (crate::kkt): the `kkt` linear algebra's Newton solve. Default
+    /// None.
+    fn kkt(&self) -> Option<&dyn crate::kkt::KktSystem> {
+        None
+    }
+
     /// Whether [`OdeSystem::time_derivative`] is implemented. When false, Rosenbrock methods
     /// take ∂f/∂t by a central difference in t (two RHS evaluations per step), which is
     /// accurate only when f is smooth in t on the scale of the difference's step.

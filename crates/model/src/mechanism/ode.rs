@@ -30,6 +30,13 @@ impl OdeSystem for Mechanism {
         self.sparsity()
     }
 
+    /// The absolute formulations' KKT form (crate::kkt); None under minimal.
+    fn kkt(&self) -> Option<&dyn lash_solver::kkt::KktSystem> {
+        self.formulation
+            .kkt_stabilisation()
+            .map(|_| self as &dyn lash_solver::kkt::KktSystem)
+    }
+
     fn has_time_derivative(&self) -> bool {
         self.formulation.has_time_derivative()
     }

@@ -3,6 +3,7 @@
 //! value operator, and the equations that hold them, on either linear algebra.
 
 use std::cell::RefCell;
+use std::rc::Rc;
 
 use diffsol::{
     Matrix, NonLinearOp, NonLinearOpJacobian, OdeEquations, OdeEquationsRef, Op, UnitCallable,
@@ -10,6 +11,7 @@ use diffsol::{
 use faer::MatMut;
 
 use crate::jacobian::{Colouring, JacobianEvaluator};
+use crate::kkt::KktNewton;
 use crate::linear_algebra::{JacView, La};
 use crate::stats::Stats;
 use crate::system::OdeSystem;
@@ -30,6 +32,8 @@ pub(super) struct SysRhs<'a, S: OdeSystem + ?Sized, B: La> {
     /// The sparse path's pattern, coloured, and diffsol's form of it (None: dense).
     pub(super) colouring: Option<Colouring>,
     pub(super) sparsity: Option<<B::M as Matrix>::Sparsity>,
+    /// The `kkt` path's shared linearisation (crate::kkt; None on the other paths).
+    pub(super) kkt: Option<Rc<RefCell<KktNewton>>>,
 }
 
 impl<S: OdeSystem + ?Sized, B: La> SysRhs<'_, S, B> {
@@ -118,6 +122,15 @@ impl<S: OdeSystem + ?Sized, B: La> NonLinearOpJacobian for SysRhs<'_, S, B> {
 
     fn jacobian_inplace(&self, x: &B::V, t: f64, y: &mut B::M) {
         let x = B::slice(x);
+        if let (Some(kkt), Some(sys)) = (&self.kkt, self.sys.kkt()) {
+            // J's exact identity block (q' = v); the rest is the linearisation's.
+            if let JacView::Sparse { values, .. } = B::view(y) {
+                values.fill(1.0);
+            }
+            let mut counts = self.counts.borrow_mut();
+            kkt.borrow_mut().linearise(sys, t, x, &mut counts);
+            return;
+        }
         match (B::view(y), &self.colouring) {
             (JacView::Dense(jac), _) => self.dense_jacobian(t, x, jac),
             (

@@ -36,6 +36,7 @@ fn rhs_op<S: OdeSystem + ?Sized>(sys: &S) -> SysRhs<'_, S, Dense> {
         counts: RefCell::new(Stats::default()),
         colouring: None,
         sparsity: None,
+        kkt: None,
     }
 }
 

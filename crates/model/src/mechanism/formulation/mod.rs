@@ -94,6 +94,16 @@ impl Formulation {
         }
     }
 
+    /// (p, s) of the constraint rows' right-hand side c = γ − pΦ̇ − sΦ of the KKT form
+    /// (crate::kkt) under the absolute formulations; None under minimal.
+    pub(crate) fn kkt_stabilisation(&self) -> Option<(f64, f64)> {
+        match self {
+            Formulation::LagrangeBaumgarte(f) => Some(f.stabilisation()),
+            Formulation::AugmentedLagrangian(f) => Some(f.stabilisation()),
+            Formulation::Minimal(_) => None,
+        }
+    }
+
     /// Length of the state y.
     pub(crate) fn dim(&self, bodies: &Bodies) -> usize {
         match self {

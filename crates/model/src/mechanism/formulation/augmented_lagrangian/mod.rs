@@ -167,6 +167,11 @@ impl AugmentedLagrangian {
         }
     }
 
+    /// (2ξω, ω²): c = γ − 2ξωΦ̇ − ω²Φ (crate::kkt).
+    pub(crate) fn stabilisation(&self) -> (f64, f64) {
+        (self.a2, self.b2)
+    }
+
     /// The constraint rows at the kinematics of `sc`: Φ, Φ̇, c and the values of Φ_q.
     fn constraint_rows(&self, t: f64, cons: &Constraints, info: &[BodyInfo], sc: &Scratch) {
         let mut w = self.work.borrow_mut();

@@ -206,6 +206,11 @@ impl LagrangeBaumgarte {
         }
     }
 
+    /// (2α, β²): r = γ − 2αΦ̇ − β²Φ (crate::kkt).
+    pub(crate) fn stabilisation(&self) -> (f64, f64) {
+        (2.0 * self.alpha, self.beta * self.beta)
+    }
+
     /// q̈ into `sc.qdd` from the applied forces `sc.g` (after the kinematics): the constraint
     /// rows, then the KKT system by its Schur complement. False if S is not positive definite.
     /// A full evaluation (`_full`) needs nothing more of this formulation (the reactions come
