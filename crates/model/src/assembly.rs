@@ -23,6 +23,8 @@
 
 use faer::Mat;
 
+mod sparse;
+
 use crate::mechanism::bodies::Owner;
 use crate::mechanism::constraints::{describe, eval_row, Row, Term, TermKind};
 use crate::mechanism::Mechanism;
@@ -304,11 +306,10 @@ fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
     r
 }
 
-/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇) and what
-/// the assembly changed.
-pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
+/// The scene's state y = (q, q̇) of the integrated bodies: positions and angles as given,
+/// velocities the exact `initial_velocity` where there is one, else the guesses.
+fn guess(mech: &Mechanism) -> Vec<f64> {
     let nq = mech.nq();
-    let t0 = mech.t_start();
     let mut y = vec![0.0; 2 * nq];
     for (i, &k) in mech.bodies().int_bodies.iter().enumerate() {
         let b = &mech.scene().bodies[k];
@@ -320,21 +321,50 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         y[nq + 3 * i + 1] = iv.vy.unwrap_or(b.velocity[1]);
         y[nq + 3 * i + 2] = iv.omega.unwrap_or(b.angular_velocity);
     }
-    let given = y.clone();
+    y
+}
+
+/// The row of largest |value| and that value (the first NaN, if any).
+fn worst(phi: &[f64]) -> (usize, f64) {
+    phi.iter().enumerate().fold((0, 0.0), |(bi, bv), (i, v)| {
+        if !(v.abs() <= bv) {
+            (i, v.abs())
+        } else {
+            (bi, bv)
+        }
+    })
+}
+
+/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇) and what
+/// the assembly changed. From `sparse::SPARSE_FROM_COORDINATES` coordinates on sparse
+/// matrices when that path can answer (assembly/sparse.rs), else on dense ones.
+pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
+    let nq = mech.nq();
+    let given = guess(mech);
     let rows = assembly_rows(mech);
     let vrows = velocity_rows(mech);
     if rows.is_empty() && vrows.is_empty() {
-        return Ok((y, ProjectionReport::default()));
+        return Ok((given, ProjectionReport::default()));
     }
-    let worst = |phi: &[f64]| -> (usize, f64) {
-        phi.iter().enumerate().fold((0, 0.0), |(bi, bv), (i, v)| {
-            if !(v.abs() <= bv) {
-                (i, v.abs())
-            } else {
-                (bi, bv)
-            }
-        })
-    };
+    if nq >= sparse::SPARSE_FROM_COORDINATES {
+        if let Some(done) = sparse::assemble(mech, &rows, &given)? {
+            return Ok(done);
+        }
+    }
+    dense(mech, rows, vrows, given)
+}
+
+/// The dense path of [`assemble`]: SVDs of the m × n_q Jacobians (the reference of the sparse
+/// path, and the one that words every refusal).
+fn dense(
+    mech: &Mechanism,
+    rows: Vec<Row>,
+    vrows: Vec<(Row, String, String)>,
+    given: Vec<f64>,
+) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
+    let nq = mech.nq();
+    let t0 = mech.t_start();
+    let mut y = given.clone();
     let fail = |mech: &Mechanism, phi: &[f64], jac: &Mat<f64>, what: &str, iters: usize| {
         if mech.formulation().needs_full_rank() {
             check_rank(mech, &rows, jac)?;
