@@ -27,13 +27,14 @@ use faer::linalg::solvers::SolveCore;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Side};
 
-use super::{
-    report, velocity_rows, worst, ProjectionReport, MAX_ITER, MAX_PROJECTION_CONDITION,
-    MAX_PROJECTION_ENERGY_RATIO, POS_TOL, VEL_TOL,
+use super::common::{
+    report, velocity_rows, worst, MAX_ITER, MAX_PROJECTION_CONDITION, MAX_PROJECTION_ENERGY_RATIO,
+    POS_TOL, VEL_TOL,
 };
 use crate::mechanism::bodies::Owner;
 use crate::mechanism::constraints::{eval_row, Row};
 use crate::mechanism::Mechanism;
+use crate::projection::ProjectionReport;
 use crate::scene::error::SceneError;
 
 /// Mechanisms with at least this many coordinates n_q of integrated bodies (100 bodies) are
@@ -422,7 +423,8 @@ mod tests {
     //! the dense path's.
     use serde_json::{json, Value};
 
-    use super::super::{assembly_rows, dense, guess, velocity_rows};
+    use super::super::common::velocity_rows;
+    use super::super::{assembly_rows, dense, guess};
     use super::*;
     use crate::scene::format::{FormulationName, Scene};
 
