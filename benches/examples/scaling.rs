@@ -29,6 +29,11 @@
 //! example's directory (target/release/lash), or each `--lash PATH` given: with several, every
 //! case runs with each binary in turn (old and new side by side in one session), one row each,
 //! the binary's path in a column of its own.
+//!
+//! `--figure STEM` also writes STEM.csv (one row per case and binary: kind, N, n = dim y,
+//! exit code, wall time, CPU time and peak RSS), the data of a log–log figure against N (the
+//! figure itself is not drawn yet). CPU time is utime + stime of /proc/<pid>/stat (every
+//! thread), polled with the memory: it misses at most the child's last 5 ms.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -103,8 +108,31 @@ fn vm_hwm(pid: u32) -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
+/// CPU time (user + system, every thread) of a live process (s), from /proc/<pid>/stat.
+fn cpu_time(pid: u32) -> Option<f64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name (which may hold spaces), from its closing parenthesis:
+    // state is field 3, utime 14 and stime 15 (proc(5)).
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    // USER_HZ is 100 on every Linux configuration lash runs on (sysconf(_SC_CLK_TCK)).
+    Some(ticks / 100.0)
+}
+
+/// One measured case (a row of the CSV).
+struct Measured {
+    kind: String,
+    bodies: usize,
+    binary: Option<String>,
+    exit: Option<i32>,
+    wall: f64,
+    cpu: f64,
+    rss_mb: f64,
+}
+
 /// One case: exit code, wall time of the process (s), the run's own wall time (s), peak
-/// memory (MB).
+/// memory (MB); printed as a table row and returned with the CPU time.
 fn measure(
     lash: &PathBuf,
     label: Option<&str>,
@@ -112,7 +140,8 @@ fn measure(
     name: &str,
     scene: &str,
     t_end: Option<&str>,
-) {
+) -> Measured {
+    let binary = label.map(str::to_string);
     let path = dir.join(format!("{name}.json"));
     std::fs::write(&path, scene).expect("write the scene");
     let out = dir.join(name);
@@ -128,11 +157,13 @@ fn measure(
         .spawn()
         .expect("spawn lash");
     let mut peak = 0;
+    let mut cpu = 0.0f64;
     let status = loop {
         if let Some(s) = child.try_wait().expect("wait for lash") {
             break s;
         }
         peak = peak.max(vm_hwm(child.id()).unwrap_or(0));
+        cpu = cpu.max(cpu_time(child.id()).unwrap_or(0.0));
         std::thread::sleep(Duration::from_millis(5));
     };
     let wall = start.elapsed().as_secs_f64();
@@ -154,6 +185,43 @@ fn measure(
         peak as f64 / 1024.0
     );
     std::io::stdout().flush().ok();
+    Measured {
+        kind: String::new(),
+        bodies: 0,
+        binary,
+        exit: status.code(),
+        wall,
+        cpu,
+        rss_mb: peak as f64 / 1024.0,
+    }
+}
+
+/// STEM.csv of the module doc.
+fn write_figure(stem: &std::path::Path, rows: &[Measured]) {
+    let mut csv = String::from("kind,bodies,n,binary,exit,wall_s,cpu_s,peak_rss_mb\n");
+    for r in rows {
+        csv += &format!(
+            "{},{},{},{},{},{:.4},{:.4},{:.1}\n",
+            r.kind,
+            r.bodies,
+            6 * r.bodies,
+            r.binary.as_deref().unwrap_or(""),
+            r.exit.map_or_else(|| "signal".into(), |c| c.to_string()),
+            r.wall,
+            r.cpu,
+            r.rss_mb
+        );
+    }
+    let name = |suffix: &str| {
+        let mut s = stem.as_os_str().to_owned();
+        s.push(suffix);
+        PathBuf::from(s)
+    };
+    if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).expect("the figure's directory");
+    }
+    std::fs::write(name(".csv"), csv).expect("write the CSV");
+    println!("wrote {}.csv", stem.display());
 }
 
 /// The `crossover N` case (module doc): one table row; `kkt`: the `kkt-crossover N` case.
@@ -213,9 +281,17 @@ fn main() {
     let mut cases: Vec<(String, usize)> = Vec::new();
     let mut kind = None;
     let mut lashes: Vec<PathBuf> = Vec::new();
+    let mut figure: Option<PathBuf> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
+            "--figure" => match it.next() {
+                Some(p) => figure = Some(PathBuf::from(p)),
+                None => {
+                    eprintln!("--figure needs a path stem (e.g. docs/figures/scaling)");
+                    std::process::exit(2);
+                }
+            },
             "--lash" => match it.next() {
                 Some(p) => lashes.push(PathBuf::from(p)),
                 None => {
@@ -229,7 +305,7 @@ fn main() {
                 _ => {
                     eprintln!(
                         "usage: scaling [chain N…] [free N…] [clearance N…] (N ≥ 1) \
-                         [--lash PATH]…"
+                         [--lash PATH]… [--figure STEM]"
                     );
                     std::process::exit(2);
                 }
@@ -275,6 +351,7 @@ fn main() {
         println!("| case | exit | wall (s) | run (s) | peak RSS (MB) |");
         println!("|---|---|---|---|---|");
     }
+    let mut rows = Vec::new();
     for (k, n) in cases {
         let (scene, t_end) = match k.as_str() {
             "chain" => (chain(n, false), Some("1e-3")),
@@ -286,7 +363,7 @@ fn main() {
             // A directory per binary: each run writes its own output.
             let sub = dir.join(i.to_string());
             std::fs::create_dir_all(&sub).expect("a temporary directory");
-            measure(
+            let mut m = measure(
                 lash,
                 label.as_deref(),
                 &sub,
@@ -294,7 +371,12 @@ fn main() {
                 &scene,
                 t_end,
             );
+            (m.kind, m.bodies) = (k.clone(), n);
+            rows.push(m);
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+    if let Some(stem) = figure {
+        write_figure(&stem, &rows);
+    }
 }

@@ -67,12 +67,25 @@ def memory_child(call: str) -> dict:
     return lines
 
 
+def chain(n: int) -> str:
+    """The expression of n pendulum links (0.1 m, 1 kg) pinned end to end, the first to the
+    ground: one cluster, whose Jacobian is dense (6n state components)."""
+    return ('{"bodies": [{"name": f"l{i}", "mass": 1.0, "inertia": 0.000833, '
+            '"position": [0.1 * i + 0.05, 0.0], '
+            '"points": {"A": [-0.05, 0.0], "B": [0.05, 0.0]}} for i in range(%d)], '
+            '"joints": [{"type": "revolute", "name": "j0", "a": {"body": "l0", "point": "A"}, '
+            '"b": {"body": "ground", "at": [0.0, 0.0]}}] + '
+            '[{"type": "revolute", "name": f"j{i}", "a": {"body": f"l{i - 1}", "point": "B"}, '
+            '"b": {"body": f"l{i}", "point": "A"}} for i in range(1, %d)], '
+            '"gravity": [0.0, -9.81], "t_end": 0.001}' % (n, n))
+
+
 def test_a_3000_body_scene_under_6_gib_raises_memory_error_not_abort():
-    # Before: "memory allocation of 2592000000 bytes failed" and SIGABRT. BDF now takes the
-    # sparse path on 3000 free bodies (a block-diagonal Jacobian), so the dense-only Rodas5P
-    # is the one refused up front: three 18000 x 18000 matrices, 3 * 18000**2 * 8 =
-    # 7 776 000 000 bytes.
-    out = memory_child(f"lash.run({free_bodies(3000)}, method='rodas5p', name='free3000')")
+    # Before: "memory allocation of 2592000000 bytes failed" and SIGABRT. BDF and Rodas5P now
+    # take the sparse path on 3000 free bodies (a block-diagonal Jacobian), so the refused
+    # case is a chain of 3000 links (one cluster: the dense path): Rodas5P's three
+    # 18000 x 18000 matrices, 3 * 18000**2 * 8 = 7 776 000 000 bytes.
+    out = memory_child(f"lash.run({chain(3000)}, method='rodas5p', name='chain3000')")
     kind, is_memory, is_lash, needed, budget = out["RESULT"].split()
     assert (kind, is_memory, is_lash) == ("OutOfMemoryError", "True", "True"), out
     assert int(needed) == 3 * 18000 ** 2 * 8

@@ -23,29 +23,19 @@
 
 use faer::Mat;
 
-use crate::mechanism::bodies::Owner;
-use crate::mechanism::constraints::{describe, eval_row, Row, Term, TermKind};
-use crate::mechanism::Mechanism;
-use crate::projection::{CoordinateChange, ProjectionReport, REPORT_TOL};
-use crate::scene::error::SceneError;
-use crate::scene::format::JointSpec;
-use crate::scene::refs::GROUND;
+mod common;
+mod sparse;
 
-/// Position tolerance of the assembly (m or rad).
-const POS_TOL: f64 = 1e-12;
-/// Velocity tolerance after the projection (m/s or rad/s).
-const VEL_TOL: f64 = 1e-10;
-/// Newton iterations before giving up.
-const MAX_ITER: usize = 50;
-/// Relative singular-value threshold of the rank check.
-const RANK_TOL: f64 = 1e-9;
-/// Largest condition number of the velocity projection that meets exact initial velocities
-/// (docs/model.md §1.6).
-const MAX_PROJECTION_CONDITION: f64 = 1e8;
-/// Largest ratio of the kinetic energy the projection adds to the energy the exact initial
-/// velocities carry (docs/model.md §1.6): a lever multiplies it by (1 + its arm ratio²), a
-/// pinned rod given its centre's speed by 4/3.
-const MAX_PROJECTION_ENERGY_RATIO: f64 = 100.0;
+use common::{
+    report, velocity_rows, worst, MAX_ITER, MAX_PROJECTION_CONDITION, MAX_PROJECTION_ENERGY_RATIO,
+    POS_TOL, RANK_TOL, VEL_TOL,
+};
+
+use crate::mechanism::bodies::Owner;
+use crate::mechanism::constraints::{describe, eval_row, Row};
+use crate::mechanism::Mechanism;
+use crate::projection::ProjectionReport;
+use crate::scene::error::SceneError;
 
 /// The equations held during assembly: the mechanism's constraint equations, then each
 /// clearance joint's own (its initial eccentricity, or its initial offset and tilt), with
@@ -62,88 +52,6 @@ fn assembly_rows(mech: &Mechanism) -> Vec<Row> {
         rows.extend(p.assembly_rows(&integrated, t0));
     }
     rows
-}
-
-/// Velocity-only equations: the exact initial velocities the scene asks for (joint
-/// `initial_rate`, body `initial_velocity`), each with its JSON path and a description.
-fn velocity_rows(mech: &Mechanism) -> Vec<(Row, String, String)> {
-    let scene = mech.scene();
-    let t0 = mech.t_start();
-    let mut out = Vec::new();
-    for (ji, j) in scene.joints.iter().enumerate() {
-        match j {
-            JointSpec::Revolute(r) => {
-                let Some(v) = r.initial_rate else { continue };
-                let mut row = Row::new(ji, "initial rate");
-                for (a, c) in [(&r.a, 1.0), (&r.b, -1.0)] {
-                    if a.body != GROUND {
-                        row.push(Term {
-                            body: scene.body_index(&a.body).expect("validated"),
-                            kind: TermKind::Angle { c },
-                        });
-                    }
-                }
-                out.push((
-                    row.with_rate(v, t0),
-                    format!("joints[{ji}].initial_rate"),
-                    format!("the initial rate {v} rad/s of {j}"),
-                ));
-            }
-            JointSpec::Translational(tr) => {
-                let Some(v) = tr.initial_rate else { continue };
-                let k = scene.body_index(&tr.body).expect("validated");
-                let l = tr.direction[0].hypot(tr.direction[1]);
-                let mut row = Row::new(ji, "initial rate");
-                row.push(Term {
-                    body: k,
-                    kind: TermKind::Point {
-                        s: scene.bodies[k].points[&tr.point],
-                        w: [tr.direction[0] / l, tr.direction[1] / l],
-                    },
-                });
-                out.push((
-                    row.with_rate(v, t0),
-                    format!("joints[{ji}].initial_rate"),
-                    format!("the initial rate {v} m/s of {j}"),
-                ));
-            }
-            _ => {}
-        }
-    }
-    for (k, b) in scene.bodies.iter().enumerate() {
-        let Some(iv) = &b.initial_velocity else {
-            continue;
-        };
-        for (name, v, kind) in [
-            (
-                "vx",
-                iv.vx,
-                TermKind::Point {
-                    s: [0.0; 2],
-                    w: [1.0, 0.0],
-                },
-            ),
-            (
-                "vy",
-                iv.vy,
-                TermKind::Point {
-                    s: [0.0; 2],
-                    w: [0.0, 1.0],
-                },
-            ),
-            ("omega", iv.omega, TermKind::Angle { c: 1.0 }),
-        ] {
-            let Some(v) = v else { continue };
-            let mut row = Row::new(usize::MAX, "initial velocity");
-            row.push(Term { body: k, kind });
-            out.push((
-                row.with_rate(v, t0),
-                format!("bodies[{k}].initial_velocity.{name}"),
-                format!("the initial velocity {name} = {v} of body '{}'", b.name),
-            ));
-        }
-    }
-    out
 }
 
 /// Evaluates rows at (t, y): values, rates, and the Jacobian on integrated columns.
@@ -266,49 +174,10 @@ fn contradictory(mech: &Mechanism, rows: &[Row], phi: &[f64]) -> Result<(), Scen
     })
 }
 
-/// The report of what assembly changed: `given` and `assembled` states (q, q̇).
-fn report(mech: &Mechanism, given: &[f64], y: &[f64]) -> ProjectionReport {
+/// The scene's state y = (q, q̇) of the integrated bodies: positions and angles as given,
+/// velocities the exact `initial_velocity` where there is one, else the guesses.
+fn guess(mech: &Mechanism) -> Vec<f64> {
     let nq = mech.nq();
-    let mut r = ProjectionReport::default();
-    const NAMES: [&str; 6] = ["x", "y", "theta", "vx", "vy", "omega"];
-    for (i, &k) in mech.bodies().int_bodies.iter().enumerate() {
-        let b = &mech.body_info()[k];
-        let m = [b.mass, b.mass, b.inertia];
-        for c in 0..3 {
-            let (vg, va) = (given[nq + 3 * i + c], y[nq + 3 * i + c]);
-            r.kinetic_energy_given += 0.5 * m[c] * vg * vg;
-            r.kinetic_energy_assembled += 0.5 * m[c] * va * va;
-        }
-        for (c, name) in NAMES.iter().enumerate() {
-            let j = if c < 3 { 3 * i + c } else { nq + 3 * i + c - 3 };
-            let change = y[j] - given[j];
-            if c < 3 {
-                r.max_position_change = r.max_position_change.max(change.abs());
-            } else {
-                r.max_velocity_change = r.max_velocity_change.max(change.abs());
-            }
-            if change.abs() > REPORT_TOL * given[j].abs().max(1.0) {
-                r.changes.push(CoordinateChange {
-                    body: b.name.clone(),
-                    coordinate: name,
-                    given: given[j],
-                    assembled: y[j],
-                    change,
-                });
-            }
-        }
-    }
-    // Positions first, then velocities (stable within each).
-    r.changes
-        .sort_by_key(|c| matches!(c.coordinate, "vx" | "vy" | "omega"));
-    r
-}
-
-/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇) and what
-/// the assembly changed.
-pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
-    let nq = mech.nq();
-    let t0 = mech.t_start();
     let mut y = vec![0.0; 2 * nq];
     for (i, &k) in mech.bodies().int_bodies.iter().enumerate() {
         let b = &mech.scene().bodies[k];
@@ -320,21 +189,39 @@ pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport),
         y[nq + 3 * i + 1] = iv.vy.unwrap_or(b.velocity[1]);
         y[nq + 3 * i + 2] = iv.omega.unwrap_or(b.angular_velocity);
     }
-    let given = y.clone();
+    y
+}
+
+/// Newton on positions, projection of velocities, rank check; returns y0 = (q, q̇) and what
+/// the assembly changed. From `sparse::SPARSE_FROM_COORDINATES` coordinates on sparse
+/// matrices when that path can answer (assembly/sparse.rs), else on dense ones.
+pub(crate) fn assemble(mech: &Mechanism) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
+    let nq = mech.nq();
+    let given = guess(mech);
     let rows = assembly_rows(mech);
     let vrows = velocity_rows(mech);
     if rows.is_empty() && vrows.is_empty() {
-        return Ok((y, ProjectionReport::default()));
+        return Ok((given, ProjectionReport::default()));
     }
-    let worst = |phi: &[f64]| -> (usize, f64) {
-        phi.iter().enumerate().fold((0, 0.0), |(bi, bv), (i, v)| {
-            if !(v.abs() <= bv) {
-                (i, v.abs())
-            } else {
-                (bi, bv)
-            }
-        })
-    };
+    if nq >= sparse::SPARSE_FROM_COORDINATES {
+        if let Some(done) = sparse::assemble(mech, &rows, &given)? {
+            return Ok(done);
+        }
+    }
+    dense(mech, rows, vrows, given)
+}
+
+/// The dense path of [`assemble`]: SVDs of the m × n_q Jacobians (the reference of the sparse
+/// path, and the one that words every refusal).
+fn dense(
+    mech: &Mechanism,
+    rows: Vec<Row>,
+    vrows: Vec<(Row, String, String)>,
+    given: Vec<f64>,
+) -> Result<(Vec<f64>, ProjectionReport), SceneError> {
+    let nq = mech.nq();
+    let t0 = mech.t_start();
+    let mut y = given.clone();
     let fail = |mech: &Mechanism, phi: &[f64], jac: &Mat<f64>, what: &str, iters: usize| {
         if mech.formulation().needs_full_rank() {
             check_rank(mech, &rows, jac)?;

@@ -208,6 +208,8 @@ pub struct Problem<'a, S: OdeSystem + ?Sized> {
     opts: SolverOptions,
     config: Config,
     diffsol: Option<DiffsolProblem<'a, S>>,
+    /// Rodas5P's pattern on the sparse path (crate::linear_algebra), coloured.
+    rodas_sparse: Option<crate::jacobian::Colouring>,
 }
 
 impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
@@ -236,18 +238,40 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
                 opts.linear_algebra,
                 opts.max_memory,
             )?),
-            _ => {
+            _ => None,
+        };
+        // Rodas5P takes the sparse path as diffsol's methods do; the other one-step methods
+        // (explicit) have no matrices.
+        let mut rodas_sparse = None;
+        if diffsol.is_none() {
+            let pattern = (opts.method == Method::Rodas5p)
+                .then(|| crate::linear_algebra::sparse_pattern(sys, opts.linear_algebra))
+                .flatten();
+            if let Some(pattern) = pattern {
+                let nnz = pattern.iter().map(Vec::len).sum::<usize>();
+                crate::memory::check_sparse(opts.method, sys.dim(), nnz, opts.max_memory)
+                    .map_err(SolveError::OutOfMemory)?;
+                // sparse_pattern's rows are in range: the colouring exists.
+                rodas_sparse = crate::jacobian::Colouring::new(pattern);
+            }
+            if rodas_sparse.is_none() {
                 crate::memory::check_method(opts.method, sys.dim(), opts.max_memory)
                     .map_err(SolveError::OutOfMemory)?;
-                None
             }
-        };
+        }
         Ok(Problem {
             sys,
             opts: opts.clone(),
             config,
             diffsol,
+            rodas_sparse,
         })
+    }
+
+    /// Whether the method runs on sparse matrices (crate::linear_algebra: diffsol's methods
+    /// and Rodas5P).
+    pub fn is_sparse(&self) -> bool {
+        self.rodas_sparse.is_some() || self.diffsol.as_ref().is_some_and(|d| d.is_sparse())
     }
 
     /// The validated configuration of the method's family, which the steppers consume.
@@ -299,7 +323,12 @@ pub fn make_stepper<'p, S: OdeSystem + ?Sized>(
     match problem.config() {
         Config::Fixed(c) => Ok(Box::new(crate::rk4::Rk4::new(sys, t0, y0, c)?)),
         Config::OneStep(c) if c.method() == Method::Rodas5p => {
-            let m = crate::rosenbrock::Rodas5pMethod::new(sys, c.tolerances());
+            let m = match &problem.rodas_sparse {
+                Some(colouring) => {
+                    crate::rosenbrock::Rodas5pMethod::sparse(sys, c.tolerances(), colouring.clone())
+                }
+                None => crate::rosenbrock::Rodas5pMethod::new(sys, c.tolerances()),
+            };
             Ok(Box::new(crate::onestep::OneStepDriver::new(
                 sys, m, t0, y0, c,
             )))

@@ -1,5 +1,6 @@
 //! Dense or sparse linear algebra for diffsol's implicit methods (BDF, TR-BDF2, ESDIRK3(4)),
-//! chosen per problem.
+//! chosen per problem; Rodas5P chooses the same way (its sparse W: crate::sparse_lu::
+//! ShiftedSparse).
 //!
 //! ```text
 //! dense   nalgebra vectors and n × n matrices: ∂f/∂y the system's own (or forward
@@ -36,8 +37,8 @@ use std::rc::Rc;
 use crate::kkt::KktNewton;
 use crate::system::OdeSystem;
 
-/// Which linear algebra diffsol's implicit methods use (module doc). The other methods
-/// ignore it.
+/// Which linear algebra diffsol's implicit methods and Rodas5P use (module doc). The other
+/// methods ignore it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearAlgebra {

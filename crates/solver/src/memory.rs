@@ -24,7 +24,8 @@
 //! (∂f/∂y, the LU and faer's scratch of the factorisation; counted as 3), the explicit methods
 //! and RK4 0.
 //!
-//! The sparse path of diffsol's methods (crate::linear_algebra) stores no n × n matrix: its
+//! The sparse path of diffsol's methods and Rodas5P (crate::linear_algebra) stores no n × n
+//! matrix: its
 //! need is counted per entry of the pattern of ∂f/∂y (nnz) and of the Newton matrix
 //! (nnz + n, with the diagonal), [`sparse_bytes`]:
 //!

@@ -40,6 +40,11 @@
 //! J, f(t_n, y_n) and f_t (they belong to the step's start). Fixed steps (`adaptive = false`):
 //! h0 on every step, the error estimate ignored.
 //!
+//! Large sparse systems (crate::linear_algebra's choice, as for diffsol's methods: `auto` from
+//! 600 unknowns with a pattern of at most n²/8 entries): J by coloured differences on the
+//! system's pattern (colours + 1 RHS evaluations) and W by faer's sparse LU
+//! (crate::sparse_lu::ShiftedSparse), O(nnz) memory; the same tableau and step control.
+//!
 //! Step size: the loop of [`crate::onestep::OneStepDriver`] (default controller Gustafsson's
 //! predictive one, [`Method::default_controller`]; any [`crate::ControllerKind`] accepted),
 //! with error order p̂ = 4. A singular W (a zero or non-finite pivot) rejects the attempt (`rejected_newton`) and shrinks h by 4;
@@ -345,6 +350,33 @@ impl DenseLu {
     }
 }
 
+/// W = I/(hγ) − J and its factors: dense (n² f64) or sparse (crate::sparse_lu).
+enum Linear {
+    Dense { jac: Mat<f64>, w: Box<DenseLu> },
+    Sparse(Box<crate::sparse_lu::ShiftedSparse>),
+}
+
+impl Linear {
+    /// Sets W = d·I − J and factors it; false when it is singular.
+    fn factor(&mut self, d: f64) -> bool {
+        match self {
+            Linear::Dense { jac, w } => {
+                w.set_shifted(jac, d);
+                w.factor()
+            }
+            Linear::Sparse(w) => w.factor(d),
+        }
+    }
+
+    /// Solves W x = b in place.
+    fn solve(&mut self, x: &mut [f64]) {
+        match self {
+            Linear::Dense { w, .. } => w.solve(x),
+            Linear::Sparse(w) => w.solve(x),
+        }
+    }
+}
+
 /// LU factorisation with partial pivoting of a small dense matrix, row-major, in place.
 ///
 /// ```text
@@ -448,8 +480,7 @@ pub struct Rodas5pMethod {
     atol: Atol,
     f0: Vec<f64>,
     dfdt: Vec<f64>,
-    jac: Mat<f64>,
-    w: DenseLu,
+    lin: Linear,
     jac_eval: JacobianEvaluator,
     k: Vec<Vec<f64>>,
     dense: [Vec<f64>; 3],
@@ -460,8 +491,41 @@ pub struct Rodas5pMethod {
 
 impl Rodas5pMethod {
     /// The method for `sys` with tolerances `tol` (the finite-difference increments of the
-    /// Jacobian are floored at atol_i/rtol). Nothing is evaluated before the first step.
+    /// Jacobian are floored at atol_i/rtol), on dense matrices. Nothing is evaluated before
+    /// the first step.
     pub fn new<Sy: OdeSystem + ?Sized>(sys: &Sy, tol: &Tolerances) -> Self {
+        let n = sys.dim();
+        Self::with_linear(
+            sys,
+            tol,
+            Linear::Dense {
+                jac: Mat::zeros(n, n),
+                w: Box::new(DenseLu::new(n)),
+            },
+        )
+    }
+
+    /// The method on sparse matrices (crate::linear_algebra's sparse path): ∂f/∂y by
+    /// coloured differences on `colouring`'s pattern, W by faer's sparse LU
+    /// (crate::sparse_lu); the dense method ([`Rodas5pMethod::new`]) when the pattern's
+    /// symbolic factorisation fails.
+    pub fn sparse<Sy: OdeSystem + ?Sized>(
+        sys: &Sy,
+        tol: &Tolerances,
+        colouring: crate::jacobian::Colouring,
+    ) -> Self {
+        match crate::sparse_lu::ShiftedSparse::new(colouring) {
+            Some(w) => Self::with_linear(sys, tol, Linear::Sparse(Box::new(w))),
+            None => Self::new(sys, tol),
+        }
+    }
+
+    /// Whether it runs on sparse matrices.
+    pub fn is_sparse(&self) -> bool {
+        matches!(self.lin, Linear::Sparse(_))
+    }
+
+    fn with_linear<Sy: OdeSystem + ?Sized>(sys: &Sy, tol: &Tolerances, lin: Linear) -> Self {
         let n = sys.dim();
         let (rtol, atol) = (tol.rtol(), tol.atol());
         let scale = (0..n).map(|i| atol.get(i) / rtol).collect();
@@ -472,8 +536,7 @@ impl Rodas5pMethod {
             atol: atol.clone(),
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
-            jac: Mat::zeros(n, n),
-            w: DenseLu::new(n),
+            lin,
             jac_eval: JacobianEvaluator::new(scale),
             k: vec![vec![0.0; n]; S],
             dense: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
@@ -499,8 +562,13 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
         if !self.f0.iter().all(|v| v.is_finite()) {
             return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
         }
-        self.jac_eval
-            .jacobian(sys, t, y, &self.f0, self.jac.as_mut(), stats);
+        match &mut self.lin {
+            Linear::Dense { jac, .. } => {
+                self.jac_eval
+                    .jacobian(sys, t, y, &self.f0, jac.as_mut(), stats)
+            }
+            Linear::Sparse(w) => w.jacobian(&mut self.jac_eval, sys, (t, y, &self.f0), stats),
+        }
         if self.autonomous {
             self.dfdt.fill(0.0);
         } else if self.analytic_ft {
@@ -529,9 +597,8 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
         let n = y.len();
         // W = I/(hγ) − J
         let diag = 1.0 / (h * GAMMA);
-        self.w.set_shifted(&self.jac, diag);
         stats.lu_factorizations += 1;
-        if !self.w.factor() {
+        if !self.lin.factor(diag) {
             return Attempt::Singular;
         }
         for i in 0..S {
@@ -562,7 +629,7 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
                 }
                 ki[l] = v;
             }
-            self.w.solve(ki);
+            self.lin.solve(ki);
             if !ki.iter().all(|v| v.is_finite()) {
                 return Attempt::Error(f64::INFINITY);
             }

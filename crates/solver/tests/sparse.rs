@@ -114,3 +114,70 @@ fn a_nan_jacobian_on_the_sparse_path_is_a_typed_error() {
         }
     }
 }
+
+/// Rodas5P on the sparse path (lash_solver::rosenbrock, sparse_lu::ShiftedSparse) on the
+/// diagonal system: its error against e^{−k t} within 100 rtol as diffsol's methods' above,
+/// and, the system giving no analytic Jacobian, the same f at the same points on both paths
+/// (the dense path colours its differences by the same pattern) with a diagonal W whose LU is
+/// a division per entry on both: the same steps, evaluations and factorisations.
+#[test]
+fn rodas5p_on_sparse_matrices_meets_the_exact_solution() {
+    let n = 1000;
+    let sys = Diagonal((0..n).map(|i| 1.0 + 9.0 * i as f64 / n as f64).collect());
+    let y0 = vec![1.0; n];
+    let mut runs = Vec::new();
+    for la in [LinearAlgebra::Dense, LinearAlgebra::Auto] {
+        let p = Problem::new(&sys, &opts(Method::Rodas5p, la)).unwrap();
+        assert_eq!(p.is_sparse(), la == LinearAlgebra::Auto);
+        let sol = p.solve((0.0, 1.0), &y0).unwrap();
+        let err = sol
+            .y_final
+            .iter()
+            .zip(&sys.0)
+            .map(|(y, k)| (y - (-k).exp()).abs())
+            .fold(0.0, f64::max);
+        assert!(err <= 100.0 * 1e-8, "{la:?}: error {err:e}");
+        runs.push(sol);
+    }
+    let (d, s) = (runs[0].stats, runs[1].stats);
+    assert!(s.jac_evals > 0 && s.lu_factorizations > 0);
+    assert_eq!(
+        (
+            d.accepted,
+            d.rejected_error,
+            d.rhs_evals,
+            d.jac_evals,
+            d.lu_factorizations
+        ),
+        (
+            s.accepted,
+            s.rejected_error,
+            s.rhs_evals,
+            s.jac_evals,
+            s.lu_factorizations
+        )
+    );
+    let diff = runs[0]
+        .y_final
+        .iter()
+        .zip(&runs[1].y_final)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(diff <= 1e-14, "difference {diff:e}");
+}
+
+/// A NaN Jacobian reaching Rodas5P's sparse LU ends in a typed error, as on diffsol's path.
+#[test]
+fn a_nan_jacobian_on_rodas5ps_sparse_path_is_a_typed_error() {
+    let sys = NanOff(vec![1.0; 800]);
+    let p = Problem::new(&sys, &opts(Method::Rodas5p, LinearAlgebra::Sparse)).unwrap();
+    assert!(p.is_sparse());
+    match p.solve((0.0, 1.0), &sys.0) {
+        Err(
+            SolveError::NewtonFailure { .. }
+            | SolveError::StepSizeTooSmall { .. }
+            | SolveError::NonFiniteState { .. },
+        ) => {}
+        other => panic!("{:?}", other.map(|s| s.t_final)),
+    }
+}

@@ -153,7 +153,7 @@ pub struct SolverOptions {
     /// half of the memory available to the process ([`crate::memory`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_memory: Option<u64>,
-    /// Dense or sparse matrices for diffsol's implicit methods
+    /// Dense or sparse matrices for diffsol's implicit methods and Rodas5P
     /// ([`crate::linear_algebra::LinearAlgebra`]). Default `auto`: sparse for large systems
     /// that give a sparse Jacobian pattern. Ignored by the other methods.
     #[serde(skip_serializing_if = "crate::linear_algebra::LinearAlgebra::is_auto")]
