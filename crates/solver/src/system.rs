@@ -177,6 +177,23 @@ pub trait OdeSystem {
         Ok(())
     }
 
+    /// Number m_q of quadrature variables Q (default 0: none).
+    ///
+    /// ```text
+    /// Q' = q(t, y),  Q(t0) = 0,  Q ∈ ℝ^{m_q}      (q does not depend on Q)
+    /// ```
+    /// As CVODES's quadrature variables without error control: the integrals are taken by the
+    /// method's own formula at its own stage states (`Integrator::step_quadrature`), and they
+    /// never enter the error norm, so the step sequence is the one without them, bit for bit.
+    fn n_quadratures(&self) -> usize {
+        0
+    }
+
+    /// The integrand q(t, y) of the quadrature variables, written into `q` (length
+    /// [`OdeSystem::n_quadratures`]). Called only when that is nonzero; not counted as an RHS
+    /// evaluation.
+    fn quadrature(&self, _t: f64, _y: &[f64], _q: &mut [f64]) {}
+
     /// Runs after an event has been located, with the state at the event time. It may change
     /// `y` (a bounce) and the system's own state (an impact velocity stored for a contact law).
     /// Returns what the integrator does next; the default is the event's declared action.
