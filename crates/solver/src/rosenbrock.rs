@@ -25,7 +25,10 @@
 //! Σ b_i a_ij (c_j + γ_j) = 1/6 fails and the integral of a y-dependent q is of order 2 only
 //! (measured: tests/quadrature.rs). With g every tree of the augmented system is the
 //! method's own: order 5. Cost per accepted step: 18 evaluations of q (8 stages, 8
-//! directions, 2 for q_t), none of f.
+//! directions, 2 for q_t), none of f. On a stiff component the stage states are poor (stage
+//! order 1) and q may depend on it steeply (a lubricant film's force): the differences for
+//! g·k_i are then unreliable, and lash-validation keeps Boole's rule on the dense output for
+//! this method's runs (its `run/quadrature.rs`).
 //!
 //! This is the transformed form of HNW II, §IV.7, (7.25)–(7.26) (variables k_i = u_i there), in
 //! which every stage needs one right-hand side and one solve with the same LU factors of W.
@@ -639,8 +642,8 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
     /// The quadrature rows of the stages (module documentation): k_i^Q = hγ (q_i + g·k_i +
     /// d_i h q_t + Σ_{j<i} (C_ij/h) k_j^Q), Q increment Σ m_j k_j^Q, estimate |k_8^Q|, with
     /// q_i at the stage states U_i = y_n + Σ_{j<i} a_ij k_j rebuilt from the accepted step's
-    /// stages, g·k_i = ∂q/∂y(t_n, y_n)·k_i a forward difference along k_i and q_t a central
-    /// difference in t.
+    /// stages, g·k_i = ∂q/∂y(t_n, y_n)·k_i a forward difference along k_i (no component moved
+    /// by more than √ε (|y_l| + atol_l/rtol)) and q_t a central difference in t.
     fn quadrature(
         &self,
         sys: &Sy,
@@ -665,15 +668,19 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
         for c in 0..m {
             qt[c] = (q[c] - qt[c]) / (2.0 * dt);
         }
-        let y_norm = y_prev.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+        // Each component's scale: |y_l| + atol_l/rtol (the Jacobian's increments' floor).
+        let scale: Vec<f64> = (0..n)
+            .map(|l| y_prev[l].abs() + self.atol.get(l) / self.rtol)
+            .collect();
         let mut gk = vec![0.0; m];
         let mut kq = [const { Vec::new() }; S];
         for i in 0..S {
-            // g·k_i: forward difference of q along k_i.
-            let k_norm = self.k[i].iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            // g·k_i: forward difference of q along k_i, no component moved by more than
+            // √ε of its scale.
+            let k_norm = (0..n).fold(0.0_f64, |a, l| a.max(self.k[i][l].abs() / scale[l]));
             gk.fill(0.0);
-            if k_norm > 0.0 {
-                let eps = f64::EPSILON.sqrt() * y_norm / k_norm;
+            if k_norm > 0.0 && k_norm.is_finite() {
+                let eps = f64::EPSILON.sqrt() / k_norm;
                 for l in 0..n {
                     u[l] = y_prev[l] + eps * self.k[i][l];
                 }

@@ -240,8 +240,14 @@ impl<S: OdeSystem + ?Sized, B: La> Op for SysEqn<'_, S, B> {
     fn nstates(&self) -> usize {
         self.rhs.n
     }
+    /// diffsol sizes BDF's output difference table by the equations' `nout`: the
+    /// quadrature's when there is one.
     fn nout(&self) -> usize {
-        self.rhs.n
+        if self.out.m > 0 {
+            self.out.m
+        } else {
+            self.rhs.n
+        }
     }
     fn nparams(&self) -> usize {
         0
