@@ -3,10 +3,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::elements::input::{point_state, Input, Kin, Load, Pt, Table};
-use crate::elements::interface::{ElementEval, ElementSpec, ForceElement};
+use crate::elements::interface::{ElementEval, ElementSpec, ForceElement, ForceJacobian};
 use crate::elements::table::{check_stiffness_or_curve, curve, CurveSpec};
 use crate::labels::Column;
-use crate::planar::dot;
+use crate::planar::{cross, dot, perp};
 use crate::scene::check::Checker;
 use crate::scene::de::object;
 use crate::scene::error::{invalid, SceneError};
@@ -145,6 +145,70 @@ impl ForceElement for SpringDamper {
         out.dissipation = c * ldot * ldot;
         out.potential = pot;
         out
+    }
+
+    /// Closed form for a linear spring (a force–length curve, or zero length, is differenced):
+    ///
+    /// ```text
+    /// d = r_b − r_a, L = |d|, e = d/L, u = v_b − v_a, L̇ = e·u, F = k (L − L₀) + c L̇
+    /// a change (δd, δu):  δL = e·δd,  δe = (δd − e δL)/L,  δL̇ = δe·u + e·δu
+    ///                     δF = k δL + c δL̇,  δ(F e) = δF e + F δe
+    /// by body β's coordinates (σ_a = −1, σ_b = 1; s_β = A s its arm, s⊥ = (−s_y, s_x)):
+    ///   x, y: δd = σ_β (1, 0), (0, 1);  φ: δd = σ_β s⊥_β, δu = −σ_β φ̇_β s_β
+    ///   ẋ, ẏ: δu = σ_β (1, 0), (0, 1);  φ̇: δu = σ_β s⊥_β
+    /// g_β = ρ_β (F e, s_β × F e) (ρ_a = 1, ρ_b = −1); the arm turns with φ_β:
+    ///   ∂(s_β × ρ_β F e)/∂φ_β = s⊥_β × ρ_β F e = −ρ_β s_β · F e
+    /// ```
+    fn jacobian(&self, _t: f64, kin: &Kin<'_>, jac: &mut ForceJacobian<'_>) -> bool {
+        if self.curve.is_some() {
+            return false;
+        }
+        let (ra, va, arm_a) = point_state(&self.a, kin);
+        let (rb, vb, arm_b) = point_state(&self.b, kin);
+        let d = [rb[0] - ra[0], rb[1] - ra[1]];
+        let len = d[0].hypot(d[1]);
+        if !(len > 0.0) {
+            return false;
+        }
+        let e = [d[0] / len, d[1] / len];
+        let u = [vb[0] - va[0], vb[1] - va[1]];
+        let (k, c) = (self.k, self.c);
+        let f = k * (len - self.l0) + c * dot(e, u);
+        let fe = [f * e[0], f * e[1]];
+        let ends = [(self.a.body, -1.0, 1.0, arm_a), (self.b.body, 1.0, -1.0, arm_b)];
+        for &(col_body, sigma, _, s) in &ends {
+            let Some(kc) = col_body else { continue };
+            let (p, w) = (perp(s), kin.vel[kc][2]);
+            let z = [0.0; 2];
+            // (δd, δu) of the six coordinates x, y, φ, ẋ, ẏ, φ̇ of the column body.
+            let moves: [([f64; 2], [f64; 2]); 6] = [
+                ([sigma, 0.0], z),
+                ([0.0, sigma], z),
+                ([sigma * p[0], sigma * p[1]], [-sigma * w * s[0], -sigma * w * s[1]]),
+                (z, [sigma, 0.0]),
+                (z, [0.0, sigma]),
+                (z, [sigma * p[0], sigma * p[1]]),
+            ];
+            for (comp, (dd, du)) in moves.iter().enumerate() {
+                let dl = dot(e, *dd);
+                let de = [(dd[0] - e[0] * dl) / len, (dd[1] - e[1] * dl) / len];
+                let df = k * dl + c * (dot(de, u) + dot(e, *du));
+                let dfe = [df * e[0] + f * de[0], df * e[1] + f * de[1]];
+                for &(row_body, _, rho, ar) in &ends {
+                    let Some(kr) = row_body else { continue };
+                    let g = [rho * dfe[0], rho * dfe[1]];
+                    jac.add((kr, 0), (kc, comp), g[0]);
+                    jac.add((kr, 1), (kc, comp), g[1]);
+                    jac.add((kr, 2), (kc, comp), cross(ar, g));
+                }
+            }
+        }
+        for &(body, _, rho, s) in &ends {
+            if let Some(kb) = body {
+                jac.add((kb, 2), (kb, 2), -rho * dot(s, fe));
+            }
+        }
+        true
     }
 
     fn set_initial(&mut self, t0: f64, kin: &Kin<'_>) {

@@ -2,8 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::elements::input::{opposing_factor, Kin, Law, Load};
-use crate::elements::interface::{ElementEval, ElementSpec, ForceElement};
+use crate::elements::input::{opposing_factor, Input, Kin, Law, Load};
+use crate::elements::interface::{ElementEval, ElementSpec, ForceElement, ForceJacobian};
 use crate::elements::table::{check_value_or_table, default_ramp, law, Acts, TableSpec};
 use crate::labels::Column;
 use crate::scene::check::Checker;
@@ -81,5 +81,12 @@ impl ForceElement for Torque {
         out.load = tau;
         out.power = tau * w;
         out
+    }
+
+    /// A constant torque, or one read from a table of time, that always acts depends on no
+    /// coordinate: ∂g/∂y = 0 (nothing to add). Otherwise differenced.
+    fn jacobian(&self, _t: f64, _kin: &Kin<'_>, _jac: &mut ForceJacobian<'_>) -> bool {
+        self.opposing.is_none()
+            && matches!(self.law, Law::Const(_) | Law::Table(_, Input::Time))
     }
 }

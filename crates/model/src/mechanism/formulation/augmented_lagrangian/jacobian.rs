@@ -25,7 +25,8 @@
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::MatMut;
 
-use crate::linalg::first_order_jacobian_frame;
+use crate::linalg::{block_cholesky_inv, first_order_jacobian_frame};
+use crate::mechanism::accepted::PIVOT_MIN;
 use crate::mechanism::constraints::Constraints;
 use crate::mechanism::formulation::augmented_lagrangian::columns::KktColumns;
 use crate::mechanism::formulation::augmented_lagrangian::core::{AlCore, SparseRows};
@@ -71,10 +72,18 @@ impl AugmentedLagrangian {
         let mut dl = vec![0.0; m];
         let mut x = vec![0.0; nq];
         // B and the factor of T where Φ_q has full row rank (columns.rs).
-        let mut kkt = KktColumns::new(core, rows, nq);
+        // Below the batched size, the direct solve as two operators and every column through
+        // one matrix product (`Operators`); otherwise, or where T is not well conditioned,
+        // B and the factor of T (columns.rs) for the columns one at a time or in batches.
+        let mut ops = (m < BATCHED_MIN_CONSTRAINTS)
+            .then(|| Operators::new(core, rows, nq, m, n))
+            .flatten();
+        let mut kkt = ops.is_none().then(|| KktColumns::new(core, rows, nq));
         let alpha = core.alpha;
-        let mut batch =
-            (kkt.direct() && m >= BATCHED_MIN_CONSTRAINTS).then(|| Batch::new(kkt.tmat(), nq, m));
+        let mut batch = kkt
+            .as_ref()
+            .filter(|k| k.direct() && m >= BATCHED_MIN_CONSTRAINTS)
+            .map(|k| Batch::new(k.tmat(), nq, m));
         for j in 0..n {
             let (qj, vel) = (j % nq, j >= nq);
             let (body_i, comp) = (qj / 3, qj % 3);
@@ -105,6 +114,11 @@ impl AugmentedLagrangian {
             if f.iter().all(|&v| v == 0.0) && c.iter().all(|&v| v == 0.0) {
                 continue;
             }
+            if let Some(o) = ops.as_mut() {
+                o.push(j, &f, &c);
+                continue;
+            }
+            let Some(kkt) = kkt.as_mut() else { continue };
             if let Some(b) = batch.as_mut() {
                 b.push(j, &f, &c);
                 if b.cols.len() == BATCH_COLUMNS {
@@ -117,9 +131,140 @@ impl AugmentedLagrangian {
                 jac[(nq + i, j)] = x[i];
             }
         }
-        if let Some(b) = batch.as_mut() {
+        if let (Some(b), Some(kkt)) = (batch.as_mut(), kkt.as_ref()) {
             b.flush(core, rows, kkt.bmat(), alpha, &mut jac);
         }
+        if let Some(o) = ops {
+            o.finish(&mut jac);
+        }
+    }
+}
+
+/// The direct solve (columns.rs) as two operators, for the Jacobian's columns at once:
+///
+/// ```text
+/// ∂x = z − B ∂λ,  z = A⁻¹(∂f + αΦ_qᵀ∂c),  T ∂λ = Φ_q z − ∂c = Bᵀ∂f + αT∂c − ∂c
+///    = (A⁻¹ − B T⁻¹ Bᵀ) ∂f + B T⁻¹ ∂c  =  N ∂f + Wᵀ ∂c,   W = T⁻¹ Bᵀ  (Φ_q A⁻¹ = Bᵀ)
+/// ```
+/// built from A⁻¹ (n_q solves with A's factor), B = A⁻¹Φ_qᵀ and T = Φ_q B over Φ_q's nonzero
+/// entries, T's Cholesky factor and two triangular solves on Bᵀ (faer's); the columns are then
+/// one matrix product [N Wᵀ] [∂F; ∂C]. The column-by-column solve spent one solve with A, two
+/// triangular solves with T and a product with B per column, in dependent scalar loops
+/// (Andrews' mechanism: 42 columns, n_q = 21, m = 20).
+struct Operators {
+    /// [N Wᵀ] (n_q × (n_q + m)).
+    nw: faer::Mat<f64>,
+    /// [∂F; ∂C] of every column (n_q + m) × n, zero where a column was skipped.
+    rhs: faer::Mat<f64>,
+}
+
+impl Operators {
+    /// The operators at the factored `core` and the rows `rows`; None where Φ_q has no rows
+    /// or T's Cholesky factor has a relative pivot below `PIVOT_MIN` (a singular
+    /// configuration, redundant rows: the multiplier iteration solves the columns, as in
+    /// columns.rs).
+    fn new(core: &AlCore, rows: &SparseRows, nq: usize, m: usize, n: usize) -> Option<Self> {
+        if m == 0 {
+            return None;
+        }
+        let mut nw = faer::Mat::<f64>::zeros(nq, nq + m);
+        // A⁻¹ into N's block (symmetric: column c is row c).
+        let mut e = vec![0.0; nq];
+        for i in 0..nq {
+            e.iter_mut().for_each(|v| *v = 0.0);
+            e[i] = 1.0;
+            core.apply_inverse(&mut e);
+            for (k, &v) in e.iter().enumerate() {
+                nw[(k, i)] = v;
+            }
+        }
+        // B = A⁻¹ Φ_qᵀ (n_q × m).
+        let mut b = faer::Mat::<f64>::zeros(nq, m);
+        for a in 0..m {
+            for el in rows.start[a]..rows.start[a + 1] {
+                let (c, v) = (rows.col[el], rows.val[el]);
+                for k in 0..nq {
+                    b[(k, a)] += v * nw[(k, c)];
+                }
+            }
+        }
+        // T = Φ_q B (lower triangle, row-major, as block_cholesky_inv takes it).
+        let mut t = vec![0.0; m * m];
+        for a in 0..m {
+            for bb in 0..=a {
+                let mut v = 0.0;
+                for el in rows.start[a]..rows.start[a + 1] {
+                    v += rows.val[el] * b[(rows.col[el], bb)];
+                }
+                t[a * m + bb] = v;
+            }
+        }
+        let diag: Vec<f64> = (0..m).map(|a| t[a * m + a]).collect();
+        let all: Vec<usize> = (0..m).collect();
+        if block_cholesky_inv(&mut t, m, &all).is_err()
+            || (0..m).any(|a| {
+                let l = t[a * m + a];
+                !(1.0 / (l * l) >= PIVOT_MIN * diag[a])
+            })
+        {
+            return None;
+        }
+        let l = faer::Mat::from_fn(m, m, |i, j| match j.cmp(&i) {
+            std::cmp::Ordering::Less => t[i * m + j],
+            std::cmp::Ordering::Equal => 1.0 / t[i * m + i],
+            std::cmp::Ordering::Greater => 0.0,
+        });
+        // W = T⁻¹ Bᵀ (m × n_q).
+        let mut w = b.transpose().to_owned();
+        let par = faer::Par::Seq;
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            l.as_ref(),
+            w.as_mut(),
+            par,
+        );
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            l.transpose(),
+            w.as_mut(),
+            par,
+        );
+        // N = A⁻¹ − B W; Wᵀ beside it.
+        let (mut nblk, mut wt) = nw.as_mut().split_at_col_mut(nq);
+        faer::linalg::matmul::matmul(
+            nblk.rb_mut(),
+            faer::Accum::Add,
+            b.as_ref(),
+            w.as_ref(),
+            -1.0,
+            par,
+        );
+        wt.copy_from(w.transpose());
+        Some(Operators {
+            nw,
+            rhs: faer::Mat::zeros(nq + m, n),
+        })
+    }
+
+    /// Column `j`'s ∂f and ∂c.
+    fn push(&mut self, j: usize, f: &[f64], c: &[f64]) {
+        let mut col = self.rhs.col_mut(j);
+        for (i, &v) in f.iter().chain(c).enumerate() {
+            col[i] = v;
+        }
+    }
+
+    /// ∂q̈ = [N Wᵀ] [∂F; ∂C] into the lower rows of `jac`.
+    fn finish(self, jac: &mut MatMut<'_, f64>) {
+        let nq = self.nw.nrows();
+        let n = self.rhs.ncols();
+        let lower = jac.rb_mut().submatrix_mut(nq, 0, nq, n);
+        faer::linalg::matmul::matmul(
+            lower,
+            faer::Accum::Replace,
+            self.nw.as_ref(),
+            self.rhs.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
     }
 }
 
