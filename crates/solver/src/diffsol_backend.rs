@@ -96,11 +96,12 @@ use crate::linear_algebra::{sparse_pattern, uses_kkt, Dense, Kkt, La, LinearAlge
 use crate::method::{Family, Method};
 use crate::options::{Budgets, DiffsolConfig, OptionError, OptionField, Reason, SolverOptions};
 use crate::stats::Stats;
-use crate::stepper::{check_stop, landing_step, step_floor, Budget, Stepper};
+use crate::stepper::{check_stop, landing_step, step_floor, Budget, StepQuadrature, Stepper};
 use crate::system::OdeSystem;
 
 mod ops;
-use ops::{SysEqn, SysInit, SysRhs};
+mod quadrature;
+use ops::{SysEqn, SysInit, SysOut, SysRhs};
 
 type Problem<'a, S, B> = OdeSolverProblem<SysEqn<'a, S, B>>;
 
@@ -254,6 +255,12 @@ fn build<'a, S: OdeSystem + ?Sized, B: La>(
             y0: vec![0.0; n],
             ctx,
         },
+        out: SysOut {
+            sys,
+            n,
+            m: sys.n_quadratures(),
+            ctx,
+        },
     };
     let atol: Vec<f64> = (0..n).map(|i| atol.get(i)).collect();
     let mut problem = OdeBuilder::<B::M>::new()
@@ -267,6 +274,9 @@ fn build<'a, S: OdeSystem + ?Sized, B: La>(
             )
         })?;
     problem.ode_options.max_nonlinear_solver_failures = cfg.budgets().max_steps();
+    // The quadrature (OdeSystem::quadrature) integrated by the method, out of the error norm
+    // (no out_rtol/out_atol): crate::diffsol_backend::quadrature.
+    problem.integrate_out = sys.n_quadratures() > 0;
     Ok(problem)
 }
 
@@ -365,6 +375,9 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
     fn stats(&self) -> Stats {
         with_core!(&self.inner, c => c.stats)
     }
+    fn step_quadrature(&self, value: &mut [f64], _estimate: &mut [f64]) -> StepQuadrature {
+        with_core!(&self.inner, c => c.quad.write(value))
+    }
 }
 
 /// The stepper on the linear algebra `B`.
@@ -397,6 +410,8 @@ struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
     base: Stats,
     stats: Stats,
     buf: RefCell<B::V>,
+    /// The quadrature's increments (diffsol_backend::quadrature).
+    quad: quadrature::Track,
 }
 
 fn map_err(e: DiffsolError, t: f64, h: f64, y: &[f64]) -> SolveError {
@@ -469,6 +484,7 @@ where
             base: Stats::default(),
             stats: Stats::default(),
             buf: RefCell::new(B::V::zeros(n, ctx)),
+            quad: quadrature::Track::new(problem.eqn.out.m),
         };
         st.start(t0, y0)?;
         st.update_stats();
@@ -500,6 +516,7 @@ where
         self.problem.eqn.rhs.eval(t, y, &mut dy);
         self.solver = None;
         self.pending = None;
+        self.quad.clear();
         if !dy.iter().all(|v| v.is_finite()) {
             return Err(SolveError::NonFiniteState { t, y: y.to_vec() });
         }
@@ -522,11 +539,12 @@ where
         let yv = B::V::from_slice(y, ctx);
         let dy = B::V::from_slice(&dy, ctx);
         let empty = || B::V::zeros(0, ctx);
+        let (g, dg) = self.quad.start::<S, B>(problem.eqn.rhs.sys, t, y, ctx);
         let common = StateCommon {
             y: yv,
             dy,
-            g: empty(),
-            dg: empty(),
+            g,
+            dg,
             s: empty(),
             ds: empty(),
             sg: empty(),
@@ -746,6 +764,7 @@ where
             *s.config_mut().as_base_mut().minimum_timestep = floor;
         });
         let before = with_solver!(&*solver, s => s.get_statistics().clone());
+        with_solver!(&*solver, s => self.quad.before(B::slice(s.state().g)));
         let result = with_solver!(&mut *solver, s => s.step());
         let (t_new, h_state) = with_solver!(&*solver, s => (s.state().t, s.state().h));
         let reached = match result {
@@ -804,6 +823,7 @@ where
                 y: self.y.clone(),
             });
         }
+        with_solver!(&*solver, s => self.quad.after(B::slice(s.state().g)));
         self.t_prev = self.t;
         self.t = t_new;
         let h = self.t - self.t_prev;

@@ -107,7 +107,7 @@ use crate::options::{
     Allowed, Config, OptionError, OptionField, Output, Reason, Rule, SolverOptions,
 };
 use crate::stats::Stats;
-use crate::stepper::Stepper;
+use crate::stepper::{StepQuadrature, Stepper};
 use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
 
 /// κ of the far test (module documentation): an event function whose distance from zero at
@@ -494,6 +494,20 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         } else {
             self.stepper.interpolate(t, out);
         }
+    }
+
+    /// The increments of the system's quadrature variables ([`OdeSystem::quadrature`]) over
+    /// the last step [t_prev, t], by the method's own formula at its own stages, and the
+    /// method's estimate of their error when it has one ([`Stepper::step_quadrature`]).
+    /// [`StepQuadrature::Unavailable`] (nothing written) when the system has none, the method
+    /// gives none, or the step was cut at an event inside it (the method's formula covers the
+    /// whole step, the state at the event is its dense output's: the caller integrates
+    /// [t_prev, t] itself).
+    pub fn step_quadrature(&self, value: &mut [f64], estimate: &mut [f64]) -> StepQuadrature {
+        if self.seg_end != self.stepper.t() {
+            return StepQuadrature::Unavailable;
+        }
+        self.stepper.step_quadrature(value, estimate)
     }
 
     /// Takes one step; see [`StepOutcome`] for where the state is afterwards. After an event

@@ -140,5 +140,7 @@ pub use linear_algebra::LinearAlgebra;
 pub use method::{Method, MethodInfo};
 pub use options::{Atol, Config, OptionError, OptionField, Output, Rule, SolverOptions};
 pub use stats::Stats;
-pub use stepper::Stepper;
-pub use system::{Direction, EventAction, EventHit, EventSpec, OdeSystem, Rejection};
+pub use stepper::{StepQuadrature, Stepper};
+pub use system::{
+    Direction, EventAction, EventHit, EventSpec, OdeSystem, QuadratureFn, Rejection, WithQuadrature,
+};

@@ -38,7 +38,9 @@ use crate::error::SolveError;
 use crate::method::Method;
 use crate::options::{OneStepConfig, StepControl, Tolerances};
 use crate::stats::Stats;
-use crate::stepper::{check_stop, initial_step, landing_step, step_floor, Budget, Stepper};
+use crate::stepper::{
+    check_stop, initial_step, landing_step, step_floor, Budget, StepQuadrature, Stepper,
+};
 use crate::system::OdeSystem;
 
 /// What one trial step gave.
@@ -99,6 +101,20 @@ pub trait OneStepMethod<S: OdeSystem + ?Sized> {
     /// what is still valid there. The default forgets everything ([`OneStepMethod::reset`]).
     fn rewind(&mut self) {
         self.reset();
+    }
+    /// The quadrature increments over the accepted step [t_prev, t_prev + h] (h as given to
+    /// [`OneStepMethod::accept`]) from y_prev, by the method's own formula at its stage states
+    /// ([`Stepper::step_quadrature`]). Default: unavailable.
+    fn quadrature(
+        &self,
+        sys: &S,
+        t_prev: f64,
+        y_prev: &[f64],
+        value: &mut [f64],
+        estimate: &mut [f64],
+    ) -> StepQuadrature {
+        let _ = (sys, t_prev, y_prev, value, estimate);
+        StepQuadrature::Unavailable
     }
     /// RHS evaluations made by [`OneStepMethod::interpolate`] so far (lazy dense stages),
     /// which the driver adds to its counters when they are read.
@@ -332,6 +348,14 @@ impl<S: OdeSystem + ?Sized, M: OneStepMethod<S>> Stepper for OneStepDriver<'_, S
         let theta = (t - self.t_prev) / h;
         self.m
             .interpolate(self.sys, self.t_prev, h, &self.y_prev, &self.y, theta, out);
+    }
+
+    fn step_quadrature(&self, value: &mut [f64], estimate: &mut [f64]) -> StepQuadrature {
+        if self.t == self.t_prev || self.sys.n_quadratures() == 0 {
+            return StepQuadrature::Unavailable;
+        }
+        self.m
+            .quadrature(self.sys, self.t_prev, &self.y_prev, value, estimate)
     }
 
     fn set_h_max(&mut self, h_max: f64) {

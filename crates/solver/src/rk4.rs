@@ -6,6 +6,8 @@
 //! k3 = f(t + h/2, y + h/2 k2)
 //! k4 = f(t + h,   y + h k3)
 //! y_{n+1} = y_n + h/6 (k1 + 2 k2 + 2 k3 + k4)
+//! quadrature (OdeSystem::quadrature): Q_{n+1} = Q_n + h/6 (q1 + 2 q2 + 2 q3 + q4),
+//!   q_i = q at stage i's time and state; estimate h/3 |q2 − q3|
 //! ```
 //! Kutta (1901); HNW I, Table 1.2 (p. 138). The step is fixed; only the last step is shortened
 //! to land on the stop time (the landing rule of [`crate::stepper::landing_step`]). Dense output is the cubic Hermite interpolant through
@@ -55,7 +57,7 @@ use crate::error::SolveError;
 use crate::method::Method;
 use crate::options::FixedConfig;
 use crate::stats::Stats;
-use crate::stepper::{check_stop, landing_step, Budget, Stepper};
+use crate::stepper::{check_stop, landing_step, Budget, StepQuadrature, Stepper};
 use crate::system::OdeSystem;
 
 /// Radius r of RK4's stability region on the negative real axis: −r is the real root of
@@ -87,6 +89,8 @@ pub struct Rk4<'a, S: OdeSystem + ?Sized> {
     k3: Vec<f64>,
     k4: Vec<f64>,
     tmp: Vec<f64>,
+    /// The last step's h (the quadrature's; 0 after a start or restart).
+    h_last: f64,
     stats: Stats,
 }
 
@@ -111,6 +115,7 @@ impl<'a, S: OdeSystem + ?Sized> Rk4<'a, S> {
             k3: vec![0.0; n],
             k4: vec![0.0; n],
             tmp: vec![0.0; n],
+            h_last: 0.0,
             stats: Stats::default(),
         };
         s.eval_f()?;
@@ -235,6 +240,7 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
         }
         self.t_prev = t;
         self.t = if lands { t_stop } else { t + h };
+        self.h_last = h;
         self.stats.accepted += 1;
         self.stats.record_step_size(h);
         if !self.y.iter().all(|v| v.is_finite()) {
@@ -264,6 +270,39 @@ impl<S: OdeSystem + ?Sized> Stepper for Rk4<'_, S> {
                 + h01 * self.y[i]
                 + h11 * h * self.f[i];
         }
+    }
+
+    /// RK4's own quadrature (module documentation): h/6 (q₁ + 2 q₂ + 2 q₃ + q₄) at the
+    /// stage states, estimate h/3 |q₂ − q₃| (the order-3 rule h/6 (q₁ + 4 q₂ + q₄) on the
+    /// same stages).
+    fn step_quadrature(&self, value: &mut [f64], estimate: &mut [f64]) -> StepQuadrature {
+        let m = self.sys.n_quadratures();
+        if m == 0 || self.t == self.t_prev {
+            return StepQuadrature::Unavailable;
+        }
+        let (h, t, y) = (self.h_last, self.t_prev, &self.y_prev);
+        let mut ys = vec![0.0; y.len()];
+        let mut q = vec![0.0; m];
+        let mut stage = |c: f64, a: f64, k: &[f64], q: &mut [f64]| {
+            for i in 0..y.len() {
+                ys[i] = y[i] + a * h * k[i];
+            }
+            self.sys.quadrature(t + c * h, &ys, q);
+        };
+        let mut q2 = vec![0.0; m];
+        stage(0.0, 0.0, &self.f_prev, &mut q);
+        value.copy_from_slice(&q);
+        stage(0.5, 0.5, &self.f_prev, &mut q2);
+        stage(0.5, 0.5, &self.k2, &mut q);
+        for c in 0..m {
+            value[c] += 2.0 * (q2[c] + q[c]);
+            estimate[c] = h / 3.0 * (q2[c] - q[c]).abs();
+        }
+        stage(1.0, 1.0, &self.k3, &mut q);
+        for c in 0..m {
+            value[c] = h / 6.0 * (value[c] + q[c]);
+        }
+        StepQuadrature::ValueAndEstimate
     }
 
     fn set_h_max(&mut self, _h_max: f64) {}

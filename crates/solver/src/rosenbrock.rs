@@ -12,6 +12,24 @@
 //!         K_r = Σ_j H_rj k_j
 //! ```
 //!
+//! quadrature (OdeSystem::quadrature, Q' = q(t, y), out of the error norm): the Q rows of
+//! the same stage equations, for the augmented system (y, Q) whose Jacobian has the row
+//! g = ∂q/∂y for Q (and a zero column, Q feeding nothing back):
+//!   (1/(hγ)) k_i^Q − g·k_i = q(t_n + c_i h, U_i) + d_i h q_t + Σ_{j<i} (C_ij / h) k_j^Q
+//!   Q_{n+1} = Q_n + Σ m_j k_j^Q,  estimate |k_8^Q|  (ŷ = U_8)
+//! g·k_i (a forward difference of q along k_i) and q_t (a central difference in t) at
+//! (t_n, y_n). The row g is needed: with a zero row instead, the untransformed form (HNW II
+//! (7.4)) gives k_i^Q = h q_i and Q_{n+1} − Q_n = h Σ b_i q(U_i), and although the weights
+//! meet Σ b_i c_i^k = 1/(k+1) for k ≤ 4, the stage states carry Γ's coupling
+//! (U_i − y_n = h c_i f + h² Σ_j a_ij (c_j + γ_j) f'f + …), so the order-3 condition
+//! Σ b_i a_ij (c_j + γ_j) = 1/6 fails and the integral of a y-dependent q is of order 2 only
+//! (measured: tests/quadrature.rs). With g every tree of the augmented system is the
+//! method's own: order 5. Cost per accepted step: 18 evaluations of q (8 stages, 8
+//! directions, 2 for q_t), none of f. On a stiff component the stage states are poor (stage
+//! order 1) and q may depend on it steeply (a lubricant film's force): the differences for
+//! g·k_i are then unreliable, and lash-validation keeps Boole's rule on the dense output for
+//! this method's runs (its `run/quadrature.rs`).
+//!
 //! This is the transformed form of HNW II, §IV.7, (7.25)–(7.26) (variables k_i = u_i there), in
 //! which every stage needs one right-hand side and one solve with the same LU factors of W.
 //! Coefficients: G. Steinebach, "Construction of Rosenbrock–Wanner method Rodas5P and
@@ -64,7 +82,7 @@ use crate::method::Method;
 use crate::onestep::{Attempt, OneStepMethod};
 use crate::options::{Atol, Tolerances};
 use crate::stats::Stats;
-use crate::stepper::error_norm;
+use crate::stepper::{error_norm, StepQuadrature};
 use crate::system::OdeSystem;
 
 /// Number of stages.
@@ -487,6 +505,8 @@ pub struct Rodas5pMethod {
     u: Vec<f64>,
     fu: Vec<f64>,
     y_new: Vec<f64>,
+    /// The accepted step's h (the quadrature's).
+    h_acc: f64,
 }
 
 impl Rodas5pMethod {
@@ -543,6 +563,7 @@ impl Rodas5pMethod {
             u: vec![0.0; n],
             fu: vec![0.0; n],
             y_new: vec![0.0; n],
+            h_acc: 0.0,
         }
     }
 }
@@ -655,7 +676,8 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
         &self.y_new
     }
 
-    fn accept(&mut self, _h: f64) {
+    fn accept(&mut self, h: f64) {
+        self.h_acc = h;
         for (r, dr) in self.dense.iter_mut().enumerate() {
             for l in 0..dr.len() {
                 let mut v = 0.0;
@@ -682,6 +704,84 @@ impl<Sy: OdeSystem + ?Sized> OneStepMethod<Sy> for Rodas5pMethod {
         for (i, o) in out.iter_mut().enumerate() {
             *o = th1 * y_prev[i] + th * (y[i] + th1 * (k1[i] + th * (k2[i] + th * k3[i])));
         }
+    }
+
+    /// The quadrature rows of the stages (module documentation): k_i^Q = hγ (q_i + g·k_i +
+    /// d_i h q_t + Σ_{j<i} (C_ij/h) k_j^Q), Q increment Σ m_j k_j^Q, estimate |k_8^Q|, with
+    /// q_i at the stage states U_i = y_n + Σ_{j<i} a_ij k_j rebuilt from the accepted step's
+    /// stages, g·k_i = ∂q/∂y(t_n, y_n)·k_i a forward difference along k_i (no component moved
+    /// by more than √ε (|y_l| + atol_l/rtol)) and q_t a central difference in t.
+    fn quadrature(
+        &self,
+        sys: &Sy,
+        t_prev: f64,
+        y_prev: &[f64],
+        value: &mut [f64],
+        estimate: &mut [f64],
+    ) -> StepQuadrature {
+        let h = self.h_acc;
+        let m = value.len();
+        let n = y_prev.len();
+        let mut u = y_prev.to_vec();
+        let mut q0 = vec![0.0; m];
+        let mut q = vec![0.0; m];
+        sys.quadrature(t_prev, y_prev, &mut q0);
+        // q_t by a central difference over a hundredth of the step (a difference in t is
+        // only as good as q is smooth in t on its scale: the module documentation's f_t).
+        let dt = (0.01 * h).max(1e-10 * t_prev.abs());
+        let mut qt = vec![0.0; m];
+        sys.quadrature(t_prev + dt, y_prev, &mut q);
+        sys.quadrature(t_prev - dt, y_prev, &mut qt);
+        for c in 0..m {
+            qt[c] = (q[c] - qt[c]) / (2.0 * dt);
+        }
+        // Each component's scale: |y_l| + atol_l/rtol (the Jacobian's increments' floor).
+        let scale: Vec<f64> = (0..n)
+            .map(|l| y_prev[l].abs() + self.atol.get(l) / self.rtol)
+            .collect();
+        let mut gk = vec![0.0; m];
+        let mut kq = [const { Vec::new() }; S];
+        for i in 0..S {
+            // g·k_i: forward difference of q along k_i, no component moved by more than
+            // √ε of its scale.
+            let k_norm = (0..n).fold(0.0_f64, |a, l| a.max(self.k[i][l].abs() / scale[l]));
+            gk.fill(0.0);
+            if k_norm > 0.0 && k_norm.is_finite() {
+                let eps = f64::EPSILON.sqrt() / k_norm;
+                for l in 0..n {
+                    u[l] = y_prev[l] + eps * self.k[i][l];
+                }
+                sys.quadrature(t_prev, &u, &mut q);
+                for c in 0..m {
+                    gk[c] = (q[c] - q0[c]) / eps;
+                }
+            }
+            u.copy_from_slice(y_prev);
+            for (j, kj) in self.k.iter().enumerate().take(i) {
+                let a = A[i][j];
+                if a != 0.0 {
+                    for (ul, kl) in u.iter_mut().zip(kj) {
+                        *ul += a * kl;
+                    }
+                }
+            }
+            if i == 0 {
+                q.copy_from_slice(&q0);
+            } else {
+                sys.quadrature(t_prev + C_TIME[i] * h, &u, &mut q);
+            }
+            kq[i] = (0..m)
+                .map(|c| {
+                    let coupling: f64 = (0..i).map(|j| C[i][j] / h * kq[j][c]).sum();
+                    h * GAMMA * (q[c] + gk[c] + D[i] * h * qt[c] + coupling)
+                })
+                .collect();
+        }
+        for c in 0..m {
+            value[c] = (0..S).map(|j| M[j] * kq[j][c]).sum();
+            estimate[c] = kq[S - 1][c].abs();
+        }
+        StepQuadrature::ValueAndEstimate
     }
 
     fn reset(&mut self) {}

@@ -53,6 +53,15 @@ pub trait Stepper {
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError>;
     /// Counters so far, by value. Reading them never changes them.
     fn stats(&self) -> Stats;
+    /// The increments of the system's quadrature variables ([`OdeSystem::n_quadratures`])
+    /// over the last accepted step [t_prev, t], by the method's own formula at its own stage
+    /// states, into `value`, and the method's estimate of their local error into `estimate`
+    /// when it has one ([`StepQuadrature`]). The default (and a method that cannot give them
+    /// for this step): [`StepQuadrature::Unavailable`], nothing written.
+    fn step_quadrature(&self, value: &mut [f64], estimate: &mut [f64]) -> StepQuadrature {
+        let _ = (value, estimate);
+        StepQuadrature::Unavailable
+    }
     /// Sets the largest step from the next attempt on (the contact-aware step limit of the
     /// [`crate::Integrator`], already capped by the options' `h_max`). Fixed-step methods
     /// ignore it.
@@ -71,6 +80,19 @@ pub trait Stepper {
         let _ = t;
         Ok(false)
     }
+}
+
+/// What [`Stepper::step_quadrature`] wrote.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepQuadrature {
+    /// Nothing: the method does not integrate quadratures, the system has none, or the last
+    /// step has none of its own (a start, a restart, diffsol's Euler sliver).
+    Unavailable,
+    /// The increments, without an error estimate (diffsol's methods).
+    Value,
+    /// The increments and the method's estimate of their local error (|increment − the
+    /// embedded formula's|, componentwise).
+    ValueAndEstimate,
 }
 
 /// The landing rule of every stepper: the step to try from `t` towards `t_stop` with the

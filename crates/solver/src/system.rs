@@ -184,10 +184,99 @@ pub trait OdeSystem {
         Ok(())
     }
 
+    /// Number m_q of quadrature variables Q (default 0: none).
+    ///
+    /// ```text
+    /// Q' = q(t, y),  Q(t0) = 0,  Q ∈ ℝ^{m_q}      (q does not depend on Q)
+    /// ```
+    /// As CVODES's quadrature variables without error control: the integrals are taken by the
+    /// method's own formula at its own stage states (`Integrator::step_quadrature`), and they
+    /// never enter the error norm, so the step sequence is the one without them, bit for bit.
+    fn n_quadratures(&self) -> usize {
+        0
+    }
+
+    /// The integrand q(t, y) of the quadrature variables, written into `q` (length
+    /// [`OdeSystem::n_quadratures`]). Called only when that is nonzero; not counted as an RHS
+    /// evaluation.
+    fn quadrature(&self, _t: f64, _y: &[f64], _q: &mut [f64]) {}
+
     /// Runs after an event has been located, with the state at the event time. It may change
     /// `y` (a bounce) and the system's own state (an impact velocity stored for a contact law).
     /// Returns what the integrator does next; the default is the event's declared action.
     fn on_event(&self, hit: &EventHit, _y: &mut [f64]) -> EventAction {
         self.event_spec(hit.index).action
+    }
+}
+
+/// The integrand of [`WithQuadrature`]: q(t, y) into its last argument.
+pub type QuadratureFn<'a> = &'a dyn Fn(f64, &[f64], &mut [f64]);
+
+/// A system with quadrature variables added ([`OdeSystem::quadrature`]): `m` integrands
+/// `q`; every other method is the system's own, so the integration is the one without them,
+/// bit for bit.
+pub struct WithQuadrature<'a, S: OdeSystem + ?Sized> {
+    /// The system.
+    pub sys: &'a S,
+    /// Number of quadrature variables.
+    pub m: usize,
+    /// The integrand q(t, y).
+    pub q: QuadratureFn<'a>,
+}
+
+impl<S: OdeSystem + ?Sized> OdeSystem for WithQuadrature<'_, S> {
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.sys.rhs(t, y, dy)
+    }
+    fn has_jacobian(&self) -> bool {
+        self.sys.has_jacobian()
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: MatMut<'_, f64>) {
+        self.sys.jacobian(t, y, jac)
+    }
+    fn jacobian_sparsity(&self) -> Option<Vec<Vec<usize>>> {
+        self.sys.jacobian_sparsity()
+    }
+    fn has_time_derivative(&self) -> bool {
+        self.sys.has_time_derivative()
+    }
+    fn time_derivative(&self, t: f64, y: &[f64], dfdt: &mut [f64]) {
+        self.sys.time_derivative(t, y, dfdt)
+    }
+    fn is_autonomous(&self) -> bool {
+        self.sys.is_autonomous()
+    }
+    fn n_events(&self) -> usize {
+        self.sys.n_events()
+    }
+    fn event_spec(&self, i: usize) -> EventSpec {
+        self.sys.event_spec(i)
+    }
+    fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
+        self.sys.events(t, y, g)
+    }
+    fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
+        self.sys.event_rates(t, y, g, g_dot)
+    }
+    fn check_accepted(
+        &self,
+        t_a: f64,
+        y_a: &[f64],
+        t_b: f64,
+        y_b: &[f64],
+    ) -> Result<(), Rejection> {
+        self.sys.check_accepted(t_a, y_a, t_b, y_b)
+    }
+    fn on_event(&self, hit: &EventHit, y: &mut [f64]) -> EventAction {
+        self.sys.on_event(hit, y)
+    }
+    fn n_quadratures(&self) -> usize {
+        self.m
+    }
+    fn quadrature(&self, t: f64, y: &[f64], q: &mut [f64]) {
+        (self.q)(t, y, q)
     }
 }

@@ -198,10 +198,48 @@ impl<B: La> diffsol::ConstantOp for SysInit<B> {
     }
 }
 
-/// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots.
+/// The system's quadrature integrand q(t, y) ([`OdeSystem::quadrature`]) as diffsol's output
+/// function, which diffsol integrates with the method's own formula when the problem's
+/// `integrate_out` is set (out of the error norm: no `out_rtol`/`out_atol`).
+pub(super) struct SysOut<'a, S: OdeSystem + ?Sized, B: La> {
+    pub(super) sys: &'a S,
+    pub(super) n: usize,
+    /// m_q = sys.n_quadratures().
+    pub(super) m: usize,
+    pub(super) ctx: B::C,
+}
+
+impl<S: OdeSystem + ?Sized, B: La> Op for SysOut<'_, S, B> {
+    type T = f64;
+    type V = B::V;
+    type M = B::M;
+    type C = B::C;
+    fn context(&self) -> &B::C {
+        &self.ctx
+    }
+    fn nstates(&self) -> usize {
+        self.n
+    }
+    fn nout(&self) -> usize {
+        self.m
+    }
+    fn nparams(&self) -> usize {
+        0
+    }
+}
+
+impl<S: OdeSystem + ?Sized, B: La> NonLinearOp for SysOut<'_, S, B> {
+    fn call_inplace(&self, x: &B::V, t: f64, y: &mut B::V) {
+        self.sys.quadrature(t, B::slice(x), B::slice_mut(y));
+    }
+}
+
+/// The system as diffsol `OdeEquations`: y' = f(t, y), no mass matrix, no roots; the
+/// quadrature integrand as the output function when the system has one.
 pub(super) struct SysEqn<'a, S: OdeSystem + ?Sized, B: La> {
     pub(super) rhs: SysRhs<'a, S, B>,
     pub(super) init: SysInit<B>,
+    pub(super) out: SysOut<'a, S, B>,
 }
 
 impl<S: OdeSystem + ?Sized, B: La> Op for SysEqn<'_, S, B> {
@@ -215,8 +253,14 @@ impl<S: OdeSystem + ?Sized, B: La> Op for SysEqn<'_, S, B> {
     fn nstates(&self) -> usize {
         self.rhs.n
     }
+    /// diffsol sizes BDF's output difference table by the equations' `nout`: the
+    /// quadrature's when there is one.
     fn nout(&self) -> usize {
-        self.rhs.n
+        if self.out.m > 0 {
+            self.out.m
+        } else {
+            self.rhs.n
+        }
     }
     fn nparams(&self) -> usize {
         0
@@ -228,7 +272,7 @@ impl<'b, 'a, S: OdeSystem + ?Sized, B: La> OdeEquationsRef<'b> for SysEqn<'a, S,
     type Mass = &'b UnitCallable<B::M>;
     type Root = &'b UnitCallable<B::M>;
     type Init = &'b SysInit<B>;
-    type Out = &'b UnitCallable<B::M>;
+    type Out = &'b SysOut<'a, S, B>;
     type Reset = &'b UnitCallable<B::M>;
 }
 
@@ -241,6 +285,9 @@ impl<'a, S: OdeSystem + ?Sized, B: La> OdeEquations for SysEqn<'a, S, B> {
     }
     fn init(&self) -> &SysInit<B> {
         &self.init
+    }
+    fn out(&self) -> Option<&SysOut<'a, S, B>> {
+        (self.out.m > 0).then_some(&self.out)
     }
     fn set_params(&mut self, _p: &B::V) {}
     fn get_params(&self, _p: &mut B::V) {}

@@ -9,6 +9,9 @@
 //! ε ≤ 1: accept, h ← h · controller(ε, history)       (Söderlind filter, default PI)
 //! ε > 1: reject, h ← h · max(min_shrink, safety · ε^(−1/(q̂+1)))
 //! dense output: y(t_n + θh) = y_n + h Σ b_i(θ) k_i
+//! quadrature (OdeSystem::quadrature, after an accepted step, no error control):
+//!   Q_{n+1} = Q_n + h Σ b_i q(t_n + c_i h, Y_i),  Y_i = y_n + h Σ_{j<i} a_ij k_j
+//!   estimate |h Σ e_i q_i| (e = b − b̂; DOP853: e₅)
 //! ```
 //!
 //! Methods ([`tableaus`] names the book or paper, table and page of each):
@@ -47,7 +50,7 @@ use crate::method::{Family, Method};
 use crate::onestep::{Attempt, OneStepMethod};
 use crate::options::{Atol, OptionError, OptionField, Reason, Tolerances};
 use crate::stats::Stats;
-use crate::stepper::error_norm;
+use crate::stepper::{error_norm, StepQuadrature};
 use crate::system::OdeSystem;
 
 /// The tableau of an explicit pair, or None for other methods.
@@ -104,6 +107,10 @@ pub struct ErkMethod {
     dense: RefCell<DenseCache>,
     /// RHS evaluations made by the lazy dense output.
     lazy_rhs: Cell<usize>,
+    /// The accepted step's h (the quadrature's).
+    h_acc: f64,
+    /// Scratch of the quadrature: a stage state and q there.
+    quad: RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
 impl ErkMethod {
@@ -160,6 +167,8 @@ impl ErkMethod {
                 hermite_fallback: false,
             }),
             lazy_rhs: Cell::new(0),
+            h_acc: 0.0,
+            quad: RefCell::new((vec![0.0; n], Vec::new())),
         })
     }
 
@@ -307,7 +316,8 @@ impl<S: OdeSystem + ?Sized> OneStepMethod<S> for ErkMethod {
         &self.y_new
     }
 
-    fn accept(&mut self, _h: f64) {
+    fn accept(&mut self, h: f64) {
+        self.h_acc = h;
         self.f0.copy_from_slice(&self.k[self.tab.f_new_stage()]);
         self.f0_valid = true;
         self.dense.borrow_mut().ready = false;
@@ -354,6 +364,52 @@ impl<S: OdeSystem + ?Sized> OneStepMethod<S> for ErkMethod {
                 *o += h * wj * k;
             }
         }
+    }
+
+    /// The pair's own quadrature (module documentation): Q increments h Σ b_i q(t_n + c_i h,
+    /// Y_i) and its embedded h Σ b̂_i q_i, the estimate |h Σ e_i q_i| (DOP853: e₅), at the
+    /// stage states Y_i = y_n + h Σ_j a_ij k_j rebuilt from the accepted step's stages.
+    fn quadrature(
+        &self,
+        sys: &S,
+        t_prev: f64,
+        y_prev: &[f64],
+        value: &mut [f64],
+        estimate: &mut [f64],
+    ) -> StepQuadrature {
+        let tab = self.tab;
+        let h = self.h_acc;
+        let n = y_prev.len();
+        let mut guard = self.quad.borrow_mut();
+        let (ys, q) = &mut *guard;
+        q.resize(value.len(), 0.0);
+        value.fill(0.0);
+        estimate.fill(0.0);
+        for i in 0..tab.stages() {
+            let (b, e) = (tab.b[i], self.err_w[i]);
+            if b == 0.0 && e == 0.0 {
+                continue;
+            }
+            let row = tab.a[i];
+            for l in 0..n {
+                let mut acc = 0.0;
+                for (j, a) in row.iter().enumerate() {
+                    if *a != 0.0 {
+                        acc += a * self.k[j][l];
+                    }
+                }
+                ys[l] = y_prev[l] + h * acc;
+            }
+            sys.quadrature(t_prev + tab.c[i] * h, ys, q);
+            for (c, qc) in q.iter().enumerate() {
+                value[c] += h * b * qc;
+                estimate[c] += h * e * qc;
+            }
+        }
+        for e in estimate.iter_mut() {
+            *e = e.abs();
+        }
+        StepQuadrature::ValueAndEstimate
     }
 
     fn reset(&mut self) {

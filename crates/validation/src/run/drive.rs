@@ -12,11 +12,13 @@
 //!                   velocity is the one in force)
 //!   extrema       every accepted step in the metrics window: metrics::Peaks on its dense
 //!                   output (5 samples, golden-section search where a maximum appears)
-//!   energy        ∫ P dt of Mechanism::power over every accepted step: Boole's rule on five
-//!                   equally spaced nodes, error estimate |S₂ − S₁|/15 (S₁, S₂ Simpson on one
-//!                   and two panels), panels no longer than T/400; a fixed-step method groups
-//!                   four equal steps into one panel (nodes = step ends, one power evaluation
-//!                   per step)
+//!   energy        ∫ P dt of Mechanism::power over every accepted step: integrated by the
+//!                   method itself when the power terms are the system's quadrature
+//!                   (Integrator::step_quadrature, crate::run::quadrature), with the
+//!                   method's error estimate; else (a step cut at an event, a non-finite
+//!                   stage power) Boole's rule on five equally spaced nodes of the dense
+//!                   output, error estimate |S₂ − S₁|/15 (S₁, S₂ Simpson on one and two
+//!                   panels), panels no longer than T/400
 //!   balance       W_driver − ΔT − ΔV − D_damping − D_friction − D_film
 //!   events        located hits; a run without event location (the paper's RK4) counts the
 //!                   sign changes of the event functions between consecutive step ends
@@ -27,12 +29,14 @@
 
 use std::time::{Duration, Instant};
 
-use lash_solver::{EventHit, OdeSystem, Problem, Solution, SolverOptions, Stats, StepOutcome};
+use lash_solver::{
+    EventHit, OdeSystem, Problem, Solution, SolverOptions, Stats, StepOutcome, StepQuadrature,
+};
 
 use crate::error::Error;
 use crate::report::summary::Summary;
 use crate::run::prepare::Prepared;
-use crate::run::quadrature::Powers;
+use crate::run::quadrature::{Own, Powers, TERMS};
 
 /// Receives what a run produces, as `drive` integrates (module doc).
 pub(crate) trait Observer {
@@ -41,13 +45,15 @@ pub(crate) trait Observer {
     /// The state at the next requested output time.
     fn output(&mut self, t: f64, y: &[f64]) -> Result<(), Error>;
     /// An accepted step [ta, tb] (`cut`: ended at an event); `dense(t, out)` is its dense
-    /// output; `y` the state at tb (after the event hook).
+    /// output; `y` the state at tb (after the event hook); `own` the method's integrals of
+    /// the power terms over it when the system has them as its quadrature.
     fn step(
         &mut self,
         ta: f64,
         tb: f64,
         cut: bool,
         y: &[f64],
+        own: Option<Own>,
         dense: &dyn Fn(f64, &mut [f64]),
     ) -> Result<(), Error>;
     /// An event (located, or a crossing between step ends).
@@ -99,6 +105,8 @@ pub(crate) fn drive<S: OdeSystem + ?Sized>(
     }
     let mut located = 0;
     let mut buf = vec![0.0; n];
+    let quad = sys.n_quadratures() == TERMS;
+    let (mut value, mut estimate) = ([0.0; TERMS], [0.0; TERMS]);
     loop {
         let clock = Instant::now();
         let outcome = it.step()?;
@@ -109,7 +117,16 @@ pub(crate) fn drive<S: OdeSystem + ?Sized>(
             obs.output(t, &buf)?;
         }
         let cut = matches!(outcome, StepOutcome::Event { .. });
-        obs.step(ta, tb, cut, it.y(), &|t, out| it.interpolate(t, out))?;
+        let own = if quad {
+            own_integrals(
+                it.step_quadrature(&mut value, &mut estimate),
+                value,
+                estimate,
+            )
+        } else {
+            None
+        };
+        obs.step(ta, tb, cut, it.y(), own, &|t, out| it.interpolate(t, out))?;
         if detect {
             sys.events(tb, it.y(), &mut g_now);
             for i in 0..m {
@@ -157,6 +174,23 @@ pub(crate) fn drive<S: OdeSystem + ?Sized>(
         y_final: it.y().to_vec(),
         located,
     })
+}
+
+/// The method's integrals of one step as [`Own`], None when it gave none or one is not
+/// finite (a stage beyond the model's range: the dense output's quadrature then finds it).
+fn own_integrals(got: StepQuadrature, value: Powers, estimate: Powers) -> Option<Own> {
+    let finite = |v: &Powers| v.iter().all(|x| x.is_finite());
+    match got {
+        StepQuadrature::Unavailable => None,
+        StepQuadrature::Value => finite(&value).then_some(Own {
+            value,
+            estimate: None,
+        }),
+        StepQuadrature::ValueAndEstimate => (finite(&value) && finite(&estimate)).then_some(Own {
+            value,
+            estimate: Some(estimate),
+        }),
+    }
 }
 
 pub(crate) fn checked_power(pw: PowerFn<'_>, t: f64, y: &[f64]) -> Result<Powers, Error> {

@@ -6,7 +6,7 @@
 
 use lash_model::scene::JointSpec;
 use lash_model::{LawRangeMonitor, Mechanism, Outputs, PowerTerms, Scene};
-use lash_solver::{EventHit, OdeSystem, Solution, SolveError};
+use lash_solver::{EventHit, OdeSystem, Solution, SolveError, WithQuadrature};
 
 use crate::error::Error;
 use crate::report::metrics::Window;
@@ -29,7 +29,7 @@ use crate::run::plan::RunRequest;
 use crate::run::prepare::scene_error;
 use crate::run::prepare::Prepared;
 use crate::run::prepare::QUADRATURE_PANEL_PER_PERIOD;
-use crate::run::quadrature::{Powers, Quadrature};
+use crate::run::quadrature::{own_quadrature, Own, Powers, Quadrature, TERMS};
 use crate::run::result::RunResult;
 use crate::run::sample::fixed_values;
 use crate::run::sample::Sampler;
@@ -244,6 +244,7 @@ impl Observer for MechanismRun<'_> {
         tb: f64,
         cut: bool,
         y: &[f64],
+        own: Option<Own>,
         dense: &dyn Fn(f64, &mut [f64]),
     ) -> Result<(), Error> {
         self.laws
@@ -267,7 +268,7 @@ impl Observer for MechanismRun<'_> {
                 };
                 p.map_err(|e| singular_or(mech, e, t, buf, (ta, tb)))
             };
-            q.step(ta, tb, cut, &mut node)?;
+            q.step(ta, tb, cut, own, &mut node)?;
         }
         if let Some(tr) = self.track.as_mut() {
             let o = self.mech.outputs(tb, y);
@@ -538,7 +539,19 @@ fn pass(
     {
         tr.push(t0, phi, rate);
     }
-    let d = drive(&mech, t0, t_end, &y0, opts, &mut obs).map_err(|e| singular_rhs(&mech, e))?;
+    // The power terms as the system's quadrature: the method integrates them at its own
+    // stages (crate::run::quadrature), out of its error norm.
+    let q = |t: f64, y: &[f64], out: &mut [f64]| out.copy_from_slice(&power(t, y));
+    let sys = WithQuadrature {
+        sys: &mech,
+        m: if req.energy && own_quadrature(opts.method) {
+            TERMS
+        } else {
+            0
+        },
+        q: &q,
+    };
+    let d = drive(&sys, t0, t_end, &y0, opts, &mut obs).map_err(|e| singular_rhs(&mech, e))?;
     // The window's grid samples are samples of the extrema too.
     let mut dense = obs.dense_extremes(scene);
     for s in &obs.window {

@@ -15,6 +15,7 @@ use crate::run::plan::options_within;
 use crate::run::plan::plan_run;
 use crate::run::plan::RunRequest;
 use crate::run::prepare::Prepared;
+use crate::run::quadrature::Own;
 use crate::run::result::RunResult;
 
 /// The observer of a test problem: a row per accepted step (the start included), states at
@@ -60,6 +61,7 @@ impl Observer for TestSetRun<'_> {
         tb: f64,
         _: bool,
         y: &[f64],
+        _: Option<Own>,
         _: &dyn Fn(f64, &mut [f64]),
     ) -> Result<(), Error> {
         self.push(tb, y)

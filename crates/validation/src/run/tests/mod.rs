@@ -2,6 +2,7 @@
 //! expectations, energy balance, event counts) and of runs until periodic.
 
 mod edges;
+mod energy;
 mod simulate;
 mod steady;
 mod window;

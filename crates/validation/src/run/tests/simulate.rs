@@ -118,7 +118,7 @@ fn ideal_press_follows_the_closed_form_and_conserves_energy() {
 #[test]
 fn lubricated_press_film_carries_the_load() {
     // Lagrange–Baumgarte, as before `auto`: at BDF rtol 1e-8 its energy balance closes to
-    // 1.2e-5 J of the film's 0.93 J; `auto` (minimal) closes it to 2.2e-4 J at 1e-8 and 1.5e-6
+    // 5.6e-6 J of the film's 0.93 J (1.2e-5 J with Boole's rule on the dense output); `auto` (minimal) closes it to 2.2e-4 J at 1e-8 and 1.5e-6
     // J at 1e-10 (the balance converges with rtol, the error is the integration's, not the
     // formulation's: tests/minimal.rs in lash-model), over this test's 1e-4 bound.
     let p = case("lubricated_150rpm_c0.1")
@@ -142,7 +142,12 @@ fn lubricated_press_film_carries_the_load() {
     assert!(e.dissipated_film > 0.1, "{e:?}");
     assert_eq!((e.dissipated_damping, e.dissipated_friction), (0.0, 0.0));
     assert!(e.balance_error.abs() < 1e-4 * e.dissipated_film, "{e:?}");
-    assert!(e.quadrature_error < 1e-6 * e.dissipated_film, "{e:?}");
+    // BDF integrates the power at its own steps; its quadrature error is the difference
+    // with Boole's rule on its dense output (docs/outputs.md, `energy`): 3.2e-5 J, which
+    // bounds the balance (5.6e-6 J; 1.2e-5 J when the integrals were Boole's on the dense
+    // output, whose own estimate was below 1e-6 of the film's).
+    assert!(e.balance_error.abs() <= e.quadrature_error, "{e:?}");
+    assert!(e.quadrature_error < 1e-4 * e.dissipated_film, "{e:?}");
 }
 
 /// docs/model.md §7: missed events show up as skipped impacts. The dry press is chaotic (§9), so
