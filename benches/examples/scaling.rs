@@ -31,9 +31,12 @@
 //! the binary's path in a column of its own.
 //!
 //! `--figure STEM` also writes STEM.csv (one row per case and binary: kind, N, n = dim y,
-//! exit code, wall time, CPU time and peak RSS), the data of a log–log figure against N (the
-//! figure itself is not drawn yet). CPU time is utime + stime of /proc/<pid>/stat (every
-//! thread), polled with the memory: it misses at most the child's last 5 ms.
+//! exit code, wall time, CPU time and peak RSS) and STEM.svg: CPU time and peak RSS of the
+//! last `--lash` binary's runs that exited 0 against N, log–log, one line per kind, with
+//! lines of slope 1 and 2 through the smallest case for reference (plotters, the font shipped
+//! with lash-validation). CPU time is utime + stime of /proc/<pid>/stat (every thread),
+//! polled with the memory: it misses at most the child's last 5 ms; it is the figure's time
+//! because the wall time of a shared machine is the load's.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -222,6 +225,115 @@ fn write_figure(stem: &std::path::Path, rows: &[Measured]) {
     }
     std::fs::write(name(".csv"), csv).expect("write the CSV");
     println!("wrote {}.csv", stem.display());
+    let last = rows.last().and_then(|r| r.binary.clone());
+    let newest: Vec<&Measured> = rows
+        .iter()
+        .filter(|r| r.binary == last && r.exit == Some(0))
+        .collect();
+    match draw_figure(&name(".svg"), &newest) {
+        Ok(()) => println!("wrote {}.svg", stem.display()),
+        Err(e) => eprintln!("the figure was not drawn: {e}"),
+    }
+}
+
+/// The font the figures use (lash-validation's, DejaVu Sans).
+static FONT: &[u8] = include_bytes!("../../crates/validation/assets/DejaVuSans.ttf");
+
+/// STEM.svg of the module doc from the runs in `rows`.
+fn draw_figure(
+    path: &std::path::Path,
+    rows: &[&Measured],
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+        .map_err(|_| "the font could not be registered")?;
+    if rows.is_empty() {
+        return Err("no run exited 0".into());
+    }
+    let root = SVGBackend::new(path, (1100, 460)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(550);
+    type Get = fn(&Measured) -> f64;
+    let panels: [(_, &str, Get); 2] = [
+        (left, "CPU time of `lash run` (s)", |m| m.cpu),
+        (right, "peak resident memory (MB)", |m| m.rss_mb),
+    ];
+    let kinds = [
+        ("chain", "chain of N links", RGBColor(31, 119, 180)),
+        ("free", "N free bodies", RGBColor(214, 39, 40)),
+        (
+            "clearance",
+            "N links, N − 1 clearance joints",
+            RGBColor(44, 160, 44),
+        ),
+    ];
+    for (area, title, get) in panels {
+        let xs = rows.iter().map(|m| m.bodies as f64);
+        let ys = rows.iter().map(|m| get(m).max(1e-3));
+        let (x0, x1) = xs.fold((f64::INFINITY, 0.0_f64), |(a, b), x| (a.min(x), b.max(x)));
+        let (y0, y1) = ys.fold((f64::INFINITY, 0.0_f64), |(a, b), y| (a.min(y), b.max(y)));
+        // Whole decades of time and memory around the data.
+        let decade = |v: f64, up: bool| {
+            let e = v.log10();
+            10f64.powf(if up { e.ceil() } else { e.floor() })
+        };
+        let (x0, x1) = (x0 / 1.5, x1 * 1.5);
+        let (y0, y1) = (decade(y0 / 1.2, false), decade(y1 * 1.2, true));
+        let mut chart = ChartBuilder::on(&area)
+            .caption(title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("bodies N")
+            .x_label_formatter(&|v| format!("{v}"))
+            .y_label_formatter(&|v| format!("{v}"))
+            .light_line_style(BLACK.mix(0.05))
+            .label_style(("sans-serif", 13))
+            .draw()?;
+        for (kind, label, color) in kinds {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|m| m.kind == kind)
+                .map(|m| (m.bodies as f64, get(m).max(1e-3)))
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            chart
+                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+        }
+        // Slopes 1 and 2 through the smallest case (linear and quadratic growth).
+        let first = rows
+            .iter()
+            .map(|m| (m.bodies as f64, get(m).max(1e-3)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("rows is not empty");
+        for (k, shade) in [(1.0, 0.6), (2.0, 0.35)] {
+            let grey = BLACK.mix(shade);
+            // To the edge of the plot: the right side or the top, whichever comes first.
+            let x_end = x1.min(first.0 * (y1 / first.1).powf(1.0 / k));
+            let end = (x_end, first.1 * (x_end / first.0).powf(k));
+            chart
+                .draw_series(LineSeries::new(vec![first, end], grey.stroke_width(1)))?
+                .label(format!("slope {k}"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font(("sans-serif", 12))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
 }
 
 /// The `crossover N` case (module doc): one table row; `kkt`: the `kkt-crossover N` case.

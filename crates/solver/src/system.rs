@@ -240,6 +240,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for WithQuadrature<'_, S> {
     fn jacobian_sparsity(&self) -> Option<Vec<Vec<usize>>> {
         self.sys.jacobian_sparsity()
     }
+    fn kkt(&self) -> Option<&dyn crate::kkt::KktSystem> {
+        self.sys.kkt()
+    }
     fn has_time_derivative(&self) -> bool {
         self.sys.has_time_derivative()
     }
