@@ -117,7 +117,7 @@ pub(crate) fn check(mech: &Mechanism) -> Result<(), SceneError> {
         // (lash_solver::kkt) never forms ∂f/∂y; its linearisation is checked instead
         // (crate::kkt).
         if lash_solver::linear_algebra::uses_kkt(mech, lash_solver::LinearAlgebra::Auto, false) {
-            return crate::kkt::check(mech, t, &y);
+            return check_kkt(mech, t, &y);
         }
         // Any other cluster of that size: its ∂f/∂y is dense and forming it costs O(n²)
         // memory and O(n³) work — a 1 500-link chain's took a minute and 1.3 GB, every other
@@ -279,4 +279,25 @@ fn check_evaluation(
     }
     mech.formulation()
         .check_equations(t, mech.scene(), mech.constraints(), mech.body_info(), sc)
+}
+
+/// The initial check of the `kkt` path (below): at (t, y), every entry of
+/// ∂ρ/∂y finite; a non-finite entry is the dense check's error on the acceleration of the
+/// coordinate its row acts on (a constraint row: its column's body). A K that cannot be
+/// factored (redundant constraints under the augmented Lagrangian) is not refused here: an
+/// explicit method needs no Newton matrix, and an implicit one on this path ends in its typed
+/// Newton failure (BENCHMARKS.md, "The sparse Newton of one cluster").
+fn check_kkt(mech: &Mechanism, t: f64, y: &[f64]) -> Result<(), SceneError> {
+    let nq = mech.nq();
+    let Ok(entries) = lash_solver::kkt::residual_jacobian(mech, t, y, &vec![1.0; y.len()]) else {
+        return Ok(());
+    };
+    crate::scene::error::checkpoint("the initial Jacobian", t)?;
+    match entries.into_iter().find(|e| !e.2.is_finite()) {
+        None => Ok(()),
+        Some((i, j, v)) => {
+            let row = if i < nq { i } else { j % nq };
+            Err(jacobian_entry_error(mech, nq + row, j, v))
+        }
+    }
 }

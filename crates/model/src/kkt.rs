@@ -22,7 +22,6 @@ use lash_solver::kkt::{KktShape, KktSystem};
 
 use crate::mechanism::constraints::eval_row;
 use crate::mechanism::Mechanism;
-use crate::scene::error::SceneError;
 
 impl KktSystem for Mechanism {
     fn kkt_shape(&self) -> KktShape {
@@ -122,30 +121,4 @@ pub(crate) fn residual_pattern(mech: &Mechanism) -> Vec<Vec<usize>> {
         }
     }
     pattern
-}
-
-/// The initial check of the `kkt` path (crate::initial_check): at (t, y), every entry of
-/// ∂ρ/∂y finite; a non-finite entry is the dense check's error on the acceleration of the
-/// coordinate its row acts on (a constraint row: its column's body). A K that cannot be
-/// factored (redundant constraints under the augmented Lagrangian) is not refused here: an
-/// explicit method needs no Newton matrix, and an implicit one on this path ends in its typed
-/// Newton failure (BENCHMARKS.md, "The sparse Newton of one cluster").
-pub(crate) fn check(mech: &Mechanism, t: f64, y: &[f64]) -> Result<(), SceneError> {
-    let nq = mech.nq();
-    let Ok(entries) = lash_solver::kkt::residual_jacobian(mech, t, y, &vec![1.0; y.len()]) else {
-        return Ok(());
-    };
-    crate::scene::error::checkpoint("the initial Jacobian", t)?;
-    match entries.into_iter().find(|e| !e.2.is_finite()) {
-        None => Ok(()),
-        Some((i, j, v)) => {
-            let row = if i < nq { i } else { j % nq };
-            Err(crate::initial_check::jacobian_entry_error(
-                mech,
-                nq + row,
-                j,
-                v,
-            ))
-        }
-    }
 }

@@ -99,13 +99,14 @@
 //! silently.
 
 mod exact;
+mod span;
+
+use span::check_span;
 
 use crate::diffsol_backend::DiffsolProblem;
 use crate::error::SolveError;
 use crate::method::Method;
-use crate::options::{
-    Allowed, Config, OptionError, OptionField, Output, Reason, Rule, SolverOptions,
-};
+use crate::options::{Config, OptionError, OptionField, Output, Reason, SolverOptions};
 use crate::stats::Stats;
 use crate::stepper::{StepQuadrature, Stepper};
 use crate::system::{Direction, EventAction, EventHit, EventSpec, OdeSystem};
@@ -135,37 +136,6 @@ pub fn far_from_zero(g_a: f64, gd_a: f64, g_b: f64, gd_b: f64, h: f64) -> bool {
     s != 0
         && s == sign(g_b)
         && g_a.abs().min(g_b.abs()) >= FAR_FACTOR * h * gd_a.abs().max(gd_b.abs())
-}
-
-/// The arguments of an integration: y0 has n finite entries, t0 and t_end are finite,
-/// t_end > t0.
-fn check_span(t0: f64, t_end: f64, y0: &[f64], n: usize) -> Result<(), OptionError> {
-    if y0.len() != n {
-        return Err(OptionError::new(
-            OptionField::Y0,
-            Reason::WrongLength {
-                len: y0.len(),
-                expected: n,
-            },
-        ));
-    }
-    let finite = |field| Rule::new(field, Allowed::Finite);
-    finite(OptionField::T0).check(t0)?;
-    finite(OptionField::TEnd).check(t_end)?;
-    if !(t_end > t0) {
-        return Err(OptionError::new(
-            OptionField::TEnd,
-            Reason::NotAbove {
-                value: t_end,
-                other: OptionField::T0,
-                other_value: t0,
-            },
-        ));
-    }
-    for (i, v) in y0.iter().enumerate() {
-        finite(OptionField::Y0).check_entry(i, *v)?;
-    }
-    Ok(())
 }
 
 /// What one call of [`Integrator::step`] did, and where the state is afterwards.

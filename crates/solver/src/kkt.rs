@@ -57,37 +57,7 @@ use faer::{Conj, Par};
 use crate::jacobian::Colouring;
 use crate::stats::Stats;
 
-/// The shape of a system's KKT form (module doc).
-#[derive(Clone, Debug, PartialEq)]
-pub struct KktShape {
-    /// Number n_q of coordinates q (the state is y = (q, v), 2 n_q long).
-    pub nq: usize,
-    /// Number m of multipliers λ (constraint equations).
-    pub m: usize,
-    /// Number of triplets of K ([`KktSystem::kkt_assemble`]), for the memory check.
-    pub k_entries: usize,
-    /// For each column j < 2 n_q of R = ∂ρ/∂y, the rows (< n_q + m) where it may be nonzero.
-    pub residual_pattern: Vec<Vec<usize>>,
-}
-
-/// A second-order system whose accelerations solve a sparse linear system (module doc):
-/// [`crate::OdeSystem::kkt`] gives it to the `kkt` linear algebra.
-pub trait KktSystem {
-    /// Its shape; the same at every call.
-    fn kkt_shape(&self) -> KktShape;
-
-    /// K(t, y) as (row, column, value) triplets into `k` (cleared first; duplicates are
-    /// summed; the same rows and columns in the same order at every call: only the values
-    /// change) and b(t, y) into `b` (length n_q + m). False when the system cannot evaluate
-    /// at (t, y).
-    fn kkt_assemble(
-        &self,
-        t: f64,
-        y: &[f64],
-        k: &mut Vec<(usize, usize, f64)>,
-        b: &mut [f64],
-    ) -> bool;
-}
+pub use crate::system::{KktShape, KktSystem};
 
 /// The pattern of the exact part of J diffsol holds on the `kkt` path: (i, n_q + i) for
 /// i < n_q (q' = v), as columns.

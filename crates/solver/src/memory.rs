@@ -244,7 +244,7 @@ pub fn check_sparse(
 }
 
 /// The `kkt` path's need for a system of `shape` (module doc), saturating.
-pub fn kkt_bytes(shape: &crate::kkt::KktShape) -> u64 {
+pub fn kkt_bytes(shape: &crate::system::KktShape) -> u64 {
     let nnz_r: usize = shape.residual_pattern.iter().map(Vec::len).sum();
     let entries = (shape.k_entries as u64)
         .saturating_mul(2)
@@ -256,7 +256,7 @@ pub fn kkt_bytes(shape: &crate::kkt::KktShape) -> u64 {
 /// Checks the `kkt` path's matrices of `method` for a system of `shape` against the budget.
 pub fn check_kkt(
     method: Method,
-    shape: &crate::kkt::KktShape,
+    shape: &crate::system::KktShape,
     max_memory: Option<u64>,
 ) -> Result<(), MemoryError> {
     check(

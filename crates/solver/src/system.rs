@@ -116,7 +116,7 @@ pub trait OdeSystem {
     /// The system's KKT form when its state is y = (q, v), q' = v and its accelerations solve
     /// a sparse linear system (crate::kkt): the `kkt` linear algebra's Newton solve. Default
     /// None.
-    fn kkt(&self) -> Option<&dyn crate::kkt::KktSystem> {
+    fn kkt(&self) -> Option<&dyn KktSystem> {
         None
     }
 
@@ -240,7 +240,7 @@ impl<S: OdeSystem + ?Sized> OdeSystem for WithQuadrature<'_, S> {
     fn jacobian_sparsity(&self) -> Option<Vec<Vec<usize>>> {
         self.sys.jacobian_sparsity()
     }
-    fn kkt(&self) -> Option<&dyn crate::kkt::KktSystem> {
+    fn kkt(&self) -> Option<&dyn KktSystem> {
         self.sys.kkt()
     }
     fn has_time_derivative(&self) -> bool {
@@ -282,4 +282,37 @@ impl<S: OdeSystem + ?Sized> OdeSystem for WithQuadrature<'_, S> {
     fn quadrature(&self, t: f64, y: &[f64], q: &mut [f64]) {
         (self.q)(t, y, q)
     }
+}
+
+/// The shape of a system's KKT form (crate::kkt's module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct KktShape {
+    /// Number n_q of coordinates q (the state is y = (q, v), 2 n_q long).
+    pub nq: usize,
+    /// Number m of multipliers λ (constraint equations).
+    pub m: usize,
+    /// Number of triplets of K ([`KktSystem::kkt_assemble`]), for the memory check.
+    pub k_entries: usize,
+    /// For each column j < 2 n_q of R = ∂ρ/∂y, the rows (< n_q + m) where it may be nonzero.
+    pub residual_pattern: Vec<Vec<usize>>,
+}
+
+/// A second-order system whose accelerations solve a sparse linear system (crate::kkt's
+/// module doc):
+/// [`crate::OdeSystem::kkt`] gives it to the `kkt` linear algebra.
+pub trait KktSystem {
+    /// Its shape; the same at every call.
+    fn kkt_shape(&self) -> KktShape;
+
+    /// K(t, y) as (row, column, value) triplets into `k` (cleared first; duplicates are
+    /// summed; the same rows and columns in the same order at every call: only the values
+    /// change) and b(t, y) into `b` (length n_q + m). False when the system cannot evaluate
+    /// at (t, y).
+    fn kkt_assemble(
+        &self,
+        t: f64,
+        y: &[f64],
+        k: &mut Vec<(usize, usize, f64)>,
+        b: &mut [f64],
+    ) -> bool;
 }
