@@ -560,14 +560,8 @@ fn the_jacobian_of_the_elements_matches_differences_of_the_right_hand_side() {
     mech.rhs(0.0, &y, &mut f0);
     for j in 0..n {
         let h = 1e-9;
-        let (mut yp, mut ym) = (y.clone(), y.clone());
-        yp[j] += h;
-        ym[j] -= h;
-        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-        mech.rhs(0.0, &yp, &mut fp);
-        mech.rhs(0.0, &ym, &mut fm);
-        for i in 0..n {
-            let d = (fp[i] - fm[i]) / (2.0 * h);
+        let col = central_difference(&mech, 0.0, &y, j, h);
+        for (i, &d) in col.iter().enumerate() {
             let scale = d.abs().max(1.0) * 1e-4;
             assert!(
                 (jac[(i, j)] - d).abs() <= scale,
@@ -1073,6 +1067,21 @@ fn a_damped_bushing_decays_at_rate_c_over_2m() {
 
 /// Two free bodies joined by a bushing between off-centre points, the first also held by a
 /// bushing to the ground, under gravity: the bushings turn the bodies too.
+/// Column j of ∂f/∂y by central differences of the right-hand side with step h.
+fn central_difference(mech: &Mechanism, t: f64, y: &[f64], j: usize, h: f64) -> Vec<f64> {
+    let n = y.len();
+    let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+    yp[j] += h;
+    ym[j] -= h;
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    mech.rhs(t, &yp, &mut fp);
+    mech.rhs(t, &ym, &mut fm);
+    fp.iter()
+        .zip(&fm)
+        .map(|(p, m)| (p - m) / (2.0 * h))
+        .collect()
+}
+
 fn two_bushings(c: f64) -> Value {
     json!({
         "bodies": [
@@ -1142,14 +1151,8 @@ fn the_bushings_closed_form_jacobian_matches_differences_of_the_right_hand_side(
         // Every entry is linear in y_j but for sin and cos of the angles: central differences
         // err by h² ‖∂³f‖ ≈ 1e-12 relative.
         let h = 1e-6;
-        let (mut yp, mut ym) = (y.clone(), y.clone());
-        yp[j] += h;
-        ym[j] -= h;
-        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-        mech.rhs(0.1, &yp, &mut fp);
-        mech.rhs(0.1, &ym, &mut fm);
-        for i in 0..n {
-            let d = (fp[i] - fm[i]) / (2.0 * h);
+        let col = central_difference(&mech, 0.1, &y, j, h);
+        for (i, &d) in col.iter().enumerate() {
             assert!(
                 (jac[(i, j)] - d).abs() <= 1e-6 * d.abs().max(1.0),
                 "∂f{i}/∂y{j}: closed form {:e}, differences {d:e}",
@@ -1202,14 +1205,8 @@ fn the_spring_dampers_closed_form_jacobian_matches_differences_of_the_right_hand
         // f is smooth in y (lengths ≥ 0.05 m): central differences err by h² ‖∂³f‖ (about
         // 1e-8 relative at h = 1e-6 over lengths of 0.05 m) and by rounding ε |f| / h ≈ 1e-7.
         let h = 1e-6;
-        let (mut yp, mut ym) = (y.clone(), y.clone());
-        yp[j] += h;
-        ym[j] -= h;
-        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-        mech.rhs(0.1, &yp, &mut fp);
-        mech.rhs(0.1, &ym, &mut fm);
-        for i in 0..n {
-            let d = (fp[i] - fm[i]) / (2.0 * h);
+        let col = central_difference(&mech, 0.1, &y, j, h);
+        for (i, &d) in col.iter().enumerate() {
             nonzero += usize::from(i >= n / 2 && d.abs() > 1e-3);
             assert!(
                 (jac[(i, j)] - d).abs() <= 1e-6 * d.abs().max(1.0),
