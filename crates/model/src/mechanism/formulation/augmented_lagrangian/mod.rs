@@ -29,7 +29,7 @@
 
 pub(crate) mod columns;
 pub(crate) mod core;
-mod jacobian;
+pub(crate) mod jacobian;
 
 use std::cell::{Cell, RefCell};
 

@@ -29,6 +29,7 @@ use std::cell::RefCell;
 use crate::linalg::Envelope;
 use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::{eval_row, Constraints};
+use crate::mechanism::formulation::augmented_lagrangian::jacobian::ColumnTerms;
 use crate::mechanism::scratch::Scratch;
 use crate::scene::format::Baumgarte;
 
@@ -83,17 +84,16 @@ impl Work {
 /// Jacobian allocates nothing after the first (each is resized on use).
 #[derive(Debug, Default)]
 pub(crate) struct JacWork {
-    /// P = M⁻¹Φ_qᵀS⁻¹, nq × m row-major.
-    pmat: Vec<f64>,
-    /// S⁻¹, m × m.
-    sinv: Vec<f64>,
-    /// ∂r/∂q̇, m × nq row-major.
-    drdv: Vec<f64>,
-    /// The lower blocks of ∂f/∂y, nq × n column-major.
-    low: Vec<f64>,
-    /// m-vector scratch.
+    /// W = S⁻¹ Φ_q M⁻¹, m × nq row-major.
     w: Vec<f64>,
-    w2: Vec<f64>,
+    /// N = M⁻¹ − M⁻¹Φ_qᵀ W, nq × nq (symmetric).
+    nmat: Vec<f64>,
+    /// One column of ∂q̈ (nq).
+    low: Vec<f64>,
+    /// Φ_q, m × nq column-major.
+    phiq: Vec<f64>,
+    /// The right-hand sides of one column (built on the first Jacobian).
+    terms: Option<ColumnTerms>,
 }
 
 #[derive(Debug)]
