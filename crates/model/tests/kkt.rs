@@ -96,6 +96,31 @@ fn the_kkt_newton_solve_matches_the_dense_newton_matrix() {
 /// failed steps long before it moves the answer), and final states within 1e-3 of the
 /// tolerance's scale rtol · ‖y‖∞ (both converge Newton to a small fraction of the local
 /// tolerance at the same steps).
+/// `auto`'s crossover for one cluster (lash_solver::linear_algebra::KKT_ONE_CLUSTER_FROM =
+/// 300 unknowns): a chain of 50 links (n = 300) takes the `kkt` path, one of 49 links
+/// (n = 294) the dense one; 50 free bodies (n = 300, no KKT cluster: a sparse pattern)
+/// stay dense below SPARSE_FROM.
+#[test]
+fn auto_takes_the_kkt_path_for_one_cluster_from_300_unknowns() {
+    let o = SolverOptions::with_method(Method::Bdf);
+    for (links, kkt) in [(50usize, true), (49, false)] {
+        let m = mech(&chain(links, "augmented_lagrangian"));
+        let p = Problem::new(&m, &o).unwrap();
+        assert_eq!(p.diffsol().unwrap().is_kkt(), kkt, "{links} links");
+    }
+    let bodies: Vec<Value> = (0..50)
+        .map(|i| {
+            json!({"name": format!("f{i}"), "mass": 1.0, "inertia": 0.1,
+                        "position": [i as f64, 0.0]})
+        })
+        .collect();
+    let free = json!({"bodies": bodies, "joints": [], "gravity": [0.0, -9.81], "t_end": 1.0,
+                      "formulation": "augmented_lagrangian"});
+    let m = mech(&free);
+    assert_eq!(m.dim(), 300);
+    assert!(!Problem::new(&m, &o).unwrap().diffsol().unwrap().is_kkt());
+}
+
 #[test]
 fn the_kkt_path_follows_the_dense_path_on_a_chain() {
     for formulation in ["lagrange_baumgarte", "augmented_lagrangian"] {

@@ -16,9 +16,9 @@
 //!         goes through K's sparse LU and an augmented sparse system (crate::kkt)
 //!         memory O(nnz(K) + nnz(∂ρ/∂y)) and the LU's fill: crate::memory::kkt_bytes
 //! auto    sparse when n ≥ SPARSE_FROM and the pattern has at most n²/SPARSE_DENSITY
-//!         entries; else kkt when n ≥ KKT_FROM and the system has the KKT form; dense
-//!         otherwise (every system below SPARSE_FROM unknowns keeps the dense path and its
-//!         numbers)
+//!         entries; else kkt when the system has the KKT form and n ≥ KKT_FROM, or
+//!         n ≥ KKT_ONE_CLUSTER_FROM and its Jacobian is dense (no sparsity pattern: one
+//!         cluster, as a chain or A02); dense otherwise
 //! ```
 //! On the sparse path the system's own dense Jacobian is not used (it is n × n): a mechanism's
 //! closed-form blocks are replaced by differences, whose error (√ε relative) is far below what
@@ -69,13 +69,26 @@ pub const SPARSE_FROM: usize = 600;
 /// BENCHMARKS.md, "The sparse Newton of one cluster").
 pub const KKT_FROM: usize = 600;
 
+/// The number of unknowns from which `Auto` takes the `kkt` path for a system whose Jacobian
+/// is dense ([`OdeSystem::jacobian_sparsity`] None: one cluster of constraints, as a chain
+/// or IFToMM A02), whose dense Newton matrix costs n² entries to form and n³ to factor
+/// against the KKT matrix's O(n). Measured (BENCHMARKS.md, "Jacobian / rhs"): bdf on a chain
+/// breaks even near n = 150 and is 5× faster on the kkt path at n = 300; A02 N = 40
+/// (n = 486, 20 s at rtol 1e-10) 9.1 s against 55 s, with 11 036 steps against 11 098.
+pub const KKT_ONE_CLUSTER_FROM: usize = 300;
+
 /// Whether `choice` puts `sys` on the `kkt` path (module doc), given whether the pattern
 /// path was chosen.
 pub fn uses_kkt<S: OdeSystem + ?Sized>(sys: &S, choice: LinearAlgebra, sparse: bool) -> bool {
     let has = sys.kkt().is_some();
+    let n = sys.dim();
     match choice {
         LinearAlgebra::Kkt => has,
-        LinearAlgebra::Auto => has && !sparse && sys.dim() >= KKT_FROM,
+        LinearAlgebra::Auto => {
+            has && !sparse
+                && (n >= KKT_FROM
+                    || (n >= KKT_ONE_CLUSTER_FROM && sys.jacobian_sparsity().is_none()))
+        }
         LinearAlgebra::Dense | LinearAlgebra::Sparse => false,
     }
 }
