@@ -299,12 +299,13 @@ def run_scene(lash: str, index: int, seed: int, method: str, workdir: str) -> di
 
 
 def test_energy_bound_fails_on_a_dropped_term():
-    """Real runs of the pass (seed 23) whose balance closes: the bound holds, and fails as
-    soon as the accounting drops any term above a tenth of the flows (the 5 % and the
-    floors are far below those terms)."""
+    """Real runs of the pass (seed 23) whose balance closes under BDF (the three stiff-film
+    outliers of the one-step implicit methods, BENCHMARKS.md "Fuzzing"): the bound holds, and
+    fails as soon as the accounting drops any term above a tenth of the flows (the 5 % and
+    the floors are far below those terms)."""
     lash = binary()
     with tempfile.TemporaryDirectory() as d:
-        for index, method in [(1027, "bdf"), (2082, "bdf"), (1434, "esdirk34")]:
+        for index, method in [(1027, "bdf"), (2082, "bdf"), (1434, "bdf")]:
             e = run_scene(lash, index, 23, method, d)["metrics"]["energy"]
             assert energy_bound(e) == [], (index, e)
             terms = {k: v for k, v in e.items() if k not in ESTIMATES and k != "element_potential_change"}
