@@ -262,7 +262,7 @@ pub struct Energy {
     pub quadrature_error: f64,
     /// Σᵢ |∂(T + V)/∂yᵢ| (atolᵢ + rtol |yᵢ|) at the start and end states, J: how accurately
     /// the run's tolerances let the kinetic and potential energies be known (docs/outputs.md);
-    /// null for a fixed-step method and above 1 200 states.
+    /// null for a fixed-step method and above 300 states.
     #[serde(default)]
     pub state_tolerance: Option<f64>,
     /// The balance error, J: integration error plus the work of the Baumgarte terms; it is
