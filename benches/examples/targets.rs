@@ -36,7 +36,7 @@
 //!     `--rtols`; `--kinks` runs the scene with its kink events on (`kink_events`);
 //!     `--perturb K` repeats the scan from K initial states (the journal's initial
 //!     eccentricity k µm, k = 0 … K − 1, each against its own reference) and prints the
-//!     mean and largest error and work per method and rtol
+//!     median, mean and largest error and work per method and rtol
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -1151,7 +1151,7 @@ fn perturbed_dry_scene(stem: &str, k: usize, kinks: bool) -> lash_model::Scene {
 /// reference with kink events; the cheapest run by work (target ≤ 30 000 RHS-equivalents).
 /// With `--perturb K`, the scan is repeated from K initial states (k = 0 the catalogue's,
 /// [`PERTURB_STEP`]), each against its own reference, and the error and work are summarised
-/// per method and rtol (mean and max over the K scans).
+/// per method and rtol (median, mean and largest over the K scans).
 fn dry_through_lash_run(ctx: &Ctx) {
     let stem = "dry_150rpm_c0.1";
     println!(
@@ -1264,13 +1264,21 @@ fn dry_through_lash_run(ctx: &Ctx) {
     }
 }
 
-/// `q --perturb K`'s summary: per method and rtol, over the K scans, the mean and largest
-/// error, the mean and largest work, and how many scans met the target within 30 000.
+/// `q --perturb K`'s summary: per method and rtol, over the K scans, the median, mean and
+/// largest error, the mean and largest work, and how many scans met the target within 30 000.
 fn print_scatter(runs: &[Run], methods: &[Method], n: usize) {
     println!(
         "  scatter over the perturbed scans (error m/s², work = RHS + {n} per Jacobian):\n  \
-         {:8} {:>8} {:>5} {:>10} {:>10} {:>9} {:>9} {:>6}",
-        "method", "rtol", "scans", "mean err", "max err", "mean work", "max work", "met"
+         {:8} {:>8} {:>5} {:>10} {:>10} {:>10} {:>9} {:>9} {:>6}",
+        "method",
+        "rtol",
+        "scans",
+        "median err",
+        "mean err",
+        "max err",
+        "mean work",
+        "max work",
+        "met"
     );
     for &m in methods {
         let mut tols: Vec<f64> = runs
@@ -1286,6 +1294,14 @@ fn print_scatter(runs: &[Run], methods: &[Method], n: usize) {
                 .filter(|r| r.method == Some(m) && r.rtol == rtol)
                 .collect();
             let k = rs.len() as f64;
+            let mut errs: Vec<f64> = rs.iter().map(|r| r.error).collect();
+            errs.sort_by(f64::total_cmp);
+            let half = errs.len() / 2;
+            let median_err = if errs.len() % 2 == 1 {
+                errs[half]
+            } else {
+                0.5 * (errs[half - 1] + errs[half])
+            };
             let mean_err = rs.iter().map(|r| r.error).sum::<f64>() / k;
             let max_err = rs.iter().map(|r| r.error).fold(0.0, f64::max);
             let mean_work = rs.iter().map(|r| work(r, n) as f64).sum::<f64>() / k;
@@ -1295,10 +1311,11 @@ fn print_scatter(runs: &[Run], methods: &[Method], n: usize) {
                 .filter(|r| r.error <= TARGET && work(r, n) <= 30_000)
                 .count();
             println!(
-                "  {:8} {:>8.1e} {:>5} {:>10.2e} {:>10.2e} {:>9.0} {:>9} {:>3}/{}",
+                "  {:8} {:>8.1e} {:>5} {:>10.2e} {:>10.2e} {:>10.2e} {:>9.0} {:>9} {:>3}/{}",
                 m.name(),
                 rtol,
                 rs.len(),
+                median_err,
                 mean_err,
                 max_err,
                 mean_work,
