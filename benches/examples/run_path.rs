@@ -17,6 +17,10 @@
 //!             of each, their counters and the cost per step, and a digest of the library
 //!             run's sampled accelerations (bit for bit comparisons of builds): the loop to
 //!             `perf record`
+//! --lib-only  with --library: the library run alone, `--reps` times, and its counters (no
+//!             hand-written run, no right-hand-side loop): the loop to count instructions with
+//!             `valgrind --tool=callgrind`
+//! --no-limit  with --library: the library run without the contact-aware step limit
 //! ```
 
 use std::time::Instant;
@@ -33,6 +37,8 @@ fn main() {
     let mut reps = 20;
     let mut formulation = None;
     let mut library = false;
+    let mut lib_only = false;
+    let mut no_limit = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -55,11 +61,14 @@ fn main() {
                 formulation = Some(f.parse::<FormulationName>().expect("a formulation"));
             }
             "--library" => library = true,
+            "--lib-only" => lib_only = true,
+            "--no-limit" => no_limit = true,
             s => stem = s.to_string(),
         }
     }
     if library {
-        return library_loop(&stem, method, rtol, reps, formulation);
+        let flags = LoopFlags { lib_only, no_limit };
+        return library_loop(&stem, method, rtol, reps, formulation, flags);
     }
     let case = lash_benches::cases_dir().join(format!("{stem}.json"));
     let o = RunOptions {
@@ -99,6 +108,13 @@ fn main() {
     );
 }
 
+/// `--lib-only` and `--no-limit` of `--library`.
+#[derive(Clone, Copy)]
+struct LoopFlags {
+    lib_only: bool,
+    no_limit: bool,
+}
+
 /// `--library`: the library run of the case at (method, rtol) with the run's options and the
 /// hand-written diffsol bdf (rtol 3.2e-10, atol 1e-3 rtol), `reps` alternating rounds.
 fn library_loop(
@@ -107,7 +123,9 @@ fn library_loop(
     rtol: f64,
     reps: usize,
     formulation: Option<FormulationName>,
+    flags: LoopFlags,
 ) {
+    let LoopFlags { lib_only, no_limit } = flags;
     use lash_benches::handwritten::{diffsol_bdf, HandPress};
     let path = lash_benches::cases_dir().join(format!("{stem}.json"));
     let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
@@ -126,7 +144,10 @@ fn library_loop(
     let m = lash_model::Mechanism::from_scene(&scene).expect("the scene assembles");
     let per = lash_benches::crank_period(&m);
     let times = lash_benches::grid(m.t_start() + per, m.t_start() + 2.0 * per, 2001);
-    let o = lash_benches::run_options(&m, method, rtol, 1e-4);
+    let mut o = lash_benches::run_options(&m, method, rtol, 1e-4);
+    if no_limit {
+        o.h_max_near_events = f64::INFINITY;
+    }
     let hand = HandPress::paper(150.0, 1e-4, true);
     let y0 = HandPress::minimal_state(&y_abs);
     let hand_rtol = 3.2e-10;
@@ -142,6 +163,9 @@ fn library_loop(
         digest = s.slider_a.iter().fold(0xcbf2_9ce4_8422_2325, |h, v| {
             (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3)
         });
+        if lib_only {
+            continue;
+        }
         let h = diffsol_bdf(
             &hand,
             m.t_start(),
@@ -153,6 +177,21 @@ fn library_loop(
         .expect("the hand-written run succeeds");
         best_hand = best_hand.min(h.wall);
         hand_counts = (h.steps, h.rhs_evals);
+    }
+    if lib_only {
+        let st = lib_stats.expect("reps > 0");
+        println!(
+            "library ({}, {} rtol {rtol:.1e}): {:.3} ms, {} steps, {} RHS + {} Jacobians, \
+             {} event evaluations; digest {digest:016x}",
+            m.formulation_name(),
+            method.name(),
+            best_lib * 1e3,
+            st.accepted,
+            st.rhs_evals,
+            st.jac_evals,
+            st.event_evals
+        );
+        return;
     }
     // One right-hand side at the start of the second revolution (the lubricated film loaded),
     // each side's, 100 000 calls a round, the minimum of five rounds.

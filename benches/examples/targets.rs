@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [g] [p]
 //!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R] [--methods M,..]
-//!     [--kinks] [--rtols R,..]
+//!     [--kinks] [--rtols R,..] [--perturb K]
 //! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
 //!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
@@ -33,7 +33,10 @@
 //!     (default 3.2e-10, (f)'s cheapest), without (f)'s scans: not among the defaults
 //! (q) (f)'s last part alone: the dry press through `lash run`, every adaptive method or
 //!     `--methods` (not among the defaults), at rtol 1e-5 … 1e-11 in half decades or
-//!     `--rtols`; `--kinks` runs the scene with its kink events on (`kink_events`)
+//!     `--rtols`; `--kinks` runs the scene with its kink events on (`kink_events`);
+//!     `--perturb K` repeats the scan from K initial states (the journal's initial
+//!     eccentricity k µm, k = 0 … K − 1, each against its own reference) and prints the
+//!     median, mean and largest error and work per method and rtol
 //! ```
 //! References: Rodas5P at rtol 1e-13 (atol 1e-16), events on; its distance to Rodas5P at 1e-12
 //! and to DOP853 at 1e-12 is printed as an estimate of its own error. Wall times are the
@@ -66,6 +69,8 @@ struct Ctx {
     kinks: bool,
     /// `--rtols a,b`: (q) scans these tolerances (None: 1e-5 … 1e-11 in half decades).
     rtols: Option<Vec<f64>>,
+    /// `--perturb K`: (q) repeats the scan from K initial states (0: the catalogue's only).
+    perturb: usize,
 }
 
 /// One measured run.
@@ -282,6 +287,7 @@ fn rk4_search(
         methods: None,
         kinks: false,
         rtols: None,
+        perturb: 0,
     };
     let ok = |r: &Option<Run>| r.as_ref().is_some_and(|r| r.error <= TARGET);
     let first = rk4_run(&once, m, t_end, times, reference, k_hi, false);
@@ -425,6 +431,7 @@ fn section_b(ctx: &Ctx) {
                 methods: None,
                 kinks: false,
                 rtols: None,
+                perturb: 0,
             },
             &m,
             t_end,
@@ -473,6 +480,7 @@ fn section_c(ctx: &Ctx) {
                 methods: None,
                 kinks: false,
                 rtols: None,
+                perturb: 0,
             },
             &m,
             t_end,
@@ -493,6 +501,7 @@ fn section_c(ctx: &Ctx) {
                 methods: None,
                 kinks: false,
                 rtols: None,
+                perturb: 0,
             },
             &m,
             t_end,
@@ -946,7 +955,8 @@ impl RunPath<'_> {
         for &method in methods {
             for &rtol in &tols {
                 if let Some(r) = self.measure(ctx, method, rtol, times, reference) {
-                    let done = r.error < TARGET / 30.0;
+                    // With perturbed scans every rtol is run, for the statistics.
+                    let done = r.error < TARGET / 30.0 && ctx.perturb == 0;
                     runs.push(r);
                     if done {
                         break;
@@ -1112,8 +1122,36 @@ fn path_side_by_side(
     );
 }
 
+/// The step of the perturbations of `q --perturb K` (m): scan k starts the journal at the
+/// eccentricity k · PERTURB_STEP in the direction k · 137.5° (the golden angle, so that the
+/// directions spread), 1 % of the clearance per k; k = 0 is the catalogue's centred journal.
+const PERTURB_STEP: f64 = 1e-6;
+
+/// The dry press scene `stem` of the catalogue, perturbed as scan `k` of `--perturb`
+/// ([`PERTURB_STEP`]), with `kink_events` as given.
+fn perturbed_dry_scene(stem: &str, k: usize, kinks: bool) -> lash_model::Scene {
+    let path = lash_benches::cases_dir().join(format!("{stem}.json"));
+    let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
+    assert!(!scene.kink_events, "the scene sets kink_events itself");
+    scene.kink_events = kinks;
+    let angle = (k as f64 * 137.5).to_radians();
+    let e = k as f64 * PERTURB_STEP;
+    let mut clearances = 0;
+    for j in &mut scene.joints {
+        if let lash_model::scene::JointSpec::Clearance(c) = j {
+            c.initial_eccentricity = [e * angle.cos(), e * angle.sin()];
+            clearances += 1;
+        }
+    }
+    assert_eq!(clearances, 1, "the dry press has one clearance joint");
+    scene
+}
+
 /// (f), the dry press: the first half revolution through `lash run`, error against the
 /// reference with kink events; the cheapest run by work (target ≤ 30 000 RHS-equivalents).
+/// With `--perturb K`, the scan is repeated from K initial states (k = 0 the catalogue's,
+/// [`PERTURB_STEP`]), each against its own reference, and the error and work are summarised
+/// per method and rtol (median, mean and largest over the K scans).
 fn dry_through_lash_run(ctx: &Ctx) {
     let stem = "dry_150rpm_c0.1";
     println!(
@@ -1121,17 +1159,10 @@ fn dry_through_lash_run(ctx: &Ctx) {
          error ≤ {TARGET:.0e} m/s² by work = RHS + n per Jacobian (target ≤ 30 000)",
         formulation_label(ctx.formulation)
     );
-    let mut kinked = press(stem, 0.5);
-    kinked.set_kink_events(true);
-    let half = 0.5 * crank_period(&kinked);
-    let times = grid(0.0, half, N_GRID);
-    println!("  reference with kink events and exact event steps:");
-    let reference = reference_with(&kinked, kinked.t_end(), &times, true);
     // The dimension `lash run` integrates: the scene's own formulation (`auto` resolves to
     // `minimal` for the press, 4 states) unless `--formulation` names one.
     let n = {
-        let path = lash_benches::cases_dir().join(format!("{stem}.json"));
-        let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
+        let mut scene = perturbed_dry_scene(stem, 0, false);
         if let Some(f) = ctx.formulation {
             scene.formulation = f;
         }
@@ -1140,24 +1171,7 @@ fn dry_through_lash_run(ctx: &Ctx) {
             .dim()
     };
     let dir = std::env::temp_dir().join(format!("lash-targets-fd-{}", std::process::id()));
-    let case = ctx.kinks.then(|| {
-        let src = lash_benches::cases_dir().join(format!("{stem}.json"));
-        let text = std::fs::read_to_string(&src).expect("the catalogue's scene");
-        assert!(
-            !text.contains("kink_events"),
-            "the scene sets kink_events itself"
-        );
-        let brace = text.find('{').expect("a JSON object");
-        let text = format!(
-            "{}{{\n  \"kink_events\": true,{}",
-            &text[..brace],
-            &text[brace + 1..]
-        );
-        std::fs::create_dir_all(&dir).expect("a temporary directory");
-        let p = dir.join(format!("{stem}_kinks.json"));
-        std::fs::write(&p, text).expect("written");
-        p
-    });
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
     println!(
         "  lash's side with kink events {}",
         if ctx.kinks {
@@ -1166,23 +1180,74 @@ fn dry_through_lash_run(ctx: &Ctx) {
             "as the scene says (off)"
         }
     );
-    let path = RunPath {
-        stem,
-        case,
-        t_end: half,
-        rows: 2 * (N_GRID - 1),
-        formulation: ctx.formulation,
-        out: dir.join("run"),
-    };
-    print_header();
     let adaptive: Vec<Method> = Method::ALL
         .into_iter()
         .filter(|m| !m.is_fixed_step())
         .filter(|m| ctx.methods.as_ref().is_none_or(|ms| ms.contains(m)))
         .collect();
-    let runs = path.scan_all(ctx, &adaptive, &times, &reference);
+    let scans = ctx.perturb.max(1);
+    let mut all: Vec<Run> = Vec::new();
+    for k in 0..scans {
+        let scene = perturbed_dry_scene(stem, k, ctx.kinks);
+        if ctx.perturb > 0 {
+            println!(
+                "  scan {k}: the journal's initial eccentricity {:.0e} m at {:.1}°",
+                k as f64 * PERTURB_STEP,
+                (k as f64 * 137.5) % 360.0
+            );
+        }
+        // The reference: the same initial state, kink events on, exact event steps, in the
+        // formulation lash's side runs (the scene's own, `auto`: `minimal`, or
+        // `--formulation`); its distance to the same reference in lagrange_baumgarte (that of
+        // `press` and of the tables before the perturbed scans) is printed.
+        let mechanism = |f: Option<FormulationName>| {
+            let mut s = scene.clone();
+            s.t_end = None;
+            s.revolutions = Some(0.5);
+            s.kink_events = true;
+            if let Some(f) = f {
+                s.formulation = f;
+            }
+            let mut m = Mechanism::from_scene(&s).expect("the scene assembles");
+            m.set_kink_events(true);
+            m
+        };
+        let kinked = mechanism(ctx.formulation);
+        let half = 0.5 * crank_period(&kinked);
+        let times = grid(0.0, half, N_GRID);
+        println!(
+            "  reference with kink events and exact event steps ({}):",
+            formulation_label(ctx.formulation)
+        );
+        let reference = reference_with(&kinked, kinked.t_end(), &times, true);
+        if ctx.formulation != Some(FormulationName::LagrangeBaumgarte) {
+            let lb = mechanism(Some(FormulationName::LagrangeBaumgarte));
+            let mut o = options(Method::Rodas5p, 1e-13, 1e-16, 0.0, Output::Final);
+            o.exact_event_steps = true;
+            let s = sample(&lb, lb.t_end(), &o, &times).expect("the reference run succeeds");
+            println!(
+                "  |reference − the same in lagrange_baumgarte| = {:.1e} m/s²",
+                max_abs_diff(&reference, &s.slider_a)
+            );
+        }
+        let case = dir.join(format!("{stem}_{k}.json"));
+        std::fs::write(&case, scene.to_json_pretty()).expect("written");
+        let path = RunPath {
+            stem,
+            case: Some(case),
+            t_end: half,
+            rows: 2 * (N_GRID - 1),
+            formulation: ctx.formulation,
+            out: dir.join("run"),
+        };
+        print_header();
+        all.extend(path.scan_all(ctx, &adaptive, &times, &reference));
+    }
     let _ = std::fs::remove_dir_all(&dir);
-    let mut ok: Vec<&Run> = runs.iter().filter(|r| r.error <= TARGET).collect();
+    if ctx.perturb > 0 {
+        print_scatter(&all, &adaptive, n);
+    }
+    let mut ok: Vec<&Run> = all.iter().filter(|r| r.error <= TARGET).collect();
     ok.sort_by_key(|r| work(r, n));
     println!("  the cheapest by work with error ≤ {TARGET:.0e} (n = {n}):");
     for r in ok.iter().take(5) {
@@ -1196,6 +1261,69 @@ fn dry_through_lash_run(ctx: &Ctx) {
     }
     if ok.is_empty() {
         println!("  none within the scan");
+    }
+}
+
+/// `q --perturb K`'s summary: per method and rtol, over the K scans, the median, mean and
+/// largest error, the mean and largest work, and how many scans met the target within 30 000.
+fn print_scatter(runs: &[Run], methods: &[Method], n: usize) {
+    println!(
+        "  scatter over the perturbed scans (error m/s², work = RHS + {n} per Jacobian):\n  \
+         {:8} {:>8} {:>5} {:>10} {:>10} {:>10} {:>9} {:>9} {:>6}",
+        "method",
+        "rtol",
+        "scans",
+        "median err",
+        "mean err",
+        "max err",
+        "mean work",
+        "max work",
+        "met"
+    );
+    for &m in methods {
+        let mut tols: Vec<f64> = runs
+            .iter()
+            .filter(|r| r.method == Some(m))
+            .map(|r| r.rtol)
+            .collect();
+        tols.sort_by(|a, b| b.total_cmp(a));
+        tols.dedup();
+        for rtol in tols {
+            let rs: Vec<&Run> = runs
+                .iter()
+                .filter(|r| r.method == Some(m) && r.rtol == rtol)
+                .collect();
+            let k = rs.len() as f64;
+            let mut errs: Vec<f64> = rs.iter().map(|r| r.error).collect();
+            errs.sort_by(f64::total_cmp);
+            let half = errs.len() / 2;
+            let median_err = if errs.len() % 2 == 1 {
+                errs[half]
+            } else {
+                0.5 * (errs[half - 1] + errs[half])
+            };
+            let mean_err = rs.iter().map(|r| r.error).sum::<f64>() / k;
+            let max_err = rs.iter().map(|r| r.error).fold(0.0, f64::max);
+            let mean_work = rs.iter().map(|r| work(r, n) as f64).sum::<f64>() / k;
+            let max_work = rs.iter().map(|r| work(r, n)).max().unwrap_or(0);
+            let met = rs
+                .iter()
+                .filter(|r| r.error <= TARGET && work(r, n) <= 30_000)
+                .count();
+            println!(
+                "  {:8} {:>8.1e} {:>5} {:>10.2e} {:>10.2e} {:>10.2e} {:>9.0} {:>9} {:>3}/{}",
+                m.name(),
+                rtol,
+                rs.len(),
+                median_err,
+                mean_err,
+                max_err,
+                mean_work,
+                max_work,
+                met,
+                rs.len()
+            );
+        }
     }
 }
 
@@ -1288,6 +1416,7 @@ fn main() {
     let mut methods = None;
     let mut kinks = false;
     let mut rtols = None;
+    let mut perturb = 0;
     let mut sections = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -1324,6 +1453,12 @@ fn main() {
                 );
             }
             "--kinks" => kinks = true,
+            "--perturb" => {
+                perturb = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--perturb takes a number of scans");
+            }
             "--rtols" => {
                 let v = it.next().expect("--rtols takes r1,r2,…");
                 rtols = Some(
@@ -1345,7 +1480,7 @@ fn main() {
                 eprintln!(
                     "unknown argument {other}: expected a, b, c, d, e, f, g, p, q, --reps N, \
                      --formulation F, --at METHOD:RTOL, --hand-rtol R, --methods M,.., \
-                     --kinks, --rtols R,.."
+                     --kinks, --rtols R,.., --perturb K"
                 );
                 std::process::exit(2);
             }
@@ -1362,6 +1497,7 @@ fn main() {
         methods,
         kinks,
         rtols,
+        perturb,
     };
     for s in sections {
         match s.as_str() {

@@ -242,6 +242,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         formulation: Default::default(),
         augmented_lagrangian: Default::default(),
         solver: Default::default(),
+        body_names: Default::default(),
     }
 }
 

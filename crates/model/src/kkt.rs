@@ -38,6 +38,7 @@ impl KktSystem for Mechanism {
             m: cons.rows.len(),
             k_entries,
             residual_pattern: residual_pattern(self),
+            regularisation: self.formulation().kkt_regularisation(),
         }
     }
 

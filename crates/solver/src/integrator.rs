@@ -35,6 +35,8 @@
 //! t* corrected by Newton's method on g along retaken steps, at most twice, where the
 //!   correction moves the state by more than the tolerance (exact.rs, refine_retaken)
 //! first step after the restart = min(fresh first step, the original step [t_a, t_b]'s length)
+//! with the rates ġ: the step after a step without an event ends at most 2 % past the
+//!   linear prediction −g_i/ġ_i of the nearest approaching crossing (exact.rs, crossing_limit)
 //! ```
 //!
 //! Where an event function marks a point at which the right-hand side is not smooth (a
@@ -349,6 +351,9 @@ pub struct Integrator<'p, S: OdeSystem + ?Sized> {
     g_l: Vec<f64>,
     /// Interior samples skipped by the far test.
     samples_skipped: usize,
+    /// Whether the step limit in force is the predicted crossing's (exact event steps:
+    /// `integrator/exact.rs`, [`Integrator::crossing_limit`]).
+    crossing_limited: bool,
     /// H of the contact-aware step limit (module documentation), when it is on: finite, the
     /// rates given, events on.
     h_near: Option<f64>,
@@ -399,6 +404,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
             g_t: vec![0.0; m],
             g_l: vec![0.0; m],
             samples_skipped: 0,
+            crossing_limited: false,
             h_near: None,
             ybuf: vec![0.0; n],
             seg_end: t0,
@@ -662,15 +668,21 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         if found.is_none() {
             // No event: the end of this step is the start of the next one, so g there becomes
             // the left bracket value of the next step's root finding.
+            let h = t_b - t_a0;
+            let mut limit = None;
             if let Some(h_near) = self.h_near {
-                let h = t_b - t_a0;
                 let reach = (0..m)
                     .map(|i| {
                         reach_limit(self.g_b[i], self.gd_b[i], (self.gd_b[i] - self.gd_a[i]) / h)
                     })
                     .fold(f64::INFINITY, f64::min);
-                self.stepper
-                    .set_h_max(h_near.max(reach).min(self.opts.h_max));
+                limit = Some(h_near.max(reach).min(self.opts.h_max));
+            }
+            if self.crossing_limit_on() {
+                limit = Some(self.crossing_limit(limit.unwrap_or(self.opts.h_max), h));
+            }
+            if let Some(limit) = limit {
+                self.stepper.set_h_max(limit);
             }
             self.g_a.copy_from_slice(&self.g_b);
             self.gd_a.copy_from_slice(&self.gd_b);
@@ -827,7 +839,10 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         self.g_a.copy_from_slice(&g);
         if let Some(h_near) = self.h_near {
             self.stepper.set_h_max(h_near.min(self.opts.h_max));
+        } else if self.crossing_limit_on() {
+            self.stepper.set_h_max(self.opts.h_max);
         }
+        self.crossing_limited = false;
         self.t_cur = t_ev;
         self.seg_end = t_ev;
         self.y_cur.copy_from_slice(&y);

@@ -246,7 +246,9 @@ pub fn check_sparse(
 /// The `kkt` path's need for a system of `shape` (module doc), saturating.
 pub fn kkt_bytes(shape: &crate::system::KktShape) -> u64 {
     let nnz_r: usize = shape.residual_pattern.iter().map(Vec::len).sum();
-    let entries = (shape.k_entries as u64)
+    // K_ε's −εI block, when the path regularises K (crate::kkt).
+    let k_entries = shape.k_entries + shape.regularisation.map_or(0, |_| shape.m);
+    let entries = (k_entries as u64)
         .saturating_mul(2)
         .saturating_add((nnz_r as u64).saturating_mul(2))
         .saturating_add(4 * shape.nq as u64);

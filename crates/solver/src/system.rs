@@ -295,6 +295,11 @@ pub struct KktShape {
     pub k_entries: usize,
     /// For each column j < 2 n_q of R = ∂ρ/∂y, the rows (< n_q + m) where it may be nonzero.
     pub residual_pattern: Vec<Vec<usize>>,
+    /// ε > 0 when the system's accelerations stay defined where K is singular (redundant
+    /// constraints, singular configurations: the augmented Lagrangian, ε = 1/α): the `kkt`
+    /// path then factors K_ε = [[M, Φ_qᵀ], [Φ_q, −εI]] (nonsingular when M is positive
+    /// definite) and refines K z = b with it (crate::kkt). None: K itself is factored.
+    pub regularisation: Option<f64>,
 }
 
 /// A second-order system whose accelerations solve a sparse linear system (crate::kkt's

@@ -312,11 +312,15 @@ impl OdeSystem for RatedBall {
 /// Runs the rated ball with `method` at default options: the bounces of the plain ball (same
 /// times to 1e-6 relative, none lost) and the number of interior samples the far test skipped.
 fn rated_ball_bounces(ball: Ball, method: Method) -> Result<(Vec<f64>, usize), SolveError> {
+    rated_ball_bounces_with(ball, &SolverOptions::with_method(method))
+}
+
+/// [`rated_ball_bounces`] with options `o`.
+fn rated_ball_bounces_with(ball: Ball, o: &SolverOptions) -> Result<(Vec<f64>, usize), SolveError> {
     let rated = RatedBall(ball);
     let expected = rated.0.bounce_times();
     let t_end = expected.last().unwrap() + 1.0;
-    let o = SolverOptions::with_method(method);
-    let problem = Problem::new(&rated, &o)?;
+    let problem = Problem::new(&rated, o)?;
     let mut it = problem.integrator(0.0, t_end, &[rated.0.h0, 0.0])?;
     let mut bounces = Vec::new();
     loop {
@@ -349,6 +353,31 @@ proptest! {
         let expected = ball.bounce_times();
         for method in adaptive_methods() {
             let (found, _) = rated_ball_bounces(Ball::new(g, e, log_h0.exp()), method)
+                .map_err(|e| TestCaseError::fail(format!("{method}: {e}")))?;
+            prop_assert_eq!(found.len(), expected.len(), "{}: {:?} vs {:?}", method, found, expected);
+            for (t, te) in found.iter().zip(&expected) {
+                prop_assert!((t - te).abs() <= 1e-6 * te, "{}: {} vs {}", method, t, te);
+            }
+        }
+    }
+
+    /// With the rates given, exact event steps also limit each step to end just past the
+    /// predicted crossing (crate::integrator, "Exact event steps"; integrator/exact.rs): 200
+    /// random balls with event rates × every one-step adaptive method find every bounce at
+    /// its analytic time.
+    #[test]
+    fn every_bounce_is_found_with_the_predicted_crossing_limit(
+        g in 1.0f64..20.0,
+        e in 0.3f64..0.95,
+        log_h0 in (0.01f64).ln()..(10.0f64).ln(),
+    ) {
+        let expected = Ball::new(g, e, log_h0.exp()).bounce_times();
+        for method in adaptive_methods().filter(|m| m.info().family != lash_solver::method::Family::Diffsol) {
+            let o = SolverOptions {
+                exact_event_steps: true,
+                ..SolverOptions::with_method(method)
+            };
+            let (found, _) = rated_ball_bounces_with(Ball::new(g, e, log_h0.exp()), &o)
                 .map_err(|e| TestCaseError::fail(format!("{method}: {e}")))?;
             prop_assert_eq!(found.len(), expected.len(), "{}: {:?} vs {:?}", method, found, expected);
             for (t, te) in found.iter().zip(&expected) {

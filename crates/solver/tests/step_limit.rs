@@ -185,3 +185,36 @@ fn a_graze_that_hides_without_the_limit_is_found_with_it() {
         );
     }
 }
+
+/// Under the limit, diffsol's methods get a stop time only where it binds (crate::
+/// diffsol_backend's module documentation): a limit above every step the free run takes
+/// leaves the run bit for bit the free run's, whereas a stop time held at t + H until reached
+/// would cut the step that crosses it and rescale the method's history.
+#[test]
+fn a_limit_that_never_binds_leaves_diffsols_steps_alone() {
+    let sys = Graze { eps: 1e-6 };
+    let span = (0.0, std::f64::consts::PI);
+    for method in [Method::Bdf, Method::Trbdf2, Method::Esdirk34] {
+        let run = |h_near: f64| {
+            let mut o = SolverOptions::with_method(method);
+            o.rtol = 1e-6;
+            o.atol = Atol::Scalar(1e-9);
+            o.h_max_near_events = h_near;
+            o.output = Output::Steps;
+            Problem::new(&sys, &o)
+                .unwrap()
+                .solve(span, &[0.0, 1.0])
+                .unwrap()
+        };
+        let free = run(f64::INFINITY);
+        // H above every free step: the limit max(H, r) never binds, yet it is in force (the
+        // stepper's h_max is set after every step).
+        let h_near = 1.5 * free.stats.h_max_used;
+        let limited = run(h_near);
+        assert!(free.t.len() > 20, "{method}: {} steps", free.t.len());
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&limited.t), bits(&free.t), "{method}: step times");
+        assert_eq!(bits(&limited.y), bits(&free.y), "{method}: states");
+        assert_eq!(limited.stats.rhs_evals, free.stats.rhs_evals, "{method}");
+    }
+}

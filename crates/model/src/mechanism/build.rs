@@ -104,6 +104,8 @@ impl Mechanism {
             forces.prismatic.len(),
         );
         let roles = Roles::resolve(scene, &forces.revolute);
+        let rank_holds = matches!(formulation, Formulation::LagrangeBaumgarte(_))
+            && Tree::build(scene, &bodies).closing.is_empty();
         let mut mech = Mechanism {
             scene: scene.clone(),
             bodies,
@@ -116,6 +118,7 @@ impl Mechanism {
             t_end: 0.0,
             y0: Vec::new(),
             roles,
+            rank_holds,
             scratch: RefCell::new(scratch),
             force_jac: RefCell::default(),
         };

@@ -69,6 +69,9 @@ pub struct Mechanism {
     t_end: f64,
     y0: Vec<f64>,
     roles: Roles,
+    /// Under Lagrange–Baumgarte: the ideal joints form a tree, so Φ_q has full row rank in
+    /// every configuration (mechanism::accepted: no crossing to look for).
+    rank_holds: bool,
     scratch: RefCell<Scratch>,
     force_jac: RefCell<ForceJacWork>,
 }

@@ -10,6 +10,7 @@ use crate::clearance::revolute::ClearanceSpec;
 use crate::elements::input::{Input, Pt};
 use crate::elements::ForceElementSpec;
 use crate::scene::de::{object, object_opt, objects, tagged_kinds};
+use crate::scene::names::BodyNames;
 use crate::scene::refs::{body_or_ground, Attachment, Lookup, SceneRefs};
 use crate::scene::solver::SolverSpec;
 
@@ -86,6 +87,9 @@ pub struct Scene {
         deserialize_with = "object"
     )]
     pub solver: SolverSpec,
+    /// The body index by name (a cache; crate::scene::names).
+    #[serde(skip)]
+    pub(crate) body_names: BodyNames,
 }
 
 /// The formulations a scene (or `--formulation`) can choose (docs/model.md §12).
@@ -468,7 +472,8 @@ tagged_kinds! {
 impl Scene {
     /// Index of the body named `name`.
     pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
+        self.body_names
+            .index(name, self.bodies.len(), |k| self.bodies[k].name.as_str())
     }
 
     /// Index of the joint named `name`.

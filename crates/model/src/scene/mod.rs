@@ -17,6 +17,7 @@ pub(crate) mod check;
 pub(crate) mod de;
 pub(crate) mod error;
 pub(crate) mod format;
+mod names;
 mod parse;
 pub(crate) mod refs;
 mod resolution;

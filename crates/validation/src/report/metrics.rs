@@ -19,6 +19,7 @@
 //! energy.balance_error        W_driver + W_load + W_motor
 //!                             − (ΔT + ΔV + D_damping + D_friction + D_film + D_damper)
 //! energy.quadrature_error     estimated error of the integrals W_*, D_* (Richardson)
+//! energy.state_tolerance      Σᵢ |∂(T + V)/∂yᵢ| (atolᵢ + rtol |yᵢ|) at the start and end
 //! ```
 //!
 //! Extrema over the dense output ([`Peaks`]): every accepted step [a, b] that reaches into
@@ -217,6 +218,9 @@ pub(crate) struct EnergyTotals {
     /// Simpson's rule on one and two subintervals (Richardson; the value used is Boole's rule
     /// S₂ + (S₂ − S₁)/15, one order higher).
     pub quadrature_error: f64,
+    /// How accurately the tolerances let T + V be known at the start and end states
+    /// (crate::run::state_tolerance), J; None for fixed-step methods and large systems.
+    pub state_tolerance: Option<f64>,
 }
 
 /// The `energy` object of summary.json.
@@ -256,6 +260,11 @@ pub struct Energy {
     pub dissipated_damper: f64,
     /// Estimated error of the time integrals (works and dissipations), J.
     pub quadrature_error: f64,
+    /// Σᵢ |∂(T + V)/∂yᵢ| (atolᵢ + rtol |yᵢ|) at the start and end states, J: how accurately
+    /// the run's tolerances let the kinetic and potential energies be known (docs/outputs.md);
+    /// null for a fixed-step method and above 300 states.
+    #[serde(default)]
+    pub state_tolerance: Option<f64>,
     /// The balance error, J: integration error plus the work of the Baumgarte terms; it is
     /// meaningful where it exceeds `quadrature_error`.
     pub balance_error: f64,
@@ -276,6 +285,7 @@ impl Energy {
             dissipated_film: e.dissipated_film,
             dissipated_damper: e.dissipated_damper,
             quadrature_error: e.quadrature_error,
+            state_tolerance: e.state_tolerance,
             balance_error: e.driver_work + e.load_work + e.motor_work
                 - (e.kinetic_change
                     + e.potential_change
@@ -1025,6 +1035,7 @@ mod tests {
             dissipated_damper: 0.0,
             element_potential_change: 0.0,
             quadrature_error: 1e-9,
+            state_tolerance: None,
         };
         let m = compute(&samples(Sample::at), W, None, &[], Some(e), None).unwrap();
         assert_eq!(m.energy.unwrap().balance_error, 0.5);

@@ -29,10 +29,11 @@ use crate::run::plan::RunRequest;
 use crate::run::prepare::scene_error;
 use crate::run::prepare::Prepared;
 use crate::run::prepare::QUADRATURE_PANEL_PER_PERIOD;
-use crate::run::quadrature::{own_quadrature, Own, Powers, Quadrature, TERMS};
+use crate::run::quadrature::{own_quadrature, step_ends, Own, Powers, Quadrature, TERMS};
 use crate::run::result::RunResult;
 use crate::run::sample::fixed_values;
 use crate::run::sample::Sampler;
+use crate::run::state_tolerance::state_tolerance;
 use crate::run::window::{whole, CrankTrack, WindowPlan};
 
 /// Output lists of a mechanism run, merged in time order.
@@ -477,12 +478,17 @@ fn pass(
         .period
         .map_or(f64::INFINITY, |t| t * QUADRATURE_PANEL_PER_PERIOD);
     let quad = if req.energy {
-        Some(Quadrature::new(
+        let q = Quadrature::new(
             opts.method.is_fixed_step(),
             max_panel,
             t0,
             checked_power(power_ref, t0, &y0)?,
-        ))
+        );
+        Some(if step_ends(opts.method) {
+            q.on_step_ends()
+        } else {
+            q
+        })
     } else {
         None
     };
@@ -565,6 +571,8 @@ fn pass(
     extra_states.t_final = d.t_final;
     extra_states.y_final = d.y_final.clone();
     let end = mech.outputs(d.t_final, &d.y_final);
+    // Read before the state tolerance's evaluations, which would count in them.
+    let formulation_stats = mech.formulation_stats();
     let energy = match obs.quad.as_mut() {
         Some(q) => {
             q.finish();
@@ -583,6 +591,7 @@ fn pass(
                 element_potential_change: o1.elements.iter().map(|e| e.potential).sum::<f64>()
                     - o0.elements.iter().map(|e| e.potential).sum::<f64>(),
                 quadrature_error: q.err.iter().sum(),
+                state_tolerance: state_tolerance(&mech, opts, (t0, &y0), (d.t_final, &d.y_final)),
             })
         }
         None => None,
@@ -598,7 +607,7 @@ fn pass(
     let mut summary = d.summary(p, opts, t_end);
     summary.metrics = Some(metrics);
     summary.formulation = Some(mech.formulation_name().to_string());
-    summary.formulation_stats = mech.formulation_stats();
+    summary.formulation_stats = formulation_stats;
     summary.law_range = (!obs.laws.is_empty()).then(|| obs.laws.records().to_vec());
     summary.metrics_window = Some([window.t_end - window.period, window.t_end]);
     summary.crank_revolutions = start

@@ -12,6 +12,7 @@ pub(crate) mod quadrature;
 pub(crate) mod result;
 pub(crate) mod sample;
 pub(crate) mod simulate;
+pub(crate) mod state_tolerance;
 pub(crate) mod steady;
 pub(crate) mod testset;
 pub(crate) mod turns;

@@ -6,8 +6,10 @@
 //!   and BDF: own_quadrature): value = the method's increment; error = the method's
 //!   estimate (explicit pairs, RK4), or, for BDF (diffsol gives no estimate for an output
 //!   outside its error control), |increment − Boole's rule on the step's dense output|
-//! any other step (cut at an event, a non-finite stage power, longer than a panel, Rodas5P,
-//!   TR-BDF2, ESDIRK3(4)): Boole's rule on the dense output (Quadrature)
+//! Rodas5P, TR-BDF2, ESDIRK3(4) (step_ends): the polynomial through the power at the last
+//!   3–4 step ends (accurate states only), integrated over the step (StepEnds)
+//! any other step (cut at an event, the first after the start or an event, a non-finite
+//!   stage power, longer than a panel): Boole's rule on the dense output (Quadrature)
 //! ```
 //!
 //! Source: Boole's rule and Richardson extrapolation of Simpson's rule (Davis & Rabinowitz,
@@ -21,6 +23,12 @@ pub(crate) const TERMS: usize = 7;
 
 /// The power terms at one instant, W, in the order of [`TERMS`].
 pub(crate) type Powers = [f64; TERMS];
+
+/// Whether a run with `method` integrates the power terms on its step ends (Rodas5P, TR-BDF2,
+/// ESDIRK3(4): the methods without [`own_quadrature`], adaptive; [`StepEnds`]).
+pub(crate) fn step_ends(method: lash_solver::Method) -> bool {
+    !own_quadrature(method) && !method.is_fixed_step()
+}
 
 /// Whether a run with `method` integrates the power terms with the method's own formula
 /// (module doc): the explicit methods and BDF. Rodas5P, TR-BDF2 and ESDIRK3(4) keep Boole's
@@ -79,6 +87,94 @@ pub(crate) struct Quadrature {
     pub evals: usize,
     /// Steps integrated by the method itself.
     pub own_steps: usize,
+    /// The step ends' rule, when the run uses it ([`Quadrature::on_step_ends`]).
+    ends: Option<StepEnds>,
+}
+
+/// The power's integral over a step from its values at the last step ends alone, none of
+/// them on the dense output inside a step (for the one-step implicit methods, whose dense
+/// output is far from a stiff solution inside a step while the step's ends are accurate).
+///
+/// ```text
+/// nodes t_{n−k+1} < … < t_n < t_{n+1} = the last k + 1 step ends (k + 1 = 4, or 3),
+///   none before the start or the last event
+/// value    = ∫_{t_n}^{t_{n+1}} p_k(t) dt,  p_k the polynomial through the k + 1 nodes
+///            (k = 3: order 4, a variable-step Adams–Moulton formula)
+/// estimate = |value − ∫ p_{k−1}|,  p_{k−1} through the newest k nodes (k − 1 = 1: the
+///            trapezoid)
+/// a rule whose weights sum in magnitude to more than 3 (t_{n+1} − t_n) (a step much longer
+///   than the ones before it, where p_k extrapolates) is replaced by the one of the next
+///   lower degree; with fewer than 3 usable nodes (the first step after the start or an
+///   event) the step takes Boole's rule on its dense output
+/// ```
+///
+/// Weights by 3-point Gauss–Legendre on the Lagrange basis (exact for degree ≤ 5). Source:
+/// Hairer, Nørsett & Wanner, Solving ODEs I, §III.5 (variable-step Adams formulas).
+#[derive(Clone, Debug, Default)]
+struct StepEnds {
+    /// The last step ends since the start or the last event (at most 3: with the new end,
+    /// the 4 nodes of a cubic).
+    hist: Vec<(f64, Powers)>,
+    /// Steps integrated by this rule.
+    steps: usize,
+}
+
+/// Largest Σ|wⱼ|/h accepted for a rule on the step ends.
+const MAX_WEIGHT_SUM: f64 = 3.0;
+
+impl StepEnds {
+    /// The weights wⱼ of ∫_{a}^{b} p(t) dt = Σ wⱼ f(tⱼ) for the polynomial p through `ts`
+    /// (b = the last of them).
+    fn weights(ts: &[f64], a: f64) -> Vec<f64> {
+        let b = ts[ts.len() - 1];
+        let h = b - a;
+        // Shifted to b to keep the differences small.
+        let s: Vec<f64> = ts.iter().map(|t| t - b).collect();
+        let g = [
+            (-(0.6f64).sqrt(), 5.0 / 9.0),
+            (0.0, 8.0 / 9.0),
+            ((0.6f64).sqrt(), 5.0 / 9.0),
+        ];
+        (0..s.len())
+            .map(|j| {
+                g.iter()
+                    .map(|&(x, w)| {
+                        let u = -h / 2.0 + x * h / 2.0;
+                        let l: f64 = (0..s.len())
+                            .filter(|&m| m != j)
+                            .map(|m| (u - s[m]) / (s[j] - s[m]))
+                            .product();
+                        w * h / 2.0 * l
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// The value and estimate over [a, b] from `nodes` (the last is (b, P(b))), or None when
+    /// no rule of degree ≥ 2 has acceptable weights.
+    fn integrate(nodes: &[(f64, Powers)], a: f64) -> Option<(Powers, Powers)> {
+        let h = nodes[nodes.len() - 1].0 - a;
+        let rule = |nodes: &[(f64, Powers)]| -> Option<Powers> {
+            let ts: Vec<f64> = nodes.iter().map(|n| n.0).collect();
+            let w = StepEnds::weights(&ts, a);
+            if w.iter().map(|x| x.abs()).sum::<f64>() > MAX_WEIGHT_SUM * h {
+                return None;
+            }
+            Some(std::array::from_fn(|c| {
+                w.iter().zip(nodes).map(|(w, n)| w * n.1[c]).sum()
+            }))
+        };
+        let mut from = 0;
+        while nodes.len() - from >= 3 {
+            if let Some(v) = rule(&nodes[from..]) {
+                let lower = rule(&nodes[from + 1..])?;
+                return Some((v, std::array::from_fn(|c| (v[c] - lower[c]).abs())));
+            }
+            from += 1;
+        }
+        None
+    }
 }
 
 impl Quadrature {
@@ -93,7 +189,24 @@ impl Quadrature {
             err: [0.0; TERMS],
             evals: 1,
             own_steps: 0,
+            ends: None,
         }
+    }
+
+    /// Integrates the steps on their ends ([`StepEnds`]) instead of the dense output's
+    /// panels, except where the module doc says.
+    pub(crate) fn on_step_ends(mut self) -> Quadrature {
+        self.ends = Some(StepEnds {
+            hist: self.group.clone(),
+            steps: 0,
+        });
+        self
+    }
+
+    /// Steps integrated on their ends.
+    #[cfg(test)]
+    pub(crate) fn step_end_steps(&self) -> usize {
+        self.ends.as_ref().map_or(0, |e| e.steps)
     }
 
     fn last(&self) -> (f64, Powers) {
@@ -139,6 +252,29 @@ impl Quadrature {
             self.group.clear();
             return Ok(());
         }
+        if let Some(ends) = self.ends.as_mut() {
+            // A history that ends at ta (anything else — a restart — has been cleared).
+            let usable = !cut
+                && h <= self.max_panel
+                && ends.hist.len() >= 2
+                && ends.hist.last().is_some_and(|n| n.0 == ta);
+            if usable {
+                let pb = (tb, node(tb)?);
+                self.evals += 1;
+                let mut nodes = ends.hist.clone();
+                nodes.push(pb);
+                if let Some((value, err)) = StepEnds::integrate(&nodes, ta) {
+                    for c in 0..TERMS {
+                        self.total[c] += value[c];
+                        self.err[c] += err[c];
+                    }
+                    ends.steps += 1;
+                    ends.hist = nodes[nodes.len().saturating_sub(3)..].to_vec();
+                    self.group = vec![pb];
+                    return Ok(());
+                }
+            }
+        }
         if self.group.is_empty() {
             self.group.push((ta, node(ta)?));
             self.evals += 1;
@@ -164,6 +300,18 @@ impl Quadrature {
         for c in 0..TERMS {
             self.total[c] += value[c];
             self.err[c] += err[c];
+        }
+        if let Some(ends) = self.ends.as_mut() {
+            // The step's end (the panels' last node) continues the history, or restarts it
+            // after an event or a step that broke it.
+            let end = self.group[0];
+            let continues = !cut && ends.hist.last().is_some_and(|n| n.0 == ta);
+            if !continues {
+                ends.hist.clear();
+            }
+            ends.hist.push(end);
+            let k = ends.hist.len();
+            ends.hist.drain(..k.saturating_sub(3));
         }
         Ok(())
     }
@@ -373,6 +521,92 @@ mod tests {
         // is estimated by its difference with the trapezoid.
         let (e, est) = run(10);
         assert!(e <= est && est < 1e-3, "{e} {est}");
+    }
+
+    /// ∫ over uneven steps on the step ends: the first step takes Boole's rule on the dense
+    /// output (exact to degree 5), the second the quadratic through three ends, the rest the
+    /// cubic through four: exact for the quadratics (terms 1 and 5); for the cubic (terms 2
+    /// and 6) only the quadratic step errs, within its estimate; for the quintic too. Only the
+    /// step ends are evaluated after the first step.
+    #[test]
+    fn step_ends_integrate_on_uneven_steps_within_their_estimate() {
+        let ts = [0.0, 0.1, 0.25, 0.3, 0.5, 0.9, 1.2];
+        let mut q = Quadrature::new(false, f64::INFINITY, 0.0, poly(0.0)).on_step_ends();
+        for w in ts.windows(2) {
+            q.step(w[0], w[1], false, None, &mut |t| Ok(poly(t)))
+                .unwrap();
+        }
+        q.finish();
+        let ex = exact(0.0, 1.2);
+        for c in [1, 5] {
+            assert!((q.total[c] - ex[c]).abs() < 1e-13 * ex[c].abs(), "{c}");
+        }
+        // The cubic errs on the quadratic's step [0.1, 0.25] alone; the quintic on every
+        // step-end step: nonzero and within the estimate.
+        for c in [0, 2, 6] {
+            let e = (q.total[c] - ex[c]).abs();
+            assert!(e > 1e-9 && e <= q.err[c], "{c}: {e:e} {:e}", q.err[c]);
+        }
+        assert_eq!(q.step_end_steps(), 5);
+        assert_eq!(q.evals, 1 + 4 + 5);
+        // The cubic rule alone (four uneven ends, Σ|wⱼ| = 1.4 h) is exact for cubics; on
+        // 0.25, 0.3, 0.5, 0.9 (Σ|wⱼ| = 5 h: a step 2–8 times longer than those before it)
+        // it gives way to the quadratic.
+        let ends =
+            |ts: &[f64]| -> Vec<(f64, Powers)> { ts.iter().map(|&t| (t, poly(t))).collect() };
+        let (v, _) = StepEnds::integrate(&ends(&[0.3, 0.5, 0.9, 1.2]), 0.9).unwrap();
+        let ex = exact(0.9, 1.2);
+        for c in [1, 2, 5, 6] {
+            assert!((v[c] - ex[c]).abs() < 1e-13 * ex[c].abs(), "{c}");
+        }
+        let (v, _) = StepEnds::integrate(&ends(&[0.25, 0.3, 0.5, 0.9]), 0.5).unwrap();
+        let (quadratic, _) = StepEnds::integrate(&ends(&[0.3, 0.5, 0.9]), 0.5).unwrap();
+        assert_eq!(v, quadratic);
+    }
+
+    /// On n equal steps of cos 2t over [0, 1] the cubic rule's error falls as h⁴ (order 4),
+    /// and the estimate (its difference with the quadratic, one order lower) bounds it.
+    #[test]
+    fn step_ends_converge_at_order_four() {
+        let run = |n: usize| {
+            let h = 1.0 / n as f64;
+            let mut q = Quadrature::new(false, f64::INFINITY, 0.0, poly(0.0)).on_step_ends();
+            for k in 0..n {
+                let (a, b) = (k as f64 * h, (k + 1) as f64 * h);
+                q.step(a, b, false, None, &mut |t| Ok(poly(t))).unwrap();
+            }
+            q.finish();
+            ((q.total[3] - exact(0.0, 1.0)[3]).abs(), q.err[3])
+        };
+        let ((e1, est1), (e2, est2)) = (run(40), run(80));
+        let order = (e1 / e2).log2();
+        assert!((3.7..4.4).contains(&order), "order {order}: {e1:e} {e2:e}");
+        assert!(e1 <= est1 && e2 <= est2, "{e1:e} {est1:e} {e2:e} {est2:e}");
+    }
+
+    /// A step 100 times longer than the ones before it: the cubic and the quadratic through
+    /// the clustered ends extrapolate (weights far above 3h), so the step takes Boole's rule
+    /// on its dense output; an event restarts the history (the next step too).
+    #[test]
+    fn step_ends_fall_back_to_boole_where_they_would_extrapolate() {
+        let mut q = Quadrature::new(false, f64::INFINITY, 0.0, poly(0.0)).on_step_ends();
+        let mut f = |t: f64| Ok(poly(t));
+        for (a, b) in [(0.0, 0.001), (0.001, 0.002), (0.002, 0.003)] {
+            q.step(a, b, false, None, &mut f).unwrap();
+        }
+        assert_eq!(q.step_end_steps(), 2);
+        q.step(0.003, 0.3, false, None, &mut f).unwrap();
+        assert_eq!(q.step_end_steps(), 2, "the long step took Boole's rule");
+        q.step(0.3, 0.31, true, None, &mut f).unwrap();
+        q.step(0.31, 0.32, false, None, &mut f).unwrap();
+        assert_eq!(q.step_end_steps(), 2, "no rule across an event");
+        q.step(0.32, 0.33, false, None, &mut f).unwrap();
+        assert_eq!(q.step_end_steps(), 3);
+        q.finish();
+        let ex = exact(0.0, 0.33);
+        for c in [1, 5] {
+            assert!((q.total[c] - ex[c]).abs() < 1e-13 * ex[c].abs(), "{c}");
+        }
     }
 
     #[test]

@@ -172,6 +172,11 @@ impl AugmentedLagrangian {
         (self.a2, self.b2)
     }
 
+    /// The penalty α of its leading matrix M + Φ_qᵀαΦ_q (crate::kkt: 1/α regularises K).
+    pub(crate) fn penalty(&self) -> f64 {
+        self.work.borrow().core.alpha
+    }
+
     /// The constraint rows at the kinematics of `sc`: Φ, Φ̇, c and the values of Φ_q.
     fn constraint_rows(&self, t: f64, cons: &Constraints, info: &[BodyInfo], sc: &Scratch) {
         let mut w = self.work.borrow_mut();
