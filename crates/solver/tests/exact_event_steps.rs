@@ -150,26 +150,34 @@ fn the_event_time_is_refined_to_the_accuracy_of_the_motion() {
     assert!((off - tk).abs() >= 1e-7, "t* = {off} from the dense output");
 }
 
+/// The adaptive methods of order ≥ 4 with exact event steps.
+const ADAPTIVE: [Method; 4] = [
+    Method::Dopri54,
+    Method::Tsit54,
+    Method::Dop853,
+    Method::Rodas5p,
+];
+
+/// `method` at `rtol` (atol the same), exact event steps, the final state only.
+fn exact_options(method: Method, rtol: f64) -> SolverOptions {
+    SolverOptions {
+        method,
+        rtol,
+        atol: Atol::Scalar(rtol),
+        exact_event_steps: true,
+        output: Output::Final,
+        ..Default::default()
+    }
+}
+
 #[test]
 fn adaptive_runs_with_exact_event_steps_meet_the_tolerance() {
     // With error control and exact event steps the global error at t = 1 is within a decade
     // of rtol·|y(1)| (|y(1)| = 3.77), as on a smooth problem, for every method of order ≥ 4;
     // from the dense-output event state it is up to 460 times that (dop853, rtol 1e-6).
-    for method in [
-        Method::Dopri54,
-        Method::Tsit54,
-        Method::Dop853,
-        Method::Rodas5p,
-    ] {
+    for method in ADAPTIVE {
         for rtol in [1e-6, 1e-8, 1e-10] {
-            let o = SolverOptions {
-                method,
-                rtol,
-                atol: Atol::Scalar(rtol),
-                exact_event_steps: true,
-                output: Output::Final,
-                ..Default::default()
-            };
+            let o = exact_options(method, rtol);
             let s = solve(&Kinked, (0.0, T_END), &[1.0], &o).unwrap();
             assert_eq!(s.events.len(), 1, "{method} rtol {rtol:e}");
             let err = (s.y_final[0] - exact(T_END)).abs();
@@ -190,21 +198,9 @@ fn the_predicted_crossing_limit_keeps_the_tolerance_without_more_rejections() {
     // rejected than without the rate, summed over the methods and tolerances (66 against 70
     // measured; fewer at rtol 1e-10 for dopri54 and tsit54, 4 and 5 against 7).
     let (mut with, mut without) = (0, 0);
-    for method in [
-        Method::Dopri54,
-        Method::Tsit54,
-        Method::Dop853,
-        Method::Rodas5p,
-    ] {
+    for method in ADAPTIVE {
         for rtol in [1e-6, 1e-8, 1e-10] {
-            let o = SolverOptions {
-                method,
-                rtol,
-                atol: Atol::Scalar(rtol),
-                exact_event_steps: true,
-                output: Output::Final,
-                ..Default::default()
-            };
+            let o = exact_options(method, rtol);
             let s = solve(&RatedKinked, (0.0, T_END), &[1.0], &o).unwrap();
             assert_eq!(s.events.len(), 1, "{method} rtol {rtol:e}");
             let err = (s.y_final[0] - exact(T_END)).abs();

@@ -49,7 +49,8 @@ impl LagrangeBaumgarte {
         let n = 2 * nq;
         let m = cons.len();
         first_order_jacobian_frame(&mut jac, nq, dg.is_some());
-        let Some(dg) = dg else {
+        // Every body prescribed (n_q = 0): an empty Jacobian.
+        let (Some(dg), true) = (dg, nq > 0) else {
             return;
         };
         let mut w0 = self.work.borrow_mut();
