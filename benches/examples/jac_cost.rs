@@ -1,5 +1,5 @@
 //! The cost of one Jacobian in right-hand sides (issue 26: "the Jacobian stays at or under 6
-//! RHS-equivalents per evaluation"; BENCHMARKS.md, "Jacobian / rhs").
+//! RHS-equivalents per evaluation"; BENCHMARKS.md, "Minimal with loop closures").
 //!
 //! ```text
 //! cargo build --release -p lash-benches --example jac_cost
@@ -24,7 +24,7 @@
 //! `lash_solver::LinearAlgebra`; `lash run` has no option for it), and the example prints
 //! the solver's counters (steps, right-hand sides, Jacobians, LU factorisations) and the
 //! integration's wall time: the dense and kkt Newton side by side on one cluster (A02 N = 40,
-//! BENCHMARKS.md, "Jacobian / rhs").
+//! BENCHMARKS.md, "Minimal with loop closures").
 
 use std::hint::black_box;
 use std::process::ExitCode;

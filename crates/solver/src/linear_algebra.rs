@@ -72,7 +72,7 @@ pub const KKT_FROM: usize = 600;
 /// The number of unknowns from which `Auto` takes the `kkt` path for a system whose Jacobian
 /// is dense ([`OdeSystem::jacobian_sparsity`] None: one cluster of constraints, as a chain
 /// or IFToMM A02), whose dense Newton matrix costs n² entries to form and n³ to factor
-/// against the KKT matrix's O(n). Measured (BENCHMARKS.md, "Jacobian / rhs"): bdf on a chain
+/// against the KKT matrix's O(n). Measured (BENCHMARKS.md, "Minimal with loop closures"): bdf on a chain
 /// breaks even near n = 150 and is 5× faster on the kkt path at n = 300; A02 N = 40
 /// (n = 486, 20 s at rtol 1e-10) 9.1 s against 55 s, with 11 036 steps against 11 098.
 pub const KKT_ONE_CLUSTER_FROM: usize = 300;

@@ -19,7 +19,7 @@
 //! Φ_q acts on at most two), so every column of ∂q̈ is a sum of a few rows of N and W: the
 //! Jacobian costs O(n n_q) products beyond the evaluation. docs/model.md §1 (1.7) allows finite
 //! differences for the constraint part; the closed forms are exact. Before (BENCHMARKS.md,
-//! "Jacobian / rhs"): S⁻¹ by m scalar envelope solves, P = M⁻¹Φ_qᵀS⁻¹, and per-column scalar
+//! "Minimal with loop closures"): S⁻¹ by m scalar envelope solves, P = M⁻¹Φ_qᵀS⁻¹, and per-column scalar
 //! loops, 10.7 right-hand sides on Andrews' mechanism.
 
 use faer::reborrow::ReborrowMut;
