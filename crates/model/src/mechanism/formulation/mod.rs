@@ -56,6 +56,7 @@
 //! `auto` (the default) is resolved to one of them in `Mechanism::from_scene`.
 
 pub(crate) mod augmented_lagrangian;
+pub(crate) mod column_terms;
 pub(crate) mod lagrange_baumgarte;
 pub(crate) mod minimal;
 

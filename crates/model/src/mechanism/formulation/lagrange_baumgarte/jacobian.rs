@@ -27,7 +27,7 @@ use faer::MatMut;
 
 use crate::linalg::{first_order_jacobian_frame, zeroed};
 use crate::mechanism::constraints::Constraints;
-use crate::mechanism::formulation::augmented_lagrangian::jacobian::ColumnTerms;
+use crate::mechanism::formulation::column_terms::ColumnTerms;
 use crate::mechanism::formulation::lagrange_baumgarte::{JacWork, LagrangeBaumgarte};
 use crate::mechanism::scratch::Scratch;
 

@@ -29,7 +29,7 @@ use std::cell::RefCell;
 use crate::linalg::Envelope;
 use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::{eval_row, Constraints};
-use crate::mechanism::formulation::augmented_lagrangian::jacobian::ColumnTerms;
+use crate::mechanism::formulation::column_terms::ColumnTerms;
 use crate::mechanism::scratch::Scratch;
 use crate::scene::format::Baumgarte;
 
