@@ -301,10 +301,11 @@ impl KktNewton {
             // z of K z = b by the augmented Lagrangian's own iteration: z += K_ε⁻¹ (b − K z),
             // the multipliers' update with penalty 1/ε, which converges to the accelerations
             // of K z = b where those are unique (also for a singular, consistent K).
-            let mut r = vec![0.0; nk];
+            // ρ₁ as the residual's buffer: the coloured differences below overwrite it.
+            let r = &mut self.rho1;
             for _ in 0..REFINEMENTS {
-                Self::residual(&self.k, &self.b, &self.z, &mut r);
-                kmat.solve(&mut r);
+                Self::residual(&self.k, &self.b, &self.z, r);
+                kmat.solve(r);
                 let (mut dz, mut zmax) = (0.0f64, 0.0f64);
                 for (zi, ri) in self.z[..self.nq].iter_mut().zip(&r[..self.nq]) {
                     *zi += ri;
