@@ -79,8 +79,10 @@ class SolveError(LashError, RuntimeError):
         ``"rk4_unstable"`` (fixed-step RK4 beyond its stability limit, only where a scene
         asks for the check), ``"newton_failure"``, ``"budget_exhausted"``,
         ``"event_nan"`` (an event function returned NaN: the message names it),
-        ``"law_out_of_range"`` (a mechanism left the range its contact laws hold in) or
-        ``"singular_configuration"`` (a mechanism reached a singular configuration).
+        ``"law_out_of_range"`` (a mechanism left the range its contact laws hold in),
+        ``"singular_configuration"`` (a mechanism reached a singular configuration) or
+        ``"energy_balance"`` (a finished :func:`lash.run` whose energy balance is off by
+        more than its accuracy allows; docs/outputs.md, "The energy check of a run").
     result : OdeResult or None
         What :func:`lash.solve_ivp` had computed up to the failure, with ``status = -1``,
         ``success = False`` and ``message`` (scipy's failed result).

@@ -227,6 +227,7 @@ def run(
     name: str = "scene",
     max_memory: Optional[int] = None,
     formulation: Optional[str] = None,
+    energy_check: bool = True,
 ) -> Run:
     """Run a scene as ``lash run`` does and return its results in memory.
 
@@ -273,6 +274,12 @@ def run(
         or ``"auto"``
         (docs/model.md §12), over the scene's own ``formulation``. Recorded in
         ``summary["formulation"]``. Keyword only.
+    energy_check : bool, optional
+        The energy check of the finished run (docs/outputs.md, "The energy check of a run"):
+        a run whose energy balance is off by more than its accuracy allows (5 % of its energy
+        flows plus its integrals' and its states' own error) raises :class:`SolveError` of
+        kind ``"energy_balance"``. ``False`` (``--no-energy-check``) leaves it out, for a run
+        that is coarse on purpose. Default ``True``. Keyword only.
     name : str, optional
         The case name recorded in the summary for a dict scene (``lash run`` records a
         file's stem); its ``scene_sha256`` is the sha256 of the JSON text the dict is
@@ -383,12 +390,14 @@ def run(
                                                        "auto"):
         raise UsageError(f"unknown formulation {formulation!r}; lash's formulations are "
                          "lagrange_baumgarte, augmented_lagrangian, minimal, auto")
+    if not isinstance(energy_check, bool):
+        raise UsageError(f"energy_check must be True or False, got {energy_check!r}")
     raw = _lash.run_core(dict(
         path=path, text=text, name=name, method=method, rtol=rtol, atol=atol_list,
         controller=controller, step=step, t_end=t_end,
         samples_per_revolution=samples_per_revolution, output_every=output_every,
         max_wall_time=max_wall_time, max_steps=max_steps, max_memory=max_memory,
-        formulation=formulation))
+        formulation=formulation, skip_energy_check=not energy_check))
 
     summary = json.loads(raw["summary"])
     # Each column is the engine's own vector, wrapped by numpy without a copy.

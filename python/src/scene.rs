@@ -168,7 +168,8 @@ fn events<'py>(
 ///   controller, step,
 ///   max_steps, max_wall_time,
 ///   max_memory
-/// t_end, samples_per_revolution, output_every, formulation  → RunOptions
+/// t_end, samples_per_revolution, output_every, formulation,
+///   skip_energy_check                                          → RunOptions
 /// ```
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
@@ -203,6 +204,8 @@ pub struct RunArgs {
     pub max_memory: Option<u64>,
     /// The formulation over the scene's, or None (docs/model.md §12).
     pub formulation: Option<String>,
+    /// Leaves out the energy check of the finished run (`energy_check=False`).
+    pub skip_energy_check: bool,
 }
 
 /// How often the calling thread looks for a pending signal while the engine runs.
@@ -491,6 +494,7 @@ fn run<'py>(py: Python<'py>, a: RunArgs) -> PyResult<Bound<'py, PyDict>> {
         until_periodic: None,
         formulation,
         window: None,
+        skip_energy_check: a.skip_energy_check,
     };
     let (path, text, name) = (a.path, a.text, a.name);
     let outcome: Result<Ran, Error> = run_watched(py, "lash.run", move || {

@@ -258,12 +258,32 @@ def test_a_scene_file_that_is_not_json_is_a_scene_error(tmp_path):
     ({"max_steps": 0}, "max_steps must be a whole number >= 1"),
     ({"max_wall_time": math.inf}, "max_wall_time must be a finite number > 0"),
     ({"samples_per_revolution": 10, "output_every": 1e-3}, "exclude each other"),
+    ({"energy_check": 1}, "energy_check must be True or False"),
 ])
 def test_bad_options_raise_usage_error(kwargs, fragment):
     with pytest.raises(lash.UsageError) as info:
         lash.run(DRY, **kwargs)
     assert fragment in str(info.value)
     assert isinstance(info.value, ValueError)
+
+
+def test_a_broken_energy_balance_raises_unless_the_check_is_left_out():
+    """The fuzzed 2 µm film under ESDIRK3(4) (docs/outputs.md, "The energy check of a run"):
+    every step passes the error test but the driver's work is ~16 J short of 128 J of flows:
+    SolveError of kind energy_balance at the end time; energy_check=False returns the run,
+    whose summary shows the balance refused; bdf closes the same scene and passes."""
+    scene = ROOT / "crates" / "validation" / "tests" / "data" / "fuzz_2082.json"
+    with pytest.raises(lash.SolveError) as info:
+        lash.run(scene, method="esdirk34")
+    assert info.value.kind == "energy_balance"
+    assert info.value.t == 0.01
+    assert str(info.value).startswith("energy balance off at t = 1e-2")
+    kept = lash.run(scene, method="esdirk34", energy_check=False)
+    e = kept.summary["metrics"]["energy"]
+    assert e["balance_error"] < -10.0
+    assert info.value.y.shape == (12,) and np.all(np.isfinite(info.value.y))
+    e = lash.run(scene, method="bdf").summary["metrics"]["energy"]
+    assert abs(e["balance_error"]) < 1e-2
 
 
 def test_a_solver_failure_raises_solve_error_with_time_and_state():

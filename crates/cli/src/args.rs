@@ -5,7 +5,7 @@
 //!                                        lubricated, RK4 against the best adaptive method
 //! lash run CASE [--method M] [--rtol R] [--atol A[,A..]] [--step H] [--controller C]
 //!              [--max-steps N] [--max-wall-time S] [--t-end S]
-//!              [--samples-per-revolution N | --output-every DT] [--out DIR]
+//!              [--samples-per-revolution N | --output-every DT] [--no-energy-check] [--out DIR]
 //! lash study paper [--out DIR]
 //! lash compare CASE [--tolerances R,..] [--steps H,..] [--t-end S] [--max-wall-time S]
 //!                   [--window W] [--out DIR]
@@ -261,6 +261,12 @@ pub struct RunArgs {
     /// last-revolution with a crank, all without one.
     #[arg(long, value_name = "W", value_parser = parse_window, allow_hyphen_values = true)]
     pub window: Option<lash_model::MetricsWindow>,
+    /// Leave out the energy check of the finished run, for a run that is coarse on purpose.
+    /// Default: on: a run whose energy balance is off by more than its accuracy allows (5 % of
+    /// its energy flows plus its integrals' and its states' own error) fails with exit 3,
+    /// `energy_balance` (docs/outputs.md, "The energy check of a run").
+    #[arg(long = "no-energy-check")]
+    pub no_energy_check: bool,
 }
 
 /// Parses --window (lash_model::MetricsWindow).
@@ -289,6 +295,7 @@ impl RunArgs {
             }),
             formulation: self.formulation,
             window: self.window,
+            skip_energy_check: self.no_energy_check,
         }
     }
 }

@@ -217,6 +217,45 @@ fn exhausted_budgets_exit_3_and_name_the_budget() {
     assert!(!d.path().join("c").exists());
 }
 
+/// A run whose energy balance is off by more than its accuracy allows exits 3 with
+/// `energy_balance` (docs/outputs.md, "The energy check of a run"): the fuzzed 2 µm film of
+/// crates/validation/tests/data/fuzz_2082.json under ESDIRK3(4) at the default rtol 1e-8;
+/// failure.json names the kind and the end time, partial_trajectory.csv holds the whole run
+/// (0.01 s at 2.5 µs spacing: 4 001 rows). `--no-energy-check` keeps the run, and its
+/// summary.json shows the balance the check refused (below −10 J of its 128 J of flows).
+#[test]
+fn a_broken_energy_balance_exits_3_unless_the_check_is_left_out() {
+    let d = tempfile::tempdir().unwrap();
+    let case =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../validation/tests/data/fuzz_2082.json");
+    let case = case.to_str().unwrap();
+    budget_error(
+        &["run", case, "--method", "esdirk34", "--out", "a"],
+        d.path(),
+        "a",
+        "energy balance off at t = 1e-2: balance error ",
+    );
+    let f = common::json(&d.path().join("a/failure.json"));
+    assert_eq!(f["error"]["kind"], "energy_balance", "{f}");
+    assert_eq!(f["t"], 0.01, "{f}");
+    assert_eq!(f["rows"], 4001, "{f}");
+    common::ok(
+        &[
+            "run",
+            case,
+            "--method",
+            "esdirk34",
+            "--no-energy-check",
+            "--out",
+            "b",
+        ],
+        d.path(),
+    );
+    let s = common::json(&d.path().join("b/summary.json"));
+    let balance = s["metrics"]["energy"]["balance_error"].as_f64().unwrap();
+    assert!(balance < -10.0, "{balance}");
+}
+
 /// A wall-clock budget longer than the clock holds (`--max-wall-time 1e300`: finite and > 0,
 /// so the rule accepts it) is no budget: the run ends with exit 0 and writes its summary,
 /// where the watchdog's and the engine's deadlines used to panic (exit 101).

@@ -65,6 +65,10 @@ pub struct RunOptions {
     /// The metrics window (`--window`); None: the crank's last revolution, else the whole run
     /// (docs/outputs.md, "The metrics window").
     pub window: Option<lash_model::MetricsWindow>,
+    /// Leaves out the energy check of the finished run (`--no-energy-check`; for a run that is
+    /// coarse on purpose): by default a run whose energy balance is off by more than its
+    /// accuracy allows is the solver failure `energy_balance` (crate::run::energy_check).
+    pub skip_energy_check: bool,
 }
 
 /// Runs one case into its directory: checks the case and the solver choice (the choice first
@@ -221,8 +225,15 @@ fn run_request(
     Ok((prepared, req, settled))
 }
 
-/// A finished run, or `BudgetExhausted` when the wall-clock budget ran out meanwhile.
+/// A finished run; `BudgetExhausted` when the wall-clock budget ran out meanwhile, or the
+/// `energy_balance` failure when its energy balance is off by more than its accuracy allows
+/// (crate::run::energy_check; not with `skip_energy_check`).
 fn within(r: RunResult, o: &RunOptions, deadline: Option<Instant>) -> Result<RunResult, Error> {
+    let r = if o.skip_energy_check {
+        r
+    } else {
+        crate::run::energy_check::check(r).map_err(Error::Solver)?
+    };
     match deadline.filter(|d| Instant::now() >= *d) {
         Some(_) => Err(Error::Solver(SolveError::BudgetExhausted {
             t: r.extra_states.t_final,

@@ -87,7 +87,8 @@ pub(crate) struct RunOutput<'a> {
 /// { kind, message, t, h, h_limit, steps, reason }   (fields a kind lacks are null)
 /// kind: step_size_too_small | too_many_steps | non_finite_state | rk4_unstable
 ///       | newton_failure | budget_exhausted | invalid_options | event_nan | out_of_memory
-///       | law_out_of_range | singular_configuration
+///       | law_out_of_range | singular_configuration | constraint_violation
+///       | energy_balance
 /// ```
 ///
 /// Source: docs/outputs.md ("`failure.json`").
@@ -104,7 +105,7 @@ pub(crate) struct FailureError {
     /// Steps taken (too_many_steps) or flagged in a row (rk4_unstable).
     pub steps: Option<usize>,
     /// Why (newton_failure, budget_exhausted, invalid_options, out_of_memory,
-    /// law_out_of_range, singular_configuration).
+    /// law_out_of_range, singular_configuration, energy_balance).
     pub reason: Option<String>,
 }
 

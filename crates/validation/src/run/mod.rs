@@ -3,6 +3,7 @@
 
 pub(crate) mod case;
 pub(crate) mod drive;
+pub(crate) mod energy_check;
 pub(crate) mod files;
 pub(crate) mod mechanism;
 pub(crate) mod plan;

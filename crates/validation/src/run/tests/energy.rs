@@ -170,3 +170,64 @@ fn step_end_quadrature_leaves_the_run_unchanged_and_closes_the_balance() {
         assert!(e.balance_error.abs() <= bound, "{method}: {e:?}");
     }
 }
+
+/// tests/data/fuzz_2082.json (BENCHMARKS.md, "Fuzzing"; docs/outputs.md, "The energy check of
+/// a run"): a 2 µm lubricated film whose journal hangs on a free body 1 m from the origin.
+/// ESDIRK3(4) at rtol 1e-8 passes every step's error test, yet its driver's work comes out
+/// ~16 J short of 128 J of flows: the run is the typed failure `energy_balance` at its end
+/// time, with its end state, and its balance (with the check left out) is beyond the bound
+/// the failure names. bdf on the same scene closes to within 1e-4 of the flows, well inside
+/// the bound, and passes: the check refuses the run, not the scene.
+#[test]
+fn a_balance_beyond_its_accuracy_is_the_energy_balance_failure() {
+    use crate::commands::run::{run_in_memory, RunOptions};
+    use crate::error::Error;
+    use crate::run::case::Case;
+    use crate::run::energy_check::{bound, flows};
+    use lash_solver::SolveError;
+
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz_2082.json");
+    let options = |method: Method, skip: bool| RunOptions {
+        solver: crate::options::SolverChoice {
+            method: Some(method),
+            ..Default::default()
+        },
+        skip_energy_check: skip,
+        ..Default::default()
+    };
+    let run = |method, skip| {
+        run_in_memory(
+            Case::load(path.to_str().unwrap(), None)?,
+            &options(method, skip),
+        )
+    };
+
+    let kept = run(Method::Esdirk34, true).unwrap();
+    let e = kept.summary.metrics.as_ref().unwrap().energy.unwrap();
+    let accepted = kept.summary.stats.accepted;
+    let limit = bound(&e, accepted);
+    assert!(e.balance_error.abs() > limit, "{e:?}, bound {limit}");
+    assert!(e.balance_error.abs() > 0.1 * flows(&e), "{e:?}");
+
+    match run(Method::Esdirk34, false) {
+        Err(Error::Solver(SolveError::StateRejected { t, y, kind, reason })) => {
+            assert_eq!(kind, "energy_balance", "{reason}");
+            assert_eq!(t, 0.01, "{reason}");
+            assert_eq!(y, kept.extra_states.y_final, "{reason}");
+            assert!(
+                reason.contains(&format!("{:.3e} J", e.balance_error)),
+                "{reason}"
+            );
+            assert!(reason.contains(&format!("{limit:.3e} J")), "{reason}");
+        }
+        Err(e) => panic!("expected energy_balance, got {e}"),
+        Ok(r) => panic!(
+            "expected energy_balance, the run passed: {:?}",
+            r.summary.metrics
+        ),
+    }
+
+    let bdf = run(Method::Bdf, false).unwrap();
+    let e = bdf.summary.metrics.as_ref().unwrap().energy.unwrap();
+    assert!(e.balance_error.abs() < 1e-4 * flows(&e), "{e:?}");
+}
