@@ -19,8 +19,10 @@
 //! evaluations only (Φ_q has full row rank on a tree); with loops, the closing rows'
 //! multipliers are the iteration's λ* and the tree's rows take Q − M q̈ − Φ_closingᵀλ*.
 //!
-//! R is dense (n_q × n) and Rᵀ M R is factored densely: O(n_q n²) per right-hand side, which
-//! is why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
+//! R is stored dense (n_q × n); Rᵀ M R and Rᵀ (Q − M a_c) are summed only where R can be
+//! nonzero (each body's rows in its own and its integrated ancestors' columns,
+//! `Tree::columns_of`), and Rᵀ M R is factored densely: O(n³) per right-hand side, which is
+//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
 
 mod jacobian;
 pub(crate) mod loops;
