@@ -342,3 +342,44 @@ fn rodas5p_takes_the_steps_of_lagrange_baumgarte_under_minimal() {
         );
     }
 }
+
+/// The prescribed bodies' kinematics are kept between evaluations at the same t
+/// (`Scratch::pres_t`): whatever came before — a right-hand side at another t, the events, the
+/// Jacobian and ∂f/∂t (which move the prescribed bodies of their own copy to other times) —
+/// a right-hand side, the events and the Jacobian at (t, y) give the bits of a mechanism built
+/// afresh and evaluated there first (they are functions of (t, y) alone).
+#[test]
+fn kept_prescribed_kinematics_change_no_result() {
+    let scene = press_scene(PressJoint::Lubricated, 150.0, 1e-4);
+    let used = with(scene.clone(), FormulationName::Minimal);
+    let y0 = used.initial_state();
+    let n = y0.len();
+    let at = |k: f64| -> Vec<f64> {
+        y0.iter()
+            .enumerate()
+            .map(|(i, v)| v + 1e-5 * k * (1.0 + i as f64))
+            .collect()
+    };
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let eval = |m: &Mechanism, t: f64, y: &[f64]| {
+        let mut dy = vec![0.0; n];
+        m.rhs(t, y, &mut dy);
+        let mut g = vec![0.0; m.n_events()];
+        m.events(t, y, &mut g);
+        let mut jac = Mat::<f64>::zeros(n, n);
+        m.jacobian(t, y, jac.as_mut());
+        let jac: Vec<f64> = (0..n * n).map(|k| jac[(k / n, k % n)]).collect();
+        (bits(&dy), bits(&g), bits(&jac))
+    };
+    let mut scratch = vec![0.0; n];
+    for (k, t) in [0.013, 0.05, 0.05, 0.0131, 0.013].into_iter().enumerate() {
+        let y = at(k as f64);
+        // Before: a right-hand side at another t and the same state, ∂f/∂t at t (its own
+        // copy at t ± h), a right-hand side at t and another state.
+        used.rhs(t + 1e-3, &y, &mut scratch);
+        used.time_derivative(t, &at(7.0), &mut scratch);
+        used.rhs(t, &at(9.0), &mut scratch);
+        let fresh = with(scene.clone(), FormulationName::Minimal);
+        assert_eq!(eval(&used, t, &y), eval(&fresh, t, &y), "t = {t}");
+    }
+}

@@ -209,8 +209,20 @@ impl Bodies {
     }
 
     /// Poses, velocities and accelerations of the prescribed bodies at t (they depend on t
-    /// alone: a prescribed body's parent is the ground or another prescribed body).
+    /// alone: a prescribed body's parent is the ground or another prescribed body). Kept when
+    /// `sc` holds them at this t already (`Scratch::pres_t`, the same bits of t: the same
+    /// result): a step's Newton iterations, its events and its Jacobian share one t.
+    #[inline]
     pub(crate) fn prescribed_kinematics(&self, t: f64, sc: &mut Scratch) {
+        if self.pres.is_empty() || sc.pres_t == Some(t.to_bits()) {
+            return;
+        }
+        self.compute_prescribed(t, sc);
+        sc.pres_t = Some(t.to_bits());
+    }
+
+    /// [`Bodies::prescribed_kinematics`], computed.
+    fn compute_prescribed(&self, t: f64, sc: &mut Scratch) {
         for p in &self.pres {
             let phi = p.theta0 + p.omega * t;
             let (s, c) = phi.sin_cos();

@@ -6,7 +6,13 @@
 //! gb                   applied forces on every body (full evaluations: Newton–Euler, outputs)
 //! qdd                  q̈ of the integrated coordinates, as the formulation solved it
 //! revolute, el, pr     what each clearance joint, force element, prismatic joint did
+//! pres_t               the t (its bits) of the prescribed bodies' kinematics in pose, vel,
+//!                      acc, cs (functions of t alone): a right-hand side, the events and the
+//!                      Jacobian at the t of the last evaluation skip recomputing them
 //! ```
+//! `pres_t` is set by `Bodies::prescribed_kinematics` and travels with every copy of the
+//! kinematics (`clone`, `clone_from`, [`Scratch::copy_kinematics_from`]); whatever writes the
+//! prescribed bodies' kinematics another way must clear it.
 
 use crate::clearance::prismatic::PrismaticEval;
 use crate::clearance::revolute::RevoluteEval;
@@ -34,6 +40,9 @@ pub(crate) struct Scratch {
     pub el: Vec<ElementEval>,
     /// Every prismatic clearance joint (docs/model.md §11).
     pub pr: Vec<PrismaticEval>,
+    /// The bits of the t at which the prescribed bodies' kinematics were computed; None:
+    /// not known (module doc).
+    pub pres_t: Option<u64>,
 }
 
 impl Clone for Scratch {
@@ -49,6 +58,7 @@ impl Clone for Scratch {
             revolute: self.revolute.clone(),
             el: self.el.clone(),
             pr: self.pr.clone(),
+            pres_t: self.pres_t,
         }
     }
 
@@ -63,6 +73,7 @@ impl Clone for Scratch {
         self.revolute.clone_from(&o.revolute);
         self.el.clone_from(&o.el);
         self.pr.clone_from(&o.pr);
+        self.pres_t = o.pres_t;
     }
 }
 
@@ -86,7 +97,18 @@ impl Scratch {
             revolute: vec![RevoluteEval::default(); n_rev],
             el: vec![ElementEval::default(); n_el],
             pr: vec![PrismaticEval::default(); n_pr],
+            pres_t: None,
         }
+    }
+
+    /// Copies the poses, velocities, accelerations and (cos φ, sin φ) of every body from `o`
+    /// (the same number of bodies), with the t of its prescribed bodies' kinematics.
+    pub(crate) fn copy_kinematics_from(&mut self, o: &Scratch) {
+        self.pose.copy_from_slice(&o.pose);
+        self.vel.copy_from_slice(&o.vel);
+        self.acc.copy_from_slice(&o.acc);
+        self.cs.copy_from_slice(&o.cs);
+        self.pres_t = o.pres_t;
     }
 
     /// The poses, velocities and (cos φ, sin φ) of every body.

@@ -71,12 +71,7 @@ impl Minimal {
         } = &mut *jw;
         // The prescribed bodies' kinematics (functions of t) as the evaluation left them.
         match s2 {
-            Some(s2) => {
-                s2.pose.copy_from_slice(&sc.pose);
-                s2.vel.copy_from_slice(&sc.vel);
-                s2.acc.copy_from_slice(&sc.acc);
-                s2.cs.copy_from_slice(&sc.cs);
-            }
+            Some(s2) => s2.copy_kinematics_from(sc),
             None => *s2 = Some(sc.clone()),
         }
         let s2 = s2.as_mut().expect("set above");
@@ -223,10 +218,7 @@ impl Minimal {
         for (off, wt) in STENCIL {
             let ts = t + off * h;
             // ∂g/∂t at fixed (q, q̇) of the integrated bodies, into dgq.
-            s2.pose.copy_from_slice(&sc.pose);
-            s2.vel.copy_from_slice(&sc.vel);
-            s2.acc.copy_from_slice(&sc.acc);
-            s2.cs.copy_from_slice(&sc.cs);
+            s2.copy_kinematics_from(sc);
             bodies.prescribed_kinematics(ts, s2);
             forces.applied(bodies, ts, s2, false);
             for (o, g) in dgq.iter_mut().zip(&s2.g) {
@@ -249,10 +241,7 @@ impl Minimal {
         // velocity and acceleration of the tree moved by its prescribed bodies alone (θ̇ = 0,
         // θ̈ = 0). Exact, because on a stiff film the force part below must cancel J f to
         // many digits.
-        s2.pose.copy_from_slice(&sc.pose);
-        s2.vel.copy_from_slice(&sc.vel);
-        s2.acc.copy_from_slice(&sc.acc);
-        s2.cs.copy_from_slice(&sc.cs);
+        s2.copy_kinematics_from(sc);
         zeroed(yp, n);
         self.tree.positions(&w.y[..n], yp, s2);
         self.tree.accelerations(s2, None, qddp);

@@ -19,8 +19,10 @@
 //! evaluations only (Φ_q has full row rank on a tree); with loops, the closing rows'
 //! multipliers are the iteration's λ* and the tree's rows take Q − M q̈ − Φ_closingᵀλ*.
 //!
-//! R is dense (n_q × n) and Rᵀ M R is factored densely: O(n_q n²) per right-hand side, which
-//! is why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
+//! R is stored dense (n_q × n); Rᵀ M R and Rᵀ (Q − M a_c) are summed only where R can be
+//! nonzero (each body's rows in its own and its integrated ancestors' columns,
+//! `Tree::columns_of`), and Rᵀ M R is factored densely: O(n³) per right-hand side, which is
+//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
 
 mod jacobian;
 pub(crate) mod loops;
@@ -59,6 +61,48 @@ pub(crate) struct Work {
     pub lam: Vec<f64>,
     /// Jacobian blocks of every row (full evaluations).
     pub term_jac: Vec<[[f64; 3]; 2]>,
+    /// Q − M a_c (n_q).
+    pub f: Vec<f64>,
+}
+
+/// One body's part of an entry of Rᵀ M R or of Rᵀ (Q − M a_c): the offsets of the entry, of
+/// the body's rows in the two columns of R, and of its rows in q (the sums' terms, in the
+/// order one sum over all rows adds them: [`Minimal::reduced_mass`]).
+#[derive(Clone, Copy, Debug)]
+struct Term {
+    entry: usize,
+    ri: usize,
+    rj: usize,
+    q: usize,
+}
+
+/// The terms of Rᵀ M R (lower triangle, entry i n + j) and of Rᵀ (Q − M a_c) (entry j, `ri`
+/// unused) of `tree`, body by body over [`Tree::columns_of`]: an entry's terms in the order of
+/// the rows.
+fn terms(tree: &Tree, nq: usize) -> (Vec<Term>, Vec<Term>) {
+    let n = tree.n;
+    let (mut mass, mut force) = (Vec::new(), Vec::new());
+    for b in 0..nq / 3 {
+        let q = 3 * b;
+        let cols = tree.columns_of(b);
+        for (ii, &i) in cols.iter().enumerate() {
+            for &j in &cols[..=ii] {
+                mass.push(Term {
+                    entry: i * n + j,
+                    ri: i * nq + q,
+                    rj: j * nq + q,
+                    q,
+                });
+            }
+            force.push(Term {
+                entry: i,
+                ri: i * nq + q,
+                rj: i * nq + q,
+                q,
+            });
+        }
+    }
+    (mass, force)
 }
 
 /// The Jacobian's buffers (kept between calls: no allocation once sized).
@@ -87,6 +131,9 @@ pub(crate) struct Minimal {
     jac_work: RefCell<JacWork>,
     /// The closing joints' constraints (None on a tree).
     loops: Option<Loops>,
+    /// The terms of Rᵀ M R and of Rᵀ (Q − M a_c) (`terms`).
+    mass_terms: Vec<Term>,
+    force_terms: Vec<Term>,
 }
 
 impl Minimal {
@@ -127,7 +174,10 @@ impl Minimal {
         let n = tree.n;
         let m = cons.len();
         let mass = bodies.inverse_masses().iter().map(|v| 1.0 / v).collect();
+        let (mass_terms, force_terms) = terms(&tree, nq);
         Minimal {
+            mass_terms,
+            force_terms,
             tree,
             nq,
             mass,
@@ -142,6 +192,7 @@ impl Minimal {
                 phi: vec![0.0; m],
                 lam: vec![0.0; m],
                 term_jac: vec![[[0.0; 3]; 2]; m],
+                f: vec![0.0; nq],
             }),
             jac_work: RefCell::default(),
             loops: None,
@@ -213,16 +264,18 @@ impl Minimal {
         let (nq, n) = (self.nq, self.tree.n);
         self.tree.velocity_matrix(sc, nq, &mut w.r);
         self.tree.accelerations(sc, None, &mut w.ac);
-        for i in 0..n {
-            let ri = &w.r[i * nq..(i + 1) * nq];
-            for j in 0..=i {
-                let rj = &w.r[j * nq..(j + 1) * nq];
-                let mut s = 0.0;
-                for ((a, b), m) in ri.iter().zip(rj).zip(&self.mass) {
-                    s += a * m * b;
-                }
-                w.mr[i * n + j] = s;
-            }
+        // (Rᵀ M R)_ij = Σ_rows R_ri m_r R_rj, body by body (rows ascending, as one sum over
+        // the rows would add them), over the bodies where both columns can be nonzero
+        // (Tree::columns_of: the skipped terms are +0 and change no bit).
+        let (r, m, mr) = (&w.r[..nq * n], &self.mass[..nq], &mut w.mr[..n * n]);
+        mr.fill(0.0);
+        for t in &self.mass_terms {
+            let (ri, rj, m) = (&r[t.ri..t.ri + 3], &r[t.rj..t.rj + 3], &m[t.q..t.q + 3]);
+            let mut s = mr[t.entry];
+            s += ri[0] * m[0] * rj[0];
+            s += ri[1] * m[1] * rj[1];
+            s += ri[2] * m[2] * rj[2];
+            mr[t.entry] = s;
         }
     }
 
@@ -245,14 +298,20 @@ impl Minimal {
         } else if self.factor(w, sc).is_err() {
             return false;
         }
-        // Rᵀ (Q − M a_c).
-        for j in 0..n {
-            let rj = &w.r[j * nq..(j + 1) * nq];
-            let mut s = 0.0;
-            for i in 0..nq {
-                s += rj[i] * (sc.g[i] - self.mass[i] * w.ac[i]);
-            }
-            w.thdd[j] = s;
+        // Rᵀ (Q − M a_c), body by body over the columns that can be nonzero in its rows (as
+        // Rᵀ M R in reduced_mass: the same sums, bit for bit).
+        for (((f, g), m), ac) in w.f.iter_mut().zip(&sc.g[..nq]).zip(&self.mass).zip(&w.ac) {
+            *f = g - m * ac;
+        }
+        let (r, f, thdd) = (&w.r[..nq * n], &w.f[..nq], &mut w.thdd[..n]);
+        thdd.fill(0.0);
+        for t in &self.force_terms {
+            let (rj, f) = (&r[t.rj..t.rj + 3], &f[t.q..t.q + 3]);
+            let mut s = thdd[t.entry];
+            s += rj[0] * f[0];
+            s += rj[1] * f[1];
+            s += rj[2] * f[2];
+            thdd[t.entry] = s;
         }
         match &self.loops {
             None => solve_unrolled(&w.mr, n, &mut w.thdd),
@@ -550,5 +609,111 @@ mod unrolled_tests {
 
     fn bits(v: &[f64]) -> Vec<u64> {
         v.iter().map(|x| x.to_bits()).collect()
+    }
+}
+
+#[cfg(test)]
+mod sparse_tests {
+    //! The reduced system summed body by body over `Tree::columns_of` gives the bits of the
+    //! sums over every row of R (the formulas before the skip), on a tree with a chain, a branch
+    //! from a slider and a free body, at states away from the assembled one.
+    use super::*;
+    use crate::mechanism::formulation::Formulation;
+    use crate::Mechanism;
+    use lash_solver::OdeSystem;
+
+    /// Two links in a chain from the ground, a slider on an inclined line with a link pinned
+    /// to it, and a free body; gravity, no clearance joint.
+    fn branching() -> Mechanism {
+        let link = |name: &str, x: f64, y: f64, m: f64| {
+            serde_json::json!({"name": name, "mass": m, "inertia": 0.1 * m,
+                "points": {"O": [-0.5, 0.0], "E": [0.5, 0.0]},
+                "position": [x, y], "angle": 0.0, "velocity": [0.0, 0.0],
+                "angular_velocity": 0.0})
+        };
+        let scene = serde_json::json!({
+            "bodies": [link("l1", 0.5, 0.0, 1.0), link("l2", 1.5, 0.0, 2.0),
+                       link("s", 0.0, -1.0, 3.0), link("c", 0.5, -1.0, 0.5),
+                       link("f", 3.0, 3.0, 1.5)],
+            "joints": [
+                {"type": "revolute", "name": "p1", "a": {"body": "l1", "point": "O"},
+                 "b": {"body": "ground", "at": [0.0, 0.0]}},
+                {"type": "revolute", "name": "p2", "a": {"body": "l1", "point": "E"},
+                 "b": {"body": "l2", "point": "O"}},
+                {"type": "translational", "name": "slide", "body": "s", "point": "O",
+                 "origin": [-0.5, -1.0], "direction": [1.0, 0.3]},
+                {"type": "revolute", "name": "p3", "a": {"body": "s", "point": "E"},
+                 "b": {"body": "c", "point": "O"}}
+            ],
+            "gravity": [0.0, -9.81],
+            "t_end": 1.0,
+            "formulation": "minimal"
+        });
+        let scene = crate::Scene::from_json_str(&scene.to_string()).unwrap();
+        Mechanism::from_scene(&scene).unwrap()
+    }
+
+    #[test]
+    fn the_sums_over_the_reached_columns_give_the_bits_of_the_sums_over_every_row() {
+        let m = branching();
+        let Formulation::Minimal(f) = m.formulation() else {
+            panic!("minimal")
+        };
+        let (nq, n) = (f.nq, f.n());
+        // θ = (l1, l2, σ, c, x_f, y_f, φ_f): 7 coordinates of 5 bodies.
+        assert_eq!((nq, n), (15, 7));
+        let y0 = m.initial_state();
+        let (mut zero, mut nonzero) = (0, 0);
+        for k in 0..4 {
+            // States away from the assembled one: every angle turned, every rate nonzero.
+            let y: Vec<f64> = y0
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v + 0.3 * (k as f64 + 1.0) * ((i as f64) * 1.7 + 0.4).sin())
+                .collect();
+            let mut dy = vec![0.0; 2 * n];
+            m.rhs(0.1 * k as f64, &y, &mut dy);
+            let sc = m.scratch();
+            let mut w = f.work.borrow_mut();
+            // θ̈ by the sums over every row, factored and solved by the general loops.
+            let rho: Vec<f64> = (0..n)
+                .map(|j| {
+                    let rj = &w.r[j * nq..(j + 1) * nq];
+                    let mut s = 0.0;
+                    for i in 0..nq {
+                        s += rj[i] * (sc.g[i] - f.mass[i] * w.ac[i]);
+                    }
+                    s
+                })
+                .collect();
+            f.reduced_mass(&mut w, &sc);
+            let mut dense = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..=i {
+                    let (ri, rj) = (&w.r[i * nq..(i + 1) * nq], &w.r[j * nq..(j + 1) * nq]);
+                    let mut s = 0.0;
+                    for ((a, b), mm) in ri.iter().zip(rj).zip(&f.mass) {
+                        s += a * mm * b;
+                    }
+                    assert_eq!(s.to_bits(), w.mr[i * n + j].to_bits(), "({i}, {j})");
+                    if s == 0.0 {
+                        zero += 1;
+                    } else {
+                        nonzero += 1;
+                    }
+                    dense[i * n + j] = s;
+                }
+            }
+            let all: Vec<usize> = (0..n).collect();
+            assert_eq!(block_cholesky_inv(&mut dense, n, &all), Ok(()));
+            let mut thdd = rho;
+            cholesky_solve(&dense, n, &mut thdd);
+            for (a, b) in thdd.iter().zip(&dy[n..]) {
+                assert_eq!(a.to_bits(), b.to_bits());
+            }
+        }
+        // The tree couples some columns (the chain, the branch on the slider) and not others
+        // (chain × slider, anything × the free body): both kinds were compared.
+        assert!(zero > 0 && nonzero > 0, "{zero} zero, {nonzero} nonzero");
     }
 }

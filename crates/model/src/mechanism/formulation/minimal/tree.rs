@@ -102,6 +102,11 @@ pub(crate) struct Tree {
     pub n: usize,
     /// The joints with equations the tree does not take (they close loops), in scene order.
     pub closing: Vec<usize>,
+    /// For each integrated body (by integrated index), the columns of R that can be nonzero
+    /// in its rows — its own coordinates and its integrated ancestors', ascending — at
+    /// `reach[reach_at[i]..reach_at[i + 1]]` ([`Tree::columns_of`]).
+    reach: Vec<usize>,
+    reach_at: Vec<usize>,
 }
 
 /// The child, its own point and its parent, when joint `own`–`other` reaches a body not yet
@@ -134,6 +139,31 @@ fn reach(
         }
     };
     Some((k, point_of(scene, own), parent))
+}
+
+/// [`Tree::columns_of`] of every integrated body, flattened: (columns, start of each body's).
+/// `bodies` lists parents before children, so a parent's columns are known before its child's.
+fn reach_of(bodies: &[TreeBody]) -> (Vec<usize>, Vec<usize>) {
+    let nbi = bodies.iter().map(|b| b.int + 1).max().unwrap_or(0);
+    let mut cols: Vec<Vec<usize>> = vec![Vec::new(); nbi];
+    for tb in bodies {
+        let mut own = match tb.link {
+            Link::Revolute {
+                parent: Parent::Integrated(_, ip, _),
+                ..
+            } => cols[ip].clone(),
+            _ => Vec::new(),
+        };
+        own.extend(tb.col..tb.col + tb.link.dof());
+        cols[tb.int] = own;
+    }
+    let mut reach = Vec::new();
+    let mut at = vec![0];
+    for c in cols {
+        reach.extend(c);
+        at.push(reach.len());
+    }
+    (reach, at)
 }
 
 impl Tree {
@@ -223,11 +253,24 @@ impl Tree {
             })
             .map(|(ji, _)| ji)
             .collect();
+        let (reach, reach_at) = reach_of(&out);
         Tree {
             bodies: out,
             n,
             closing,
+            reach,
+            reach_at,
         }
+    }
+
+    /// The columns of R that can be nonzero in the rows of integrated body `int`: its own
+    /// coordinates and those of its integrated ancestors, ascending. Every other column of R is
+    /// +0 in its rows ([`Tree::velocity_matrix`] writes them as 0 + 0·b), so a sum over R's
+    /// rows may skip them without changing a bit while R is finite (a sum from +0 never turns
+    /// −0, and adding ±0 to a number other than ±0 leaves it as it is).
+    #[inline]
+    pub(crate) fn columns_of(&self, int: usize) -> &[usize] {
+        &self.reach[self.reach_at[int]..self.reach_at[int + 1]]
     }
 
     /// Poses, velocities and (cos φ, sin φ) of the integrated bodies from (θ, θ̇) into `sc`
