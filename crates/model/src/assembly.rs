@@ -6,7 +6,8 @@
 //!        r_J^P − r_B^P − e₀ of every clearance joint,
 //!        n·(r_C − o) − offset₀, φ − φ_guide − tilt₀ of every prismatic clearance joint)
 //!                                                                   at t = t_start
-//! positions:  q ← q − Φ_a,q⁺ Φ_a(q)      (Newton, minimum-norm step; until max|Φ_a| ≤ 1e-12)
+//! positions:  q ← q − Φ_a,q⁺ Φ_a(q)      (Newton, minimum-norm step; until max|Φ_a| ≤ 1e-12,
+//!             then to rounding: common.rs, `Polish`)
 //! velocities: minimise ½ (q̇ − q̇₀)ᵀ M (q̇ − q̇₀)  subject to  Φ̇_a = target rates (ė₀, the
 //!             prismatic joints' rates, 0 for the ideal joints) and the exact initial
 //!             velocities of the scene (joint initial_rate, body initial_velocity):
@@ -27,8 +28,8 @@ mod common;
 mod sparse;
 
 use common::{
-    report, velocity_rows, worst, MAX_ITER, MAX_PROJECTION_CONDITION, MAX_PROJECTION_ENERGY_RATIO,
-    POS_TOL, RANK_TOL, VEL_TOL,
+    report, velocity_rows, worst, Polish, MAX_ITER, MAX_PROJECTION_CONDITION,
+    MAX_PROJECTION_ENERGY_RATIO, POS_TOL, RANK_TOL, VEL_TOL,
 };
 
 use crate::mechanism::bodies::Owner;
@@ -237,6 +238,8 @@ fn dense(
     };
     let mut converged = rows.is_empty();
     let mut iters = 0;
+    // Past POS_TOL, Newton polishes the positions to rounding (common.rs, `Polish`).
+    let mut polish = Polish::default();
     for it in 0..=MAX_ITER {
         if rows.is_empty() {
             break;
@@ -245,14 +248,19 @@ fn dense(
         crate::scene::error::checkpoint("assembly", t0)?;
         let (phi, _, jac) = eval(mech, &rows, t0, &y);
         let (_, err) = worst(&phi);
-        if err <= POS_TOL {
+        if err <= POS_TOL || converged {
+            // (A polish step that made it worse: `another` restores the best iterate.)
             converged = true;
-            break;
-        }
-        if it == MAX_ITER || !err.is_finite() {
+            if !polish.another(err, &mut y, nq) || it == MAX_ITER {
+                break;
+            }
+        } else if it == MAX_ITER || !err.is_finite() {
             return fail(mech, &phi, &jac, "positions", it);
         }
         let Some(dq) = pinv_apply(&jac, &phi) else {
+            if converged {
+                break;
+            }
             return fail(mech, &phi, &jac, "positions", it);
         };
         for j in 0..nq {

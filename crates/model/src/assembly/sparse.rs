@@ -28,8 +28,8 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Side};
 
 use super::common::{
-    report, velocity_rows, worst, MAX_ITER, MAX_PROJECTION_CONDITION, MAX_PROJECTION_ENERGY_RATIO,
-    POS_TOL, VEL_TOL,
+    report, velocity_rows, worst, Polish, MAX_ITER, MAX_PROJECTION_CONDITION,
+    MAX_PROJECTION_ENERGY_RATIO, POS_TOL, VEL_TOL,
 };
 use crate::mechanism::bodies::Owner;
 use crate::mechanism::constraints::{eval_row, Row};
@@ -299,6 +299,9 @@ pub(crate) fn assemble(
     let vrows = velocity_rows(mech);
     let mut y = given.to_vec();
     let ones = vec![1.0; nq];
+    // Past POS_TOL, Newton polishes the positions to rounding (common.rs, `Polish`).
+    let mut polish = Polish::default();
+    let mut converged = false;
     for it in 0..=MAX_ITER {
         if rows.is_empty() {
             break;
@@ -306,13 +309,18 @@ pub(crate) fn assemble(
         crate::scene::error::checkpoint("assembly", t0)?;
         let (phi, _, jac) = eval(mech, rows, t0, &y);
         let (_, err) = worst(&phi);
-        if err <= POS_TOL {
-            break;
-        }
-        if it == MAX_ITER || !err.is_finite() || rows.len() > nq {
+        if err <= POS_TOL || converged {
+            converged = true;
+            if !polish.another(err, &mut y, nq) || it == MAX_ITER {
+                break;
+            }
+        } else if it == MAX_ITER || !err.is_finite() || rows.len() > nq {
             return Ok(None);
         }
         let Some(gram) = Gram::new(&jac, &ones) else {
+            if converged {
+                break;
+            }
             return Ok(None);
         };
         let dq = min_norm(&jac, &ones, &gram, &phi);
@@ -325,6 +333,9 @@ pub(crate) fn assemble(
             .zip(&phi)
             .all(|(r, p)| (r - p).abs() <= 1e-6 * scale)
         {
+            if converged {
+                break;
+            }
             return Ok(None);
         }
         for j in 0..nq {
