@@ -23,7 +23,8 @@ Usage (the counts of BENCHMARKS.md, "Fuzzing"):
     python3 python/tests/test_fuzz_scenes.py --lash target/release/lash --n 3000 --seed 23 --jobs 2
 
 Exit status 0 when every count that must be 0 is; the report goes to stdout (JSON with
---json). `--only 1027,1434` runs those indices of the seed's sequence alone (the same scenes
+--json), with the exit-3 runs counted by their failure.json's `error.kind` (`energy_balance`
+is `lash run`'s own check of the same energy bound, docs/outputs.md). `--only 1027,1434` runs those indices of the seed's sequence alone (the same scenes
 and methods as in the full pass); `--keep DIR` copies the scene, the command and the
 summary.json of every run that breaks a bound or is a bug into DIR. `test_fuzz_subset` runs 50 scenes (seed 7) under pytest when LASH_BIN names the
 binary (default: the workspace's target/release/lash when it exists).
@@ -200,6 +201,12 @@ def run_one(lash: str, index: int, seed: int, workdir: str, keep: str | None = N
                 rec["broken"] = bounds(json.load(f))
         except (OSError, ValueError) as e:
             rec["broken"] = [f"summary unreadable: {e}"]
+    elif code == 3:
+        try:
+            with open(os.path.join(out, "failure.json")) as f:
+                rec["kind"] = json.load(f)["error"]["kind"]
+        except (OSError, ValueError, KeyError):
+            rec["kind"] = "no failure.json"
     if keep and (rec["broken"] or code not in (0, 2, 3)):
         os.makedirs(keep, exist_ok=True)
         shutil.copyfile(path, os.path.join(keep, f"s{index}.json"))
@@ -254,9 +261,14 @@ def fuzz(lash: str, n: int, seed: int, jobs: int, only: list[int] | None = None,
     counts: dict[str, int] = {}
     for r in recs:
         counts[str(r["exit"])] = counts.get(str(r["exit"]), 0) + 1
+    kinds: dict[str, int] = {}
+    for r in recs:
+        if "kind" in r:
+            kinds[r["kind"]] = kinds.get(r["kind"], 0) + 1
     bugs = [r for r in recs if r["exit"] not in (0, 2, 3)]
     broken = [r for r in recs if r["broken"]]
-    return {"scenes": len(indices), "seed": seed, "exit_codes": counts, "bugs": bugs, "broken_bounds": broken}
+    return {"scenes": len(indices), "seed": seed, "exit_codes": counts,
+            "failure_kinds": dict(sorted(kinds.items())), "bugs": bugs, "broken_bounds": broken}
 
 
 def test_fuzz_subset():
@@ -352,6 +364,7 @@ def main() -> int:
         print(json.dumps(rep, indent=1))
     else:
         print(f"{rep['scenes']} scenes (seed {rep['seed']}): exit codes {rep['exit_codes']}")
+        print(f"exit 3 by failure.json's kind: {rep['failure_kinds']}")
         print(f"bugs (exit 1, panic, abort, signal, timeout): {len(rep['bugs'])}")
         for r in rep["bugs"][:20]:
             print(f"  scene {r['index']} ({r['method']}): exit {r['exit']}: {r['err'].strip()[-200:]}")
