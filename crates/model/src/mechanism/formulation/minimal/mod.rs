@@ -113,6 +113,8 @@ pub(crate) struct JacWork {
     pub yp: Vec<f64>,
     pub rp: Vec<f64>,
     pub qddp: Vec<f64>,
+    /// q̈ at the unperturbed state (the tree's recursion with the evaluation's θ̈).
+    pub qdd0: Vec<f64>,
     pub rho: [Vec<f64>; 2],
     pub qd: [Vec<f64>; 2],
     pub dq: Vec<f64>,

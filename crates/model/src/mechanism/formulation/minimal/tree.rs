@@ -107,6 +107,11 @@ pub(crate) struct Tree {
     /// `reach[reach_at[i]..reach_at[i + 1]]` ([`Tree::columns_of`]).
     reach: Vec<usize>,
     reach_at: Vec<usize>,
+    /// For each coordinate of θ, the bodies (indices into `bodies`, in its order) that it
+    /// moves — its own body and that body's descendants — at
+    /// `moved[moved_at[c]..moved_at[c + 1]]` ([`Tree::moved_by`]).
+    moved: Vec<usize>,
+    moved_at: Vec<usize>,
 }
 
 /// The child, its own point and its parent, when joint `own`–`other` reaches a body not yet
@@ -139,6 +144,39 @@ fn reach(
         }
     };
     Some((k, point_of(scene, own), parent))
+}
+
+/// [`Tree::moved_by`] of every coordinate, flattened: (bodies, start of each coordinate's).
+fn moved_of(bodies: &[TreeBody]) -> (Vec<usize>, Vec<usize>) {
+    let nbi = bodies.iter().map(|b| b.int + 1).max().unwrap_or(0);
+    let mut parent_int = vec![None; nbi];
+    for tb in bodies {
+        if let Link::Revolute {
+            parent: Parent::Integrated(_, ip, _),
+            ..
+        } = tb.link
+        {
+            parent_int[tb.int] = Some(ip);
+        }
+    }
+    let descends = |mut int: usize, from: usize| loop {
+        if int == from {
+            return true;
+        }
+        match parent_int[int] {
+            Some(p) => int = p,
+            None => return false,
+        }
+    };
+    let mut moved = Vec::new();
+    let mut at = vec![0];
+    for owner in bodies {
+        for _ in 0..owner.link.dof() {
+            moved.extend((0..bodies.len()).filter(|&b| descends(bodies[b].int, owner.int)));
+            at.push(moved.len());
+        }
+    }
+    (moved, at)
 }
 
 /// [`Tree::columns_of`] of every integrated body, flattened: (columns, start of each body's).
@@ -254,12 +292,15 @@ impl Tree {
             .map(|(ji, _)| ji)
             .collect();
         let (reach, reach_at) = reach_of(&out);
+        let (moved, moved_at) = moved_of(&out);
         Tree {
             bodies: out,
             n,
             closing,
             reach,
             reach_at,
+            moved,
+            moved_at,
         }
     }
 
@@ -273,10 +314,34 @@ impl Tree {
         &self.reach[self.reach_at[int]..self.reach_at[int + 1]]
     }
 
+    /// The bodies that coordinate `c` of θ (or of θ̇) moves, as indices into
+    /// [`Tree::bodies`] in its order: the body it belongs to and its descendants. The
+    /// kinematics of every other body do not read it.
+    #[inline]
+    pub(crate) fn moved_by(&self, c: usize) -> &[usize] {
+        &self.moved[self.moved_at[c]..self.moved_at[c + 1]]
+    }
+
     /// Poses, velocities and (cos φ, sin φ) of the integrated bodies from (θ, θ̇) into `sc`
     /// (the prescribed bodies' must be there already).
     pub(crate) fn positions(&self, th: &[f64], thd: &[f64], sc: &mut Scratch) {
         for tb in &self.bodies {
+            Self::place(tb, th, thd, sc);
+        }
+    }
+
+    /// [`Tree::positions`] of the bodies `which` (indices into [`Tree::bodies`], ascending)
+    /// only, the others' kinematics in `sc` as they are.
+    pub(crate) fn positions_of(&self, which: &[usize], th: &[f64], thd: &[f64], sc: &mut Scratch) {
+        for &b in which {
+            Self::place(&self.bodies[b], th, thd, sc);
+        }
+    }
+
+    /// One body of [`Tree::positions`] (its parent's kinematics in `sc`).
+    #[inline(always)]
+    fn place(tb: &TreeBody, th: &[f64], thd: &[f64], sc: &mut Scratch) {
+        {
             let k = tb.body;
             let c = tb.col;
             match tb.link {
@@ -327,11 +392,63 @@ impl Tree {
         }
     }
 
+    /// Velocities of the integrated bodies from θ̇ into `sc`, at the poses and (cos φ, sin φ)
+    /// that [`Tree::positions`] left there: the bits of its velocities for the same (θ, θ̇),
+    /// without its sin_cos and poses (a change of θ̇ alone moves no body); of the bodies
+    /// `which` only (indices into [`Tree::bodies`], ascending), the others' as they are.
+    pub(crate) fn velocities_of(&self, which: &[usize], thd: &[f64], sc: &mut Scratch) {
+        for tb in which.iter().map(|&b| &self.bodies[b]) {
+            let (k, c) = (tb.body, tb.col);
+            sc.vel[k] = match tb.link {
+                Link::Free => [thd[c], thd[c + 1], thd[c + 2]],
+                Link::Slider { u, .. } => [thd[c] * u[0], thd[c] * u[1], 0.0],
+                Link::Revolute { parent, s } => {
+                    let vp = match parent {
+                        Parent::Ground(_) => [0.0; 2],
+                        Parent::Prescribed(kp, sp) | Parent::Integrated(kp, _, sp) => {
+                            let b = perp(rot(sc.cs[kp], sp));
+                            let [vx, vy, w] = sc.vel[kp];
+                            [vx + w * b[0], vy + w * b[1]]
+                        }
+                    };
+                    let w = thd[c];
+                    let b = perp(rot(sc.cs[k], s));
+                    [vp[0] - w * b[0], vp[1] - w * b[1], w]
+                }
+            };
+        }
+    }
+
     /// R = ∂q/∂θ (n_q × n, column-major) at the positions in `sc`.
     pub(crate) fn velocity_matrix(&self, sc: &Scratch, nq: usize, r: &mut [f64]) {
-        let n = self.n;
-        r[..nq * n].fill(0.0);
+        r[..nq * self.n].fill(0.0);
         for tb in &self.bodies {
+            Self::rows_of_r(tb, sc, nq, r);
+        }
+    }
+
+    /// [`Tree::velocity_matrix`] in the rows of the bodies `which` only (indices into
+    /// [`Tree::bodies`], ascending; their parents' rows in `r` as that would leave them).
+    pub(crate) fn velocity_matrix_of(
+        &self,
+        which: &[usize],
+        sc: &Scratch,
+        nq: usize,
+        r: &mut [f64],
+    ) {
+        for tb in which.iter().map(|&b| &self.bodies[b]) {
+            let i = 3 * tb.int;
+            for col in r[..nq * self.n].chunks_exact_mut(nq) {
+                col[i..i + 3].fill(0.0);
+            }
+            Self::rows_of_r(tb, sc, nq, r);
+        }
+    }
+
+    /// One body's rows of R, written over zeros.
+    #[inline(always)]
+    fn rows_of_r(tb: &TreeBody, sc: &Scratch, nq: usize, r: &mut [f64]) {
+        {
             let (i, c) = (3 * tb.int, tb.col);
             match tb.link {
                 Link::Free => {
@@ -367,8 +484,30 @@ impl Tree {
     /// q̈ of the integrated coordinates (n_q) at the positions and velocities in `sc` for the
     /// given θ̈ (None: θ̈ = 0, which gives a_c).
     pub(crate) fn accelerations(&self, sc: &Scratch, thdd: Option<&[f64]>, out: &mut [f64]) {
-        let al = |c: usize| thdd.map_or(0.0, |v| v[c]);
         for tb in &self.bodies {
+            Self::acceleration(tb, sc, thdd, out);
+        }
+    }
+
+    /// [`Tree::accelerations`] of the bodies `which` only (indices into [`Tree::bodies`],
+    /// ascending; their integrated parents' in `out` as that would leave them).
+    pub(crate) fn accelerations_of(
+        &self,
+        which: &[usize],
+        sc: &Scratch,
+        thdd: Option<&[f64]>,
+        out: &mut [f64],
+    ) {
+        for &b in which {
+            Self::acceleration(&self.bodies[b], sc, thdd, out);
+        }
+    }
+
+    /// One body of [`Tree::accelerations`].
+    #[inline(always)]
+    fn acceleration(tb: &TreeBody, sc: &Scratch, thdd: Option<&[f64]>, out: &mut [f64]) {
+        let al = |c: usize| thdd.map_or(0.0, |v| v[c]);
+        {
             let (i, c, k) = (3 * tb.int, tb.col, tb.body);
             let acc = match tb.link {
                 Link::Free => [al(c), al(c + 1), al(c + 2)],
