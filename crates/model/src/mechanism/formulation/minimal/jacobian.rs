@@ -33,6 +33,15 @@ use crate::mechanism::forces::Forces;
 use crate::mechanism::formulation::minimal::{solve_unrolled, JacWork, Minimal};
 use crate::mechanism::scratch::Scratch;
 
+/// `v` at length `len`, its entries as they are (resized, with zeros, only when it is not).
+#[inline]
+fn sized(v: &mut Vec<f64>, len: usize) -> &mut [f64] {
+    if v.len() != len {
+        v.resize(len, 0.0);
+    }
+    &mut v[..len]
+}
+
 /// The five-point central difference (module doc): (offset in steps, weight); the derivative
 /// is Σ weight · φ(x + offset · h) / h.
 const STENCIL: [(f64, f64); 4] = [
@@ -81,23 +90,27 @@ impl Minimal {
         }
         let s2 = s2.as_mut().expect("set above");
         let y = &w.y;
-        zeroed(yp, 2 * n).copy_from_slice(y);
-        zeroed(rp, nq * n).copy_from_slice(&w.r[..nq * n]);
-        zeroed(qdd0, nq);
-        self.tree.accelerations(s2, Some(&w.thdd), qdd0);
-        zeroed(qddp, nq).copy_from_slice(qdd0);
-        zeroed(&mut rho[0], n);
-        zeroed(&mut rho[1], n);
-        zeroed(&mut qd[0], nq);
-        zeroed(&mut qd[1], nq);
-        zeroed(dq, 2 * nq);
-        zeroed(dgq, nq);
-        zeroed(col, n);
+        // Sized once (no zeroing: every entry read is written first, at the call or in its
+        // column).
+        sized(yp, 2 * n).copy_from_slice(y);
+        sized(rp, nq * n).copy_from_slice(&w.r[..nq * n]);
+        self.tree.accelerations(s2, Some(&w.thdd), sized(qdd0, nq));
+        sized(qddp, nq).copy_from_slice(qdd0);
+        let [rho0, rho1] = rho;
+        for v in [rho0, rho1, col] {
+            sized(v, n);
+        }
+        let [qd0, qd1] = qd;
+        for v in [qd0, qd1, dgq] {
+            sized(v, nq);
+        }
+        sized(dq, 2 * nq);
         // Loop closures (loops.rs): σ at the perturbed states, and the columns' KKT solve.
-        let ml = self.loops.as_ref().map_or(0, |l| l.len());
-        let mut sig = [vec![0.0; ml], vec![0.0; ml]];
-        let mut dsig = vec![0.0; ml];
+        let (mut sig, mut dsig): ([Vec<f64>; 2], Vec<f64>) = Default::default();
         if let Some(l) = &self.loops {
+            let ml = l.len();
+            sig = [vec![0.0; ml], vec![0.0; ml]];
+            dsig = vec![0.0; ml];
             l.start_jacobian();
         }
         for j in 0..2 * n {

@@ -284,6 +284,7 @@ impl Minimal {
     /// θ̈ (kept) and q̈ = R θ̈ + a_c into `sc.qdd` from the applied forces `sc.g`; in full
     /// evaluations also Φ and the multipliers of every row. False if Rᵀ M R is not positive
     /// definite in f64 or θ̈ is not finite.
+    #[inline]
     pub(crate) fn accelerations(
         &self,
         t: f64,

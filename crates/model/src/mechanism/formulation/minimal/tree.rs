@@ -428,7 +428,9 @@ impl Tree {
     }
 
     /// [`Tree::velocity_matrix`] in the rows of the bodies `which` only (indices into
-    /// [`Tree::bodies`], ascending; their parents' rows in `r` as that would leave them).
+    /// [`Tree::bodies`], ascending; their parents' rows in `r` as that would leave them). It
+    /// writes the entries that pass writes; the rows' other entries, zero in R at any state,
+    /// must be zero in `r` already (as in an R these rows are restored to).
     pub(crate) fn velocity_matrix_of(
         &self,
         which: &[usize],
@@ -437,15 +439,11 @@ impl Tree {
         r: &mut [f64],
     ) {
         for tb in which.iter().map(|&b| &self.bodies[b]) {
-            let i = 3 * tb.int;
-            for col in r[..nq * self.n].chunks_exact_mut(nq) {
-                col[i..i + 3].fill(0.0);
-            }
             Self::rows_of_r(tb, sc, nq, r);
         }
     }
 
-    /// One body's rows of R, written over zeros.
+    /// One body's entries of R (its rows' others are zero).
     #[inline(always)]
     fn rows_of_r(tb: &TreeBody, sc: &Scratch, nq: usize, r: &mut [f64]) {
         {
