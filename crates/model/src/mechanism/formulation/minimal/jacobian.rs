@@ -61,10 +61,17 @@ impl Minimal {
     /// evaluation failed, the lower rows are NaN.
     pub(crate) fn jacobian(&self, sc: &Scratch, dg: Option<&[f64]>, mut jac: MatMut<'_, f64>) {
         let (nq, n) = (self.nq, self.tree.n);
-        first_order_jacobian_frame(&mut jac, n, dg.is_some());
         let Some(dg) = dg else {
+            first_order_jacobian_frame(&mut jac, n, false);
             return;
         };
+        // The upper rows [0 I] (first_order_jacobian_frame's); the columns below write every
+        // entry of the lower rows.
+        for j in 0..2 * n {
+            for i in 0..n {
+                jac[(i, j)] = if j == n + i { 1.0 } else { 0.0 };
+            }
+        }
         let w = self.work.borrow();
         let mut jw = self.jac_work.borrow_mut();
         let JacWork {
@@ -169,8 +176,12 @@ impl Minimal {
                 dq[nq..].copy_from_slice(&w.r[(j - n) * nq..(j - n + 1) * nq]);
             }
             // ρ' + Rᵀ ∂Q/∂(q, q̇) ∂(q, q̇)/∂y_j.
+            // Over the moved bodies' rows of q and of q̇, ascending (dq is +0 in the others,
+            // which the sum over every row skipped too).
             dgq.fill(0.0);
-            for (c, &d) in dq.iter().enumerate() {
+            let rows = self.tree.rows_moved_by(j % n);
+            for c in rows.iter().copied().chain(rows.iter().map(|&i| nq + i)) {
+                let d = dq[c];
                 if d != 0.0 {
                     for (o, &v) in dgq.iter_mut().zip(&dg[c * nq..(c + 1) * nq]) {
                         *o += v * d;

@@ -112,6 +112,10 @@ pub(crate) struct Tree {
     /// `moved[moved_at[c]..moved_at[c + 1]]` ([`Tree::moved_by`]).
     moved: Vec<usize>,
     moved_at: Vec<usize>,
+    /// For each coordinate, the rows of q of the bodies it moves, ascending
+    /// ([`Tree::rows_moved_by`]), at `rows[rows_at[c]..rows_at[c + 1]]`.
+    rows: Vec<usize>,
+    rows_at: Vec<usize>,
 }
 
 /// The child, its own point and its parent, when joint `own`–`other` reaches a body not yet
@@ -144,6 +148,20 @@ fn reach(
         }
     };
     Some((k, point_of(scene, own), parent))
+}
+
+/// [`Tree::rows_moved_by`] of every coordinate, flattened (rows, start of each coordinate's),
+/// from [`moved_of`]'s lists.
+fn rows_of(bodies: &[TreeBody], moved: &[usize], moved_at: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut rows = Vec::new();
+    let mut at = vec![0];
+    for c in moved_at.windows(2) {
+        let mut ints: Vec<usize> = moved[c[0]..c[1]].iter().map(|&b| bodies[b].int).collect();
+        ints.sort_unstable();
+        rows.extend(ints.iter().flat_map(|&i| 3 * i..3 * i + 3));
+        at.push(rows.len());
+    }
+    (rows, at)
 }
 
 /// [`Tree::moved_by`] of every coordinate, flattened: (bodies, start of each coordinate's).
@@ -293,6 +311,7 @@ impl Tree {
             .collect();
         let (reach, reach_at) = reach_of(&out);
         let (moved, moved_at) = moved_of(&out);
+        let (rows, rows_at) = rows_of(&out, &moved, &moved_at);
         Tree {
             bodies: out,
             n,
@@ -301,6 +320,8 @@ impl Tree {
             reach_at,
             moved,
             moved_at,
+            rows,
+            rows_at,
         }
     }
 
@@ -320,6 +341,13 @@ impl Tree {
     #[inline]
     pub(crate) fn moved_by(&self, c: usize) -> &[usize] {
         &self.moved[self.moved_at[c]..self.moved_at[c + 1]]
+    }
+
+    /// The rows of q (3 int..3 int + 3) of the bodies [`Tree::moved_by`] `c`, ascending: the
+    /// rows where column c of R can be nonzero (the others are +0).
+    #[inline]
+    pub(crate) fn rows_moved_by(&self, c: usize) -> &[usize] {
+        &self.rows[self.rows_at[c]..self.rows_at[c + 1]]
     }
 
     /// Poses, velocities and (cos φ, sin φ) of the integrated bodies from (θ, θ̇) into `sc`
