@@ -11,8 +11,11 @@
 //! geometric part (∂q̇/∂θ and ∂ρ) is smooth and cheap — the tree's kinematics, no force — and
 //! is taken by central differences of the recursive kinematics (tree.rs), step
 //! h = 6e-6 (1 + |y_j|) ≈ ε^(1/3) scale, error O(h²) ≈ 1e-10 relative. One Jacobian costs the
-//! forces' ∂g plus 4n passes of the tree's kinematics and n + n solves with the factor of
-//! Rᵀ M R. With loop closures (loops.rs) ρ also carries −Φ_θᵀλ*, the closing rows' σ is
+//! forces' ∂g plus, per column and side, a pass of the tree's kinematics over the bodies the
+//! column's coordinate moves (Tree::moved_by: its body and the descendants; velocities only
+//! for a column of θ̇, which moves no body), and n + n solves with the factor of Rᵀ M R; the
+//! other bodies keep the unperturbed kinematics, so the numbers are those of full passes (the
+//! test below keeps the full-pass implementation as the reference). With loop closures (loops.rs) ρ also carries −Φ_θᵀλ*, the closing rows' σ is
 //! differenced alongside, and each column solves the differentiated KKT system instead.
 //!
 //! ∂f/∂t ([`Minimal::time_derivative`]) is given too, for Rosenbrock methods: time moves the
