@@ -240,7 +240,18 @@ impl Revolute {
             du[vw][3] += sign * b[1];
             du[vw][wslot] += 1.0;
         }
-        // dF/dy, dT/dy, then the generalized forces of both ends.
+        // dF/dy, dT/dy, then the generalized forces of both ends: each integrated end's
+        // (integrated index, sign, radius, A s) found once, not in every column.
+        let mut on = [(0usize, 0.0, 0.0, [0.0; 2]); 2];
+        let mut n_on = 0;
+        for (end, sign, radius) in [(c.journal, 1.0, c.rj), (c.bearing, -1.0, c.rb)] {
+            let Some(kb) = end.body else { continue };
+            let Some(i) = int_of[kb] else {
+                continue;
+            };
+            on[n_on] = (i, sign, radius, rot(kin.cs[kb], end.s));
+            n_on += 1;
+        }
         for j in 0..n {
             let dj = &du[j];
             if dj.iter().all(|&v| v == 0.0) {
@@ -251,24 +262,14 @@ impl Revolute {
                 *di = (0..6).map(|l| lu[i][l] * dj[l]).sum();
             }
             let col = &mut dg[j * nq..(j + 1) * nq];
-            for (end, sign, radius) in [(c.journal, 1.0, c.rj), (c.bearing, -1.0, c.rb)] {
-                let Some(kb) = end.body else { continue };
-                let Some(i) = int_of[kb] else {
-                    continue;
-                };
-                let a = rot(kin.cs[kb], end.s);
+            for &(i, sign, radius, a) in &on[..n_on] {
                 col[3 * i] += sign * d[0];
                 col[3 * i + 1] += sign * d[1];
                 col[3 * i + 2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
             }
         }
         // The moment arms A s turn with their own bodies: ∂((A s) × F)/∂φ = perp(A s) × F = −(A s)·F.
-        for (end, sign) in [(c.journal, 1.0), (c.bearing, -1.0)] {
-            let Some(kb) = end.body else { continue };
-            let Some(i) = int_of[kb] else {
-                continue;
-            };
-            let a = rot(kin.cs[kb], end.s);
+        for &(i, sign, _, a) in &on[..n_on] {
             dg[(3 * i + 2) * nq + 3 * i + 2] -= sign * (a[0] * f[0] + a[1] * f[1]);
         }
     }

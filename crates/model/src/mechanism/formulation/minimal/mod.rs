@@ -113,6 +113,8 @@ pub(crate) struct JacWork {
     pub yp: Vec<f64>,
     pub rp: Vec<f64>,
     pub qddp: Vec<f64>,
+    /// q̈ at the unperturbed state (the tree's recursion with the evaluation's θ̈).
+    pub qdd0: Vec<f64>,
     pub rho: [Vec<f64>; 2],
     pub qd: [Vec<f64>; 2],
     pub dq: Vec<f64>,
@@ -282,6 +284,7 @@ impl Minimal {
     /// θ̈ (kept) and q̈ = R θ̈ + a_c into `sc.qdd` from the applied forces `sc.g`; in full
     /// evaluations also Φ and the multipliers of every row. False if Rᵀ M R is not positive
     /// definite in f64 or θ̈ is not finite.
+    #[inline]
     pub(crate) fn accelerations(
         &self,
         t: f64,

@@ -107,6 +107,15 @@ pub(crate) struct Tree {
     /// `reach[reach_at[i]..reach_at[i + 1]]` ([`Tree::columns_of`]).
     reach: Vec<usize>,
     reach_at: Vec<usize>,
+    /// For each coordinate of θ, the bodies (indices into `bodies`, in its order) that it
+    /// moves — its own body and that body's descendants — at
+    /// `moved[moved_at[c]..moved_at[c + 1]]` ([`Tree::moved_by`]).
+    moved: Vec<usize>,
+    moved_at: Vec<usize>,
+    /// For each coordinate, the rows of q of the bodies it moves, ascending
+    /// ([`Tree::rows_moved_by`]), at `rows[rows_at[c]..rows_at[c + 1]]`.
+    rows: Vec<usize>,
+    rows_at: Vec<usize>,
 }
 
 /// The child, its own point and its parent, when joint `own`–`other` reaches a body not yet
@@ -139,6 +148,53 @@ fn reach(
         }
     };
     Some((k, point_of(scene, own), parent))
+}
+
+/// [`Tree::rows_moved_by`] of every coordinate, flattened (rows, start of each coordinate's),
+/// from [`moved_of`]'s lists.
+fn rows_of(bodies: &[TreeBody], moved: &[usize], moved_at: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut rows = Vec::new();
+    let mut at = vec![0];
+    for c in moved_at.windows(2) {
+        let mut ints: Vec<usize> = moved[c[0]..c[1]].iter().map(|&b| bodies[b].int).collect();
+        ints.sort_unstable();
+        rows.extend(ints.iter().flat_map(|&i| 3 * i..3 * i + 3));
+        at.push(rows.len());
+    }
+    (rows, at)
+}
+
+/// [`Tree::moved_by`] of every coordinate, flattened: (bodies, start of each coordinate's).
+fn moved_of(bodies: &[TreeBody]) -> (Vec<usize>, Vec<usize>) {
+    let nbi = bodies.iter().map(|b| b.int + 1).max().unwrap_or(0);
+    let mut parent_int = vec![None; nbi];
+    for tb in bodies {
+        if let Link::Revolute {
+            parent: Parent::Integrated(_, ip, _),
+            ..
+        } = tb.link
+        {
+            parent_int[tb.int] = Some(ip);
+        }
+    }
+    let descends = |mut int: usize, from: usize| loop {
+        if int == from {
+            return true;
+        }
+        match parent_int[int] {
+            Some(p) => int = p,
+            None => return false,
+        }
+    };
+    let mut moved = Vec::new();
+    let mut at = vec![0];
+    for owner in bodies {
+        for _ in 0..owner.link.dof() {
+            moved.extend((0..bodies.len()).filter(|&b| descends(bodies[b].int, owner.int)));
+            at.push(moved.len());
+        }
+    }
+    (moved, at)
 }
 
 /// [`Tree::columns_of`] of every integrated body, flattened: (columns, start of each body's).
@@ -254,12 +310,18 @@ impl Tree {
             .map(|(ji, _)| ji)
             .collect();
         let (reach, reach_at) = reach_of(&out);
+        let (moved, moved_at) = moved_of(&out);
+        let (rows, rows_at) = rows_of(&out, &moved, &moved_at);
         Tree {
             bodies: out,
             n,
             closing,
             reach,
             reach_at,
+            moved,
+            moved_at,
+            rows,
+            rows_at,
         }
     }
 
@@ -273,10 +335,41 @@ impl Tree {
         &self.reach[self.reach_at[int]..self.reach_at[int + 1]]
     }
 
+    /// The bodies that coordinate `c` of θ (or of θ̇) moves, as indices into
+    /// [`Tree::bodies`] in its order: the body it belongs to and its descendants. The
+    /// kinematics of every other body do not read it.
+    #[inline]
+    pub(crate) fn moved_by(&self, c: usize) -> &[usize] {
+        &self.moved[self.moved_at[c]..self.moved_at[c + 1]]
+    }
+
+    /// The rows of q (3 int..3 int + 3) of the bodies [`Tree::moved_by`] `c`, ascending: the
+    /// rows where column c of R can be nonzero (the others are +0).
+    #[inline]
+    pub(crate) fn rows_moved_by(&self, c: usize) -> &[usize] {
+        &self.rows[self.rows_at[c]..self.rows_at[c + 1]]
+    }
+
     /// Poses, velocities and (cos φ, sin φ) of the integrated bodies from (θ, θ̇) into `sc`
     /// (the prescribed bodies' must be there already).
     pub(crate) fn positions(&self, th: &[f64], thd: &[f64], sc: &mut Scratch) {
         for tb in &self.bodies {
+            Self::place(tb, th, thd, sc);
+        }
+    }
+
+    /// [`Tree::positions`] of the bodies `which` (indices into [`Tree::bodies`], ascending)
+    /// only, the others' kinematics in `sc` as they are.
+    pub(crate) fn positions_of(&self, which: &[usize], th: &[f64], thd: &[f64], sc: &mut Scratch) {
+        for &b in which {
+            Self::place(&self.bodies[b], th, thd, sc);
+        }
+    }
+
+    /// One body of [`Tree::positions`] (its parent's kinematics in `sc`).
+    #[inline(always)]
+    fn place(tb: &TreeBody, th: &[f64], thd: &[f64], sc: &mut Scratch) {
+        {
             let k = tb.body;
             let c = tb.col;
             match tb.link {
@@ -327,11 +420,61 @@ impl Tree {
         }
     }
 
+    /// Velocities of the integrated bodies from θ̇ into `sc`, at the poses and (cos φ, sin φ)
+    /// that [`Tree::positions`] left there: the bits of its velocities for the same (θ, θ̇),
+    /// without its sin_cos and poses (a change of θ̇ alone moves no body); of the bodies
+    /// `which` only (indices into [`Tree::bodies`], ascending), the others' as they are.
+    pub(crate) fn velocities_of(&self, which: &[usize], thd: &[f64], sc: &mut Scratch) {
+        for tb in which.iter().map(|&b| &self.bodies[b]) {
+            let (k, c) = (tb.body, tb.col);
+            sc.vel[k] = match tb.link {
+                Link::Free => [thd[c], thd[c + 1], thd[c + 2]],
+                Link::Slider { u, .. } => [thd[c] * u[0], thd[c] * u[1], 0.0],
+                Link::Revolute { parent, s } => {
+                    let vp = match parent {
+                        Parent::Ground(_) => [0.0; 2],
+                        Parent::Prescribed(kp, sp) | Parent::Integrated(kp, _, sp) => {
+                            let b = perp(rot(sc.cs[kp], sp));
+                            let [vx, vy, w] = sc.vel[kp];
+                            [vx + w * b[0], vy + w * b[1]]
+                        }
+                    };
+                    let w = thd[c];
+                    let b = perp(rot(sc.cs[k], s));
+                    [vp[0] - w * b[0], vp[1] - w * b[1], w]
+                }
+            };
+        }
+    }
+
     /// R = ∂q/∂θ (n_q × n, column-major) at the positions in `sc`.
     pub(crate) fn velocity_matrix(&self, sc: &Scratch, nq: usize, r: &mut [f64]) {
-        let n = self.n;
-        r[..nq * n].fill(0.0);
+        r[..nq * self.n].fill(0.0);
         for tb in &self.bodies {
+            Self::rows_of_r(tb, sc, nq, r);
+        }
+    }
+
+    /// [`Tree::velocity_matrix`] in the rows of the bodies `which` only (indices into
+    /// [`Tree::bodies`], ascending; their parents' rows in `r` as that would leave them). It
+    /// writes the entries that pass writes; the rows' other entries, zero in R at any state,
+    /// must be zero in `r` already (as in an R these rows are restored to).
+    pub(crate) fn velocity_matrix_of(
+        &self,
+        which: &[usize],
+        sc: &Scratch,
+        nq: usize,
+        r: &mut [f64],
+    ) {
+        for tb in which.iter().map(|&b| &self.bodies[b]) {
+            Self::rows_of_r(tb, sc, nq, r);
+        }
+    }
+
+    /// One body's entries of R (its rows' others are zero).
+    #[inline(always)]
+    fn rows_of_r(tb: &TreeBody, sc: &Scratch, nq: usize, r: &mut [f64]) {
+        {
             let (i, c) = (3 * tb.int, tb.col);
             match tb.link {
                 Link::Free => {
@@ -367,8 +510,30 @@ impl Tree {
     /// q̈ of the integrated coordinates (n_q) at the positions and velocities in `sc` for the
     /// given θ̈ (None: θ̈ = 0, which gives a_c).
     pub(crate) fn accelerations(&self, sc: &Scratch, thdd: Option<&[f64]>, out: &mut [f64]) {
-        let al = |c: usize| thdd.map_or(0.0, |v| v[c]);
         for tb in &self.bodies {
+            Self::acceleration(tb, sc, thdd, out);
+        }
+    }
+
+    /// [`Tree::accelerations`] of the bodies `which` only (indices into [`Tree::bodies`],
+    /// ascending; their integrated parents' in `out` as that would leave them).
+    pub(crate) fn accelerations_of(
+        &self,
+        which: &[usize],
+        sc: &Scratch,
+        thdd: Option<&[f64]>,
+        out: &mut [f64],
+    ) {
+        for &b in which {
+            Self::acceleration(&self.bodies[b], sc, thdd, out);
+        }
+    }
+
+    /// One body of [`Tree::accelerations`].
+    #[inline(always)]
+    fn acceleration(tb: &TreeBody, sc: &Scratch, thdd: Option<&[f64]>, out: &mut [f64]) {
+        let al = |c: usize| thdd.map_or(0.0, |v| v[c]);
+        {
             let (i, c, k) = (3 * tb.int, tb.col, tb.body);
             let acc = match tb.link {
                 Link::Free => [al(c), al(c + 1), al(c + 2)],
