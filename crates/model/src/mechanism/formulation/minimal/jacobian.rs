@@ -497,39 +497,16 @@ mod tests {
         Scene::from_path(p).unwrap()
     }
 
-    /// A chain of two links from the ground whose second carries a free body through a dry
-    /// clearance joint, and a slider on an inclined line with a link pinned to it: bodies
-    /// that each coordinate moves and bodies it does not, in every kind of link.
+    /// The branching tree of the reduced sums' test whose free body hangs from the second
+    /// link's end through a dry clearance joint: bodies that each coordinate moves and bodies
+    /// it does not, in every kind of link.
     fn tree_with_free_body_and_slider() -> Scene {
-        let link = |name: &str, x: f64, y: f64, m: f64| {
-            serde_json::json!({"name": name, "mass": m, "inertia": 0.1 * m,
-                "points": {"O": [-0.5, 0.0], "E": [0.5, 0.0]},
-                "position": [x, y], "angle": 0.0, "velocity": [0.0, 0.0],
-                "angular_velocity": 0.0})
-        };
-        let v = serde_json::json!({
-            "bodies": [link("l1", 0.5, 0.0, 1.0), link("l2", 1.5, 0.0, 2.0),
-                       link("s", 0.0, -1.0, 3.0), link("c", 0.5, -1.0, 0.5),
-                       link("f", 2.5, 0.0, 1.5)],
-            "joints": [
-                {"type": "revolute", "name": "p1", "a": {"body": "l1", "point": "O"},
-                 "b": {"body": "ground", "at": [0.0, 0.0]}},
-                {"type": "revolute", "name": "p2", "a": {"body": "l1", "point": "E"},
-                 "b": {"body": "l2", "point": "O"}},
-                {"type": "translational", "name": "slide", "body": "s", "point": "O",
-                 "origin": [-0.5, -1.0], "direction": [1.0, 0.3]},
-                {"type": "revolute", "name": "p3", "a": {"body": "s", "point": "E"},
-                 "b": {"body": "c", "point": "O"}},
-                {"type": "clearance", "name": "j",
-                 "bearing": {"body": "l2", "point": "E", "radius": 0.01},
-                 "journal": {"body": "f", "point": "O", "radius": 0.009},
-                 "normal": {"law": "impact", "k": 1e9, "c_max": 1e3, "d_max": 1e-4},
-                 "friction": {"law": "none"}}
-            ],
-            "gravity": [0.0, -9.81],
-            "t_end": 1.0
-        });
-        Scene::from_json_str(&v.to_string()).unwrap()
+        let clearance = serde_json::json!({"type": "clearance", "name": "j",
+             "bearing": {"body": "l2", "point": "E", "radius": 0.01},
+             "journal": {"body": "f", "point": "O", "radius": 0.009},
+             "normal": {"law": "impact", "k": 1e9, "c_max": 1e3, "d_max": 1e-4},
+             "friction": {"law": "none"}});
+        super::super::sparse_tests::branching_scene([2.5, 0.0], &[clearance])
     }
 
     /// The Jacobian that recomputes only the bodies each column moves (velocities only for a

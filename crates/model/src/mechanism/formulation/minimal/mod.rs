@@ -616,7 +616,7 @@ mod unrolled_tests {
 }
 
 #[cfg(test)]
-mod sparse_tests {
+pub(super) mod sparse_tests {
     //! The reduced system summed body by body over `Tree::columns_of` gives the bits of the
     //! sums over every row of R (the formulas before the skip), on a tree with a chain, a branch
     //! from a slider and a free body, at states away from the assembled one.
@@ -626,34 +626,42 @@ mod sparse_tests {
     use lash_solver::OdeSystem;
 
     /// Two links in a chain from the ground, a slider on an inclined line with a link pinned
-    /// to it, and a free body; gravity, no clearance joint.
-    fn branching() -> Mechanism {
+    /// to it, and a free body `f` at `free_at`, with `joints` added (a clearance joint that
+    /// holds `f`, for the Jacobian's test); gravity, under `minimal`: every kind of link, and
+    /// bodies that each coordinate moves and bodies it does not.
+    pub(super) fn branching_scene(free_at: [f64; 2], joints: &[serde_json::Value]) -> crate::Scene {
         let link = |name: &str, x: f64, y: f64, m: f64| {
             serde_json::json!({"name": name, "mass": m, "inertia": 0.1 * m,
                 "points": {"O": [-0.5, 0.0], "E": [0.5, 0.0]},
                 "position": [x, y], "angle": 0.0, "velocity": [0.0, 0.0],
                 "angular_velocity": 0.0})
         };
+        let mut all = vec![
+            serde_json::json!({"type": "revolute", "name": "p1", "a": {"body": "l1", "point": "O"},
+                 "b": {"body": "ground", "at": [0.0, 0.0]}}),
+            serde_json::json!({"type": "revolute", "name": "p2", "a": {"body": "l1", "point": "E"},
+                 "b": {"body": "l2", "point": "O"}}),
+            serde_json::json!({"type": "translational", "name": "slide", "body": "s", "point": "O",
+                 "origin": [-0.5, -1.0], "direction": [1.0, 0.3]}),
+            serde_json::json!({"type": "revolute", "name": "p3", "a": {"body": "s", "point": "E"},
+                 "b": {"body": "c", "point": "O"}}),
+        ];
+        all.extend_from_slice(joints);
         let scene = serde_json::json!({
             "bodies": [link("l1", 0.5, 0.0, 1.0), link("l2", 1.5, 0.0, 2.0),
                        link("s", 0.0, -1.0, 3.0), link("c", 0.5, -1.0, 0.5),
-                       link("f", 3.0, 3.0, 1.5)],
-            "joints": [
-                {"type": "revolute", "name": "p1", "a": {"body": "l1", "point": "O"},
-                 "b": {"body": "ground", "at": [0.0, 0.0]}},
-                {"type": "revolute", "name": "p2", "a": {"body": "l1", "point": "E"},
-                 "b": {"body": "l2", "point": "O"}},
-                {"type": "translational", "name": "slide", "body": "s", "point": "O",
-                 "origin": [-0.5, -1.0], "direction": [1.0, 0.3]},
-                {"type": "revolute", "name": "p3", "a": {"body": "s", "point": "E"},
-                 "b": {"body": "c", "point": "O"}}
-            ],
+                       link("f", free_at[0], free_at[1], 1.5)],
+            "joints": all,
             "gravity": [0.0, -9.81],
             "t_end": 1.0,
             "formulation": "minimal"
         });
-        let scene = crate::Scene::from_json_str(&scene.to_string()).unwrap();
-        Mechanism::from_scene(&scene).unwrap()
+        crate::Scene::from_json_str(&scene.to_string()).unwrap()
+    }
+
+    /// [`branching_scene`] with its free body at (3, 3), no clearance joint.
+    fn branching() -> Mechanism {
+        Mechanism::from_scene(&branching_scene([3.0, 3.0], &[])).unwrap()
     }
 
     #[test]
