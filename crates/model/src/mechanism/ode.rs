@@ -58,13 +58,15 @@ impl OdeSystem for Mechanism {
 
     fn events(&self, t: f64, y: &[f64], g: &mut [f64]) {
         let mut sc = self.scratch.borrow_mut();
-        self.kinematics(t, y, &mut sc);
+        self.formulation
+            .event_kinematics(t, y, &self.bodies, &mut sc);
         events::values(&self.events, &self.forces, t, &sc, g, None);
     }
 
     fn event_rates(&self, t: f64, y: &[f64], g: &mut [f64], g_dot: &mut [f64]) -> bool {
         let mut sc = self.scratch.borrow_mut();
-        self.kinematics(t, y, &mut sc);
+        self.formulation
+            .event_kinematics(t, y, &self.bodies, &mut sc);
         events::values(&self.events, &self.forces, t, &sc, g, Some(g_dot));
         true
     }

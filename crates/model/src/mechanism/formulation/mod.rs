@@ -146,6 +146,16 @@ impl Formulation {
         }
     }
 
+    /// The poses, velocities and (cos φ, sin φ) of every body at (t, y) into `sc` (what the
+    /// event functions read), without what `kinematics` keeps for an evaluation.
+    #[inline]
+    pub(crate) fn event_kinematics(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
+        match self {
+            Formulation::Minimal(f) => f.positions(t, y, bodies, sc),
+            _ => self.kinematics(t, y, bodies, sc),
+        }
+    }
+
     /// y of the absolute (q, q̇) of the integrated bodies.
     pub(crate) fn state_of(&self, y_abs: &[f64]) -> Vec<f64> {
         match self {

@@ -239,15 +239,23 @@ impl Minimal {
         (tb.body, name)
     }
 
-    /// The kinematics of every body at (t, y) into `sc`.
+    /// The kinematics of every body at (t, y) into `sc`, and (t, y) kept for the Jacobian.
     #[inline]
     pub(crate) fn kinematics(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
         let n = self.tree.n;
-        bodies.prescribed_kinematics(t, sc);
-        self.tree.positions(&y[..n], &y[n..2 * n], sc);
+        self.positions(t, y, bodies, sc);
         let mut w = self.work.borrow_mut();
         w.t = t;
         w.y.copy_from_slice(&y[..2 * n]);
+    }
+
+    /// The kinematics of every body at (t, y) into `sc` only (the event functions' need:
+    /// the evaluation's buffers are left as they are).
+    #[inline]
+    pub(crate) fn positions(&self, t: f64, y: &[f64], bodies: &Bodies, sc: &mut Scratch) {
+        let n = self.tree.n;
+        bodies.prescribed_kinematics(t, sc);
+        self.tree.positions(&y[..n], &y[n..2 * n], sc);
     }
 
     /// θ of an absolute (q, q̇).
@@ -264,8 +272,8 @@ impl Minimal {
     /// R, a_c and Rᵀ M R (lower triangle, not factored) at the kinematics of `sc`.
     fn reduced_mass(&self, w: &mut Work, sc: &Scratch) {
         let (nq, n) = (self.nq, self.tree.n);
-        self.tree.velocity_matrix(sc, nq, &mut w.r);
-        self.tree.accelerations(sc, None, &mut w.ac);
+        self.tree
+            .velocity_matrix_and_bias(sc, nq, &mut w.r, &mut w.ac);
         // (Rᵀ M R)_ij = Σ_rows R_ri m_r R_rj, body by body (rows ascending, as one sum over
         // the rows would add them), over the bodies where both columns can be nonzero
         // (Tree::columns_of: the skipped terms are +0 and change no bit).
@@ -303,8 +311,11 @@ impl Minimal {
         }
         // Rᵀ (Q − M a_c), body by body over the columns that can be nonzero in its rows (as
         // Rᵀ M R in reduced_mass: the same sums, bit for bit).
-        for (((f, g), m), ac) in w.f.iter_mut().zip(&sc.g[..nq]).zip(&self.mass).zip(&w.ac) {
-            *f = g - m * ac;
+        {
+            let (g, m, ac, f) = (&sc.g[..nq], &self.mass[..nq], &w.ac[..nq], &mut w.f[..nq]);
+            for i in 0..nq {
+                f[i] = g[i] - m[i] * ac[i];
+            }
         }
         let (r, f, thdd) = (&w.r[..nq * n], &w.f[..nq], &mut w.thdd[..n]);
         thdd.fill(0.0);
@@ -324,13 +335,7 @@ impl Minimal {
                 }
             }
         }
-        let qdd = &mut sc.qdd[..nq];
-        qdd.copy_from_slice(&w.ac);
-        for (j, &a) in w.thdd.iter().enumerate() {
-            for (q, r) in qdd.iter_mut().zip(&w.r[j * nq..(j + 1) * nq]) {
-                *q += r * a;
-            }
-        }
+        add_columns(&w.r[..nq * n], &w.ac[..nq], &w.thdd[..n], &mut sc.qdd[..nq]);
         let ok = w.thdd.iter().all(|v| v.is_finite());
         if full {
             self.multipliers(w, t, cons, info, sc);
@@ -526,6 +531,45 @@ fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
     Ok(())
 }
 
+/// q̈ = a_c + Σ_j R_j θ̈_j (R: n_q × n column-major, n = `th.len()`), entry by entry with
+/// the columns added in ascending order: the sums of adding R θ̈ to a_c column by column, bit
+/// for bit; unrolled over the columns for n ≤ 4 (on the press, n = 2 and n_q = 6, the general
+/// loops' iterator set-up cost more than their arithmetic).
+#[inline]
+fn add_columns(r: &[f64], ac: &[f64], th: &[f64], qdd: &mut [f64]) {
+    match th.len() {
+        1 => add_columns_fixed::<1>(r, ac, th, qdd),
+        2 => add_columns_fixed::<2>(r, ac, th, qdd),
+        3 => add_columns_fixed::<3>(r, ac, th, qdd),
+        4 => add_columns_fixed::<4>(r, ac, th, qdd),
+        _ => {
+            let nq = qdd.len();
+            qdd.copy_from_slice(ac);
+            for (j, &a) in th.iter().enumerate() {
+                for (q, r) in qdd.iter_mut().zip(&r[j * nq..(j + 1) * nq]) {
+                    *q += r * a;
+                }
+            }
+        }
+    }
+}
+
+/// [`add_columns`] with n = N.
+#[inline(always)]
+fn add_columns_fixed<const N: usize>(r: &[f64], ac: &[f64], th: &[f64], qdd: &mut [f64]) {
+    let nq = qdd.len();
+    let (r, ac) = (&r[..N * nq], &ac[..nq]);
+    let mut a = [0.0; N];
+    a.copy_from_slice(&th[..N]);
+    for q in 0..nq {
+        let mut s = ac[q];
+        for (j, a) in a.iter().enumerate() {
+            s += r[j * nq + q] * a;
+        }
+        qdd[q] = s;
+    }
+}
+
 /// [`cholesky_solve`] unrolled for n ≤ 4 (the same operations in the same order).
 #[inline]
 fn solve_unrolled(l: &[f64], n: usize, b: &mut [f64]) {
@@ -610,6 +654,48 @@ mod unrolled_tests {
         }
     }
 
+    #[test]
+    fn the_unrolled_sum_of_columns_gives_the_bits_of_the_column_by_column_loop() {
+        // n = 1…5 columns of n_q = 6 rows, entries of mixed magnitude and sign, with signed
+        // zeros where a sum from a_c can keep or lose the sign of zero.
+        let nq = 6;
+        for n in 1..=5 {
+            let r: Vec<f64> = (0..n * nq)
+                .map(|k| match k % 7 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    _ => (k as f64 * 0.37).sin() * 10f64.powi(k as i32 % 5 - 2),
+                })
+                .collect();
+            let ac: Vec<f64> = (0..nq)
+                .map(|q| {
+                    if q < 2 {
+                        [-0.0, 0.0][q]
+                    } else {
+                        (q as f64).cos() * 1e-3
+                    }
+                })
+                .collect();
+            let th: Vec<f64> = (0..n).map(|j| (j as f64 + 0.5).tan() * 1e2).collect();
+            let mut want = ac.clone();
+            for (j, &a) in th.iter().enumerate() {
+                for (q, r) in want.iter_mut().zip(&r[j * nq..(j + 1) * nq]) {
+                    *q += r * a;
+                }
+            }
+            let mut got = vec![f64::NAN; nq];
+            add_columns(&r, &ac, &th, &mut got);
+            assert_eq!(bits(&want), bits(&got), "n = {n}");
+        }
+        // A sum from a_c = −0 with a product +0 is +0, as in the loop: the sum starts from
+        // a_c, not from +0.
+        let mut got = [1.0];
+        add_columns(&[0.0], &[-0.0], &[0.0], &mut got);
+        assert_eq!(got[0].to_bits(), 0.0f64.to_bits());
+        add_columns(&[0.0], &[-0.0], &[-0.0], &mut got);
+        assert_eq!(got[0].to_bits(), (-0.0f64).to_bits());
+    }
+
     fn bits(v: &[f64]) -> Vec<u64> {
         v.iter().map(|x| x.to_bits()).collect()
     }
@@ -662,6 +748,37 @@ pub(super) mod sparse_tests {
     /// [`branching_scene`] with its free body at (3, 3), no clearance joint.
     fn branching() -> Mechanism {
         Mechanism::from_scene(&branching_scene([3.0, 3.0], &[])).unwrap()
+    }
+
+    #[test]
+    fn r_and_a_c_in_one_pass_give_the_bits_of_the_two_passes() {
+        // Every kind of link, states away from the assembled one (as below).
+        let m = branching();
+        let Formulation::Minimal(f) = m.formulation() else {
+            panic!("minimal")
+        };
+        let (nq, n) = (f.nq, f.n());
+        let y0 = m.initial_state();
+        for k in 0..3 {
+            let y: Vec<f64> = y0
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v + 0.4 * (k as f64 + 1.0) * ((i as f64) * 1.3 + 0.2).cos())
+                .collect();
+            let mut dy = vec![0.0; 2 * n];
+            m.rhs(0.1 * k as f64, &y, &mut dy);
+            let sc = m.scratch();
+            let (mut r1, mut ac1) = (vec![f64::NAN; nq * n], vec![f64::NAN; nq]);
+            let (mut r2, mut ac2) = (vec![f64::NAN; nq * n], vec![f64::NAN; nq]);
+            f.tree.velocity_matrix(&sc, nq, &mut r1);
+            f.tree.accelerations(&sc, None, &mut ac1);
+            f.tree.velocity_matrix_and_bias(&sc, nq, &mut r2, &mut ac2);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&r1), bits(&r2));
+            assert_eq!(bits(&ac1), bits(&ac2));
+            // a_c is not zero on a moving tree (the check compares numbers, not zeros).
+            assert!(ac2.iter().any(|v| v.abs() > 1e-3), "{ac2:?}");
+        }
     }
 
     #[test]

@@ -447,11 +447,31 @@ impl Tree {
         }
     }
 
-    /// R = ∂q/∂θ (n_q × n, column-major) at the positions in `sc`.
+    /// R = ∂q/∂θ (n_q × n, column-major) at the positions in `sc` (the Jacobian's reference
+    /// in the tests; evaluations take [`Tree::velocity_matrix_and_bias`]).
+    #[cfg(test)]
     pub(crate) fn velocity_matrix(&self, sc: &Scratch, nq: usize, r: &mut [f64]) {
         r[..nq * self.n].fill(0.0);
         for tb in &self.bodies {
             Self::rows_of_r(tb, sc, nq, r);
+        }
+    }
+
+    /// [`Tree::velocity_matrix`] into `r` and a_c ([`Tree::accelerations`] with θ̈ = 0) into
+    /// `ac` in one pass over the bodies: each entry by the same expression as the two passes
+    /// (the same bits), each body's rotated points read once for both (the reduced
+    /// right-hand side's R and a_c).
+    pub(crate) fn velocity_matrix_and_bias(
+        &self,
+        sc: &Scratch,
+        nq: usize,
+        r: &mut [f64],
+        ac: &mut [f64],
+    ) {
+        r[..nq * self.n].fill(0.0);
+        for tb in &self.bodies {
+            Self::rows_of_r(tb, sc, nq, r);
+            Self::acceleration(tb, sc, None, ac);
         }
     }
 
