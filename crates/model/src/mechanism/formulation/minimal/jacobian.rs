@@ -584,8 +584,8 @@ mod tests {
         .map(|p| (p.to_string(), scene(p)))
         .collect();
         scenes.push(("tree".into(), tree_with_free_body_and_slider()));
-        // Rates of about 3e-4 and of about 1 rad/s (m/s): the rates' closed form is
-        // quadratic in them.
+        // Rates of about 3e-4 and of about 1 rad/s (m/s): a_c is quadratic in them, the
+        // rates' closed-form columns linear.
         for ((what, mut s), rates) in scenes
             .into_iter()
             .flat_map(|w| [(w.clone(), 30.0), (w, 1e5)])
