@@ -11,6 +11,17 @@
 //! multipliers converge to λ: mechanism/formulation/augmented_lagrangian). The minimal
 //! formulation has no KKT form here (its mass matrix is dense over a tree).
 //!
+//! ∂ρ/∂y at fixed z = (q̈, λ) in closed form (`kkt_residual_jacobian`), the column of y_j:
+//!
+//! ```text
+//! rows of g:  ∂g/∂y_j − (∂Φ_q/∂y_j)ᵀ λ      rows of c:  ∂c/∂y_j − (∂Φ_q/∂y_j) q̈
+//! ```
+//! the augmented Lagrangian's and Lagrange–Baumgarte's closed forms (formulation/
+//! column_terms.rs, there with their own q̈ and λ) over the pattern's rows, with the forces'
+//! closed-form ∂g/∂y (zero with gravity alone, which needs none). Where a force element or a
+//! prismatic clearance joint has no closed form, the `kkt` path differences ρ over the
+//! pattern's colours (lash_solver::kkt).
+//!
 //! ∂ρ/∂y's pattern ([`residual_pattern`]): the column of a coordinate of body j (q or q̇)
 //! has the rows of g of every body that shares a force element with j or a constraint row
 //! (Φ_qᵀλ), j's own, and the constraint rows that act on j. Why it covers ρ: g of body b
@@ -82,6 +93,90 @@ impl KktSystem for Mechanism {
             }
         }
         b.iter().all(|v| v.is_finite()) && k.iter().all(|e| e.2.is_finite())
+    }
+
+    /// R = ∂ρ/∂y at fixed z = (q̈, λ) in closed form (module doc) where the forces' ∂g/∂y
+    /// has one (none, gravity only; or every clearance joint's and element's own): false
+    /// otherwise, and the `kkt` path differences ρ.
+    fn kkt_residual_jacobian(
+        &self,
+        t: f64,
+        y: &[f64],
+        z: &[f64],
+        pattern: &[Vec<usize>],
+        r: &mut [f64],
+    ) -> bool {
+        let Some((p, s)) = self.formulation().kkt_stabilisation() else {
+            return false;
+        };
+        let nq = self.nq();
+        let (bodies, cons, forces) = (self.bodies(), self.constraints(), self.forces());
+        let m = cons.rows.len();
+        if y.len() != 2 * nq || z.len() != nq + m || pattern.len() != 2 * nq {
+            return false;
+        }
+        let mut sc = self.scratch();
+        self.kinematics(t, y, &mut sc);
+        let mut fw = self.force_jac_work();
+        let with_dg = forces.has_jacobian();
+        if with_dg {
+            forces.applied(bodies, t, &mut sc, false);
+            if !forces.closed_jacobian(bodies, t, &sc, &mut fw) {
+                return false;
+            }
+        }
+        // Φ_q's block of each term of every row.
+        let jr: Vec<[[f64; 3]; 2]> = cons
+            .rows
+            .iter()
+            .map(|row| eval_row(row, &bodies.info, t, &sc).jrows)
+            .collect();
+        let (qdd, lam) = z.split_at(nq);
+        let (mut dphiq, mut dcdq, mut dcdv) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        let mut e = 0;
+        for (j, rows) in pattern.iter().enumerate() {
+            let (qj, vel) = (j % nq, j >= nq);
+            let (body, comp) = (qj / 3, qj % 3);
+            let (grows, crows) = rows.split_at(rows.partition_point(|&i| i < nq));
+            for &i in crows {
+                (dphiq[i - nq], dcdq[i - nq], dcdv[i - nq]) = (0.0, 0.0, 0.0);
+            }
+            // An angle's column: ∂Φ_q/∂φ and the velocity parts of ∂c (point terms).
+            if comp == 2 {
+                let on = crows.iter().map(|&i| i - nq);
+                cons.for_point_terms_in(on, &sc, body, |a, wa, wb, om| {
+                    dphiq[a] -= wa;
+                    dcdq[a] += om * om * wb + p * wa * om;
+                    dcdv[a] += 2.0 * om * wa;
+                });
+            }
+            // (∂Φ_q/∂φ)ᵀ λ: nonzero in the angle's own row only.
+            let u: f64 = if vel {
+                0.0
+            } else {
+                crows.iter().map(|&i| dphiq[i - nq] * lam[i - nq]).sum()
+            };
+            for &i in grows {
+                let dg = if with_dg { fw.dg[j * nq + i] } else { 0.0 };
+                r[e] = if i == qj && !vel { dg - u } else { dg };
+                e += 1;
+            }
+            for &i in crows {
+                let a = i - nq;
+                let (row, ints) = (&cons.rows[a], &cons.row_int[a]);
+                let phiq: f64 = (0..row.n_terms)
+                    .filter(|&ti| ints[ti] == Some(body))
+                    .map(|ti| jr[a][ti][comp])
+                    .sum();
+                r[e] = if vel {
+                    dcdv[a] - p * phiq
+                } else {
+                    dcdq[a] - s * phiq - dphiq[a] * qdd[qj]
+                };
+                e += 1;
+            }
+        }
+        true
     }
 }
 

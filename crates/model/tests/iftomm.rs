@@ -134,6 +134,40 @@ fn a02_n_four_bar_n40_follows_the_one_dof_reference() {
     a02_meets_its_targets(40, 20.0);
 }
 
+/// The published case under bdf at rtol 1e-10, whose Newton matrix takes the `kkt` path
+/// (`auto` from 300 unknowns on one cluster: n = 486) with ∂ρ/∂y in closed form
+/// (crates/model/src/kkt.rs): B0 within 5e-5 m of the reference, energy drift below 2e-7,
+/// no parallelogram flipped (ignored by default as the dop853 run above: about 10 s). bdf's
+/// own error at this tolerance over 20 s is above dop853's 1e-6: measured 1.3e-5 m and drift
+/// 5.6e-8 with ∂ρ/∂y by the coloured differences, 1.5e-5 m and 6.9e-8 with the closed form
+/// (the Newton matrix moves the steps, not the accuracy); the benchmark's "high precision"
+/// bar is 1e-3 m.
+#[test]
+#[ignore]
+fn a02_n_four_bar_n40_under_bdf_on_the_kkt_path_follows_the_one_dof_reference() {
+    let (scene, reference) = n_four_bar(40, 20.0);
+    let m = Mechanism::from_scene(&scene).unwrap();
+    let o = SolverOptions::with_method(Method::Bdf);
+    let p = lash_solver::Problem::new(&m, &o).unwrap();
+    assert!(p.diffsol().unwrap().is_kkt());
+    let r = run_as(
+        &scene,
+        FormulationName::AugmentedLagrangian,
+        Method::Bdf,
+        1e-10,
+    )
+    .unwrap();
+    let (err, drift) = check_crank_tip(&r, &reference, 1.0);
+    eprintln!("A02 N = 40, bdf on the kkt path: B0 error {err:.3e} m, energy drift {drift:.3e}");
+    assert!(err < 5e-5, "B0 error {err:e}");
+    assert!(drift < 2e-7, "energy drift {drift:e}");
+    for p in &r.poses {
+        for i in 1..=40 {
+            assert!(angle_err(p[2 * i][2], p[0][2]) < 1e-5);
+        }
+    }
+}
+
 #[test]
 fn a02_n_four_bar_every_adaptive_method_keeps_the_branch() {
     // 20 s as published, through about 15 singular positions; Lagrange–Baumgarte ends at

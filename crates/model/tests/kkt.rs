@@ -415,3 +415,135 @@ fn the_kkt_path_runs_redundant_and_singular_mechanisms() {
         assert!(err < 1e-6, "{name}: {err:e}");
     }
 }
+
+/// R = ∂ρ/∂y at fixed z (ρ = b − K z) by the model's closed form
+/// (`KktSystem::kkt_residual_jacobian`) and central differences of ρ with steps h and h/2,
+/// h = 6e-6 (1 + |y_j|) ≈ ε^(1/3), the pattern's entries in its order, and max |ρ|; None
+/// where the model has no closed form.
+#[allow(clippy::type_complexity)]
+fn closed_and_differenced(
+    m: &Mechanism,
+    t: f64,
+    y: &[f64],
+) -> Option<(Vec<f64>, [Vec<f64>; 2], f64)> {
+    use lash_solver::kkt::KktSystem;
+    let shape = m.kkt_shape();
+    let nk = shape.nq + shape.m;
+    // z of a typical size, not the solution: R is linear in z and its closed form holds at
+    // any z.
+    let z: Vec<f64> = (0..nk).map(|i| 0.3 + ((i * 5) % 7) as f64).collect();
+    let nnz: usize = shape.residual_pattern.iter().map(Vec::len).sum();
+    let mut closed = vec![f64::NAN; nnz];
+    let mut k = Vec::new();
+    let mut b = vec![0.0; nk];
+    assert!(m.kkt_assemble(t, y, &mut k, &mut b));
+    if !m.kkt_residual_jacobian(t, y, &z, &shape.residual_pattern, &mut closed) {
+        return None;
+    }
+    let rho = |y: &[f64]| {
+        let (mut k, mut b) = (Vec::new(), vec![0.0; nk]);
+        assert!(m.kkt_assemble(t, y, &mut k, &mut b));
+        for (i, j, v) in k {
+            b[i] -= v * z[j];
+        }
+        b
+    };
+    let mut diff = [Vec::with_capacity(nnz), Vec::with_capacity(nnz)];
+    for (j, rows) in shape.residual_pattern.iter().enumerate() {
+        for (d, h) in diff.iter_mut().zip([6e-6, 3e-6]) {
+            let h = h * (1.0 + y[j].abs());
+            let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+            yp[j] += h;
+            ym[j] -= h;
+            let (rp, rm) = (rho(&yp), rho(&ym));
+            let hh = yp[j] - ym[j];
+            d.extend(rows.iter().map(|&i| (rp[i] - rm[i]) / hh));
+        }
+    }
+    let rho_max = rho(y).iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    Some((closed, diff, rho_max))
+}
+
+/// The closed-form R equals the central differences of ρ to the differences' own error, on
+/// A02 N = 2 and N = 40 (gravity only: ∂g = 0) under both absolute formulations, and on a
+/// chain with a dry clearance joint in contact and a linear spring-damper (every force's ∂g
+/// a closed form); the mixed scene, whose rotational spring and force read from a length
+/// have none, returns none (the `kkt` path then differences ρ). The states are moved off
+/// the initial one, with every velocity nonzero (the velocity terms of ∂c). The error of the
+/// difference with step h/2 is its truncation, O(h²): a third of its distance to the step
+/// h's (Richardson), bounded here by that whole distance; plus its rounding, ε max|ρ| / h
+/// (four times, and 1e-9 of the column's largest |entry|, or of 1). A wrong sign or a
+/// dropped term is O(1) of an entry of the column and fails it.
+#[test]
+fn the_closed_form_residual_jacobian_equals_central_differences() {
+    use lash_solver::kkt::KktSystem;
+    let case = |name: &str, formulation: &str| {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../cases/iftomm")
+            .join(name);
+        let mut s: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+        s["formulation"] = json!(formulation);
+        s
+    };
+    for formulation in ["lagrange_baumgarte", "augmented_lagrangian"] {
+        // The mixed scene without its rotational spring and its force read from a length
+        // (differenced elements): the clearance joint and the linear spring-damper.
+        let mut clearance = mixed(formulation);
+        clearance["forces"].as_array_mut().unwrap().truncate(1);
+        let scenes = [
+            ("A02 N = 2", case("a02_n2.json", formulation), false),
+            ("A02 N = 40", case("a02_n40.json", formulation), false),
+            ("chain with a clearance joint", clearance, true),
+        ];
+        for (what, v, contact) in scenes {
+            let m = mech(&v);
+            let mut y = m.initial_state();
+            let nq = y.len() / 2;
+            for (i, v) in y.iter_mut().enumerate() {
+                *v += if i < nq { 1e-3 } else { 0.5 } * ((i as f64) * 1.3 + 0.2).sin();
+            }
+            if contact {
+                // The journal (f1) 1.5 mm off the bearing's centre (c = 1 mm): in contact.
+                y[3 * 5] += 0.0015;
+            }
+            let (closed, [coarse, fine], rho_max) =
+                closed_and_differenced(&m, 0.01, &y).expect(what);
+            let shape = m.kkt_shape();
+            let (mut e, mut worst, mut big) = (0, 0.0f64, 0usize);
+            for (j, rows) in shape.residual_pattern.iter().enumerate() {
+                let span = e..e + rows.len();
+                // The rounding of the difference with step h/2: ε max|ρ| / h.
+                let rounding = f64::EPSILON * rho_max / (3e-6 * (1.0 + y[j].abs()));
+                let scale = fine[span.clone()]
+                    .iter()
+                    .fold(1.0f64, |a, v| a.max(v.abs()));
+                for ((c, d), d2) in closed[span.clone()]
+                    .iter()
+                    .zip(&fine[span.clone()])
+                    .zip(&coarse[span])
+                {
+                    let err = (c - d).abs();
+                    worst = worst.max(err / scale);
+                    assert!(
+                        err <= (d - d2).abs() + 1e-9 * scale + 4.0 * rounding,
+                        "{formulation} {what}: {c:e} against {d:e} (step h: {d2:e})"
+                    );
+                    big += usize::from(d.abs() > 1e-3 * scale);
+                }
+                e += rows.len();
+            }
+            eprintln!("{formulation} {what}: {e} entries, {big} large, worst {worst:e}");
+            // A fifth of the pattern at least is live (measured 24–35 %).
+            assert!(big > e / 5, "{formulation} {what}: {big} of {e}");
+        }
+        assert!(
+            closed_and_differenced(
+                &mech(&mixed(formulation)),
+                0.01,
+                &mech(&mixed(formulation)).initial_state()
+            )
+            .is_none(),
+            "{formulation}: a force read from a length has no closed form"
+        );
+    }
+}

@@ -14,10 +14,12 @@
 //!                                      [ −D   K ] [w ] = [ c R_q r₁  ]      (2 n_q + m, sparse)
 //! ```
 //! At each Jacobian evaluation (diffsol's `jacobian_inplace`) the system assembles K and b at
-//! (t, y) ([`KktSystem::kkt_assemble`]); z = K⁻¹ b by a sparse LU; R by forward differences
+//! (t, y) ([`KktSystem::kkt_assemble`]); z = K⁻¹ b by a sparse LU; R in the system's closed
+//! form where it has one ([`KktSystem::kkt_residual_jacobian`]), else by forward differences
 //! of ρ at fixed z over structurally orthogonal columns ([`KktShape::residual_pattern`],
 //! coloured as crate::jacobian colours ∂f/∂y: one assembly per colour, 19 for a chain of
-//! pendulum links whatever its length). At each factorisation diffsol asks for (a new c, the
+//! pendulum links whatever its length, each counted as a right-hand side in the solver's
+//! statistics; the closed form counts none). At each factorisation diffsol asks for (a new c, the
 //! same linearisation) the augmented matrix above is factored by faer's sparse LU, its
 //! symbolic analysis done once. The matrix diffsol itself holds is the exact part of J, the
 //! identity block q' = v (`upper_pattern`): its Newton matrix gives c exactly (the entry
@@ -33,8 +35,8 @@
 //! steps, factorisations and Newton iterations on a 110-link chain, final states within
 //! 1e-12 of each other), so observers, the error norm, events, dense output and restarts are
 //! untouched, and nothing needs a consistent (a, λ) or weights for algebraic unknowns; the
-//! price is ∂ρ/∂y by differences (one assembly of K and b per colour, cheaper than a
-//! right-hand side: no solve) and a system of 2 n_q + m unknowns per factorisation instead
+//! price is ∂ρ/∂y, the system's closed form or differences (one assembly of K and b per
+//! colour, cheaper than a right-hand side: no solve) and a system of 2 n_q + m unknowns per factorisation instead
 //! of the descriptor form's 2 n_q + m with the same banded structure: the same order of
 //! work. Limits: the transposed solve (adjoints) is not provided.
 //!
@@ -269,7 +271,7 @@ impl KktNewton {
         stats: &mut Stats,
     ) -> Result<(), String> {
         let nk = self.nq + self.m;
-        stats.rhs_evals += 1 + self.colouring.colours();
+        stats.rhs_evals += 1;
         stats.jac_evals += 1;
         if !sys.kkt_assemble(t, y, &mut self.k, &mut self.b) {
             return Err(format!("KKT matrix: the system cannot evaluate at t = {t}"));
@@ -323,9 +325,13 @@ impl KktNewton {
         if self.z.iter().any(|v| !v.is_finite()) {
             return Err(format!("KKT matrix: singular at t = {t}"));
         }
+        let pattern = self.colouring.pattern();
+        if sys.kkt_residual_jacobian(t, y, &self.z, pattern, &mut self.r) {
+            return Ok(());
+        }
+        stats.rhs_evals += self.colouring.colours();
         Self::residual(&self.k, &self.b, &self.z, &mut self.rho0);
         self.ytmp.copy_from_slice(y);
-        let pattern = self.colouring.pattern();
         let mut start = vec![0usize; pattern.len() + 1];
         for (j, rows) in pattern.iter().enumerate() {
             start[j + 1] = start[j] + rows.len();

@@ -320,4 +320,20 @@ pub trait KktSystem {
         k: &mut Vec<(usize, usize, f64)>,
         b: &mut [f64],
     ) -> bool;
+
+    /// R = ∂ρ/∂y at fixed `z` (ρ(y; z) = b(t, y) − K(t, y) z, crate::kkt) in closed form,
+    /// into `r`: column by column over `pattern` (the shape's `residual_pattern`), each
+    /// column's entries in its rows' order. False when the system has no closed form at
+    /// (t, y) (`r` is then unspecified): the `kkt` path differences ρ over the pattern's
+    /// colours instead. The default has none.
+    fn kkt_residual_jacobian(
+        &self,
+        _t: f64,
+        _y: &[f64],
+        _z: &[f64],
+        _pattern: &[Vec<usize>],
+        _r: &mut [f64],
+    ) -> bool {
+        false
+    }
 }

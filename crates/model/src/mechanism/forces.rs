@@ -163,6 +163,41 @@ impl Forces {
         }
     }
 
+    /// Whether ∂g/∂(q, q̇) can be nonzero: some clearance joint or force element acts
+    /// (gravity is constant).
+    pub(crate) fn has_jacobian(&self) -> bool {
+        !(self.revolute.is_empty() && self.elements.is_empty() && self.prismatic.is_empty())
+    }
+
+    /// [`Forces::jacobian`] where every part of it is a closed form (no prismatic clearance
+    /// joint, every force element with its own): true; false where some part would be
+    /// differenced (`fw.dg` is then incomplete).
+    pub(crate) fn closed_jacobian(
+        &self,
+        bodies: &Bodies,
+        t: f64,
+        sc: &Scratch,
+        fw: &mut ForceJacWork,
+    ) -> bool {
+        if !self.prismatic.is_empty() {
+            return false;
+        }
+        let nq = bodies.nq();
+        let n = 2 * nq;
+        let int_of = bodies.int_of();
+        let dg = zeroed(&mut fw.dg, nq * n);
+        let kin = sc.kin();
+        for (c, ev) in self.revolute.iter().zip(&sc.revolute) {
+            c.force_jacobian(ev, &kin, &int_of, n, dg, &mut fw.du);
+        }
+        let mut fj = ForceJacobian {
+            int_of: &int_of,
+            nq,
+            dg,
+        };
+        self.elements.iter().all(|e| e.jacobian(t, &kin, &mut fj))
+    }
+
     /// Adds ∂g/∂y of the force elements and prismatic clearance joints (nq × n, column-major):
     /// each element's closed form where it has one, then central differences of the
     /// generalized forces of the others and of the prismatic clearance joints, all together.

@@ -119,6 +119,8 @@ pub(crate) struct JacWork {
     pub qd: [Vec<f64>; 2],
     pub dq: Vec<f64>,
     pub dgq: Vec<f64>,
+    /// ∂a_c/∂θ̇_j of a rate's column (n_q, written in the moved bodies' rows).
+    pub dac: Vec<f64>,
     pub col: Vec<f64>,
 }
 

@@ -591,6 +591,65 @@ impl Tree {
         }
     }
 
+    /// ∂a_c/∂θ̇_j (a_c: the accelerations at θ̈ = 0, [`Tree::accelerations`] with None) in the
+    /// rows of the bodies `which` = [`Tree::moved_by`]`(j)` into `out` (a_c's other rows do
+    /// not read θ̇_j), at the positions and velocities in `sc`. a_c is quadratic in the
+    /// bodies' angular rates ω and reads θ̇ through them only (a revolute link's θ is its
+    /// absolute angle, a slider's is a distance, a free body's (x, y, φ)), so only a
+    /// coordinate that is some body m's ω moves it:
+    /// ```text
+    /// ∂a_m/∂ω_m = 2 ω_m A_m s_m               (m revolute: its own term ω_m² A_m s_m)
+    /// ∂a_k/∂ω_m = ∂a_p/∂ω_m − [p = m] 2 ω_m A_m s_p   (k revolute on parent p, descending)
+    /// ```
+    /// and the angular rows are zero (α = θ̈ or its parent's). Exact: the central difference
+    /// of a quadratic in its step, without the rounding of the difference.
+    pub(crate) fn rate_derivative_of(
+        &self,
+        j: usize,
+        which: &[usize],
+        sc: &Scratch,
+        out: &mut [f64],
+    ) {
+        let Some((&first, rest)) = which.split_first() else {
+            return;
+        };
+        let owner = &self.bodies[first];
+        let m = owner.body;
+        // Whether θ̇_j is the owner's ω, and the owner's own row.
+        let (is_rate, own) = match owner.link {
+            Link::Revolute { s, .. } if j == owner.col => {
+                let (w, a) = (sc.vel[m][2], rot(sc.cs[m], s));
+                (true, [2.0 * w * a[0], 2.0 * w * a[1], 0.0])
+            }
+            Link::Free if j == owner.col + 2 => (true, [0.0; 3]),
+            _ => (false, [0.0; 3]),
+        };
+        let i = 3 * owner.int;
+        out[i..i + 3].copy_from_slice(&own);
+        let w2 = 2.0 * sc.vel[m][2];
+        for tb in rest.iter().map(|&b| &self.bodies[b]) {
+            let i = 3 * tb.int;
+            let d = match tb.link {
+                Link::Revolute {
+                    parent: Parent::Integrated(kp, ip, sp),
+                    ..
+                } if is_rate => {
+                    let (x, y) = (out[3 * ip], out[3 * ip + 1]);
+                    if kp == m {
+                        let a = rot(sc.cs[m], sp);
+                        [x - w2 * a[0], y - w2 * a[1], 0.0]
+                    } else {
+                        [x, y, 0.0]
+                    }
+                }
+                // A descendant hangs from an integrated parent by a revolute link; a
+                // coordinate that is no ω moves no a_c.
+                _ => [0.0; 3],
+            };
+            out[i..i + 3].copy_from_slice(&d);
+        }
+    }
+
     /// θ of the absolute (q, q̇) of the integrated bodies (the inverse of
     /// [`Tree::positions`] on the constraint manifold).
     pub(crate) fn state_of(&self, y_abs: &[f64]) -> Vec<f64> {
