@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release -p lash-benches --example targets -- [a] [b] [c] [d] [e] [f] [g] [p]
 //!     [--reps N] [--formulation F] [--at METHOD:RTOL] [--hand-rtol R] [--methods M,..]
-//!     [--kinks] [--rtols R,..] [--perturb K]
+//!     [--kinks | --no-kinks] [--rtols R,..] [--perturb K]
 //! (a) one RHS and one Jacobian of the dry and lubricated press (150 rpm, c = 0.1 mm), ns,
 //!     against the hand-written minimal-coordinate RHS (`lash_benches::handwritten`)
 //! (b) lubricated 150 rpm, c = 0.1 mm, two revolutions: error = max |ẍ_slider − ẍ_ref| over the
@@ -33,7 +33,8 @@
 //!     (default 3.2e-10, (f)'s cheapest), without (f)'s scans: not among the defaults
 //! (q) (f)'s last part alone: the dry press through `lash run`, every adaptive method or
 //!     `--methods` (not among the defaults), at rtol 1e-5 … 1e-11 in half decades or
-//!     `--rtols`; `--kinks` runs the scene with its kink events on (`kink_events`);
+//!     `--rtols`; the scene's kink events as it decides (`kink_events` absent: on, its
+//!     clearance joint is dry), `--kinks` / `--no-kinks` with `kink_events` true / false;
 //!     `--perturb K` repeats the scan from K initial states (the journal's initial
 //!     eccentricity k µm, k = 0 … K − 1, each against its own reference) and prints the
 //!     median, mean and largest error and work per method and rtol
@@ -65,8 +66,9 @@ struct Ctx {
     formulation: Option<FormulationName>,
     /// `--methods a,b`: (q) scans only these (None: every adaptive method).
     methods: Option<Vec<Method>>,
-    /// `--kinks`: (q) runs the scene with `kink_events` on.
-    kinks: bool,
+    /// `--kinks` / `--no-kinks`: (q) runs the scene with `kink_events` true / false (None:
+    /// the scene's own choice, automatic for the catalogue's).
+    kinks: Option<bool>,
     /// `--rtols a,b`: (q) scans these tolerances (None: 1e-5 … 1e-11 in half decades).
     rtols: Option<Vec<f64>>,
     /// `--perturb K`: (q) repeats the scan from K initial states (0: the catalogue's only).
@@ -285,7 +287,7 @@ fn rk4_search(
         reps: 1,
         formulation: None,
         methods: None,
-        kinks: false,
+        kinks: None,
         rtols: None,
         perturb: 0,
     };
@@ -429,7 +431,7 @@ fn section_b(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
-                kinks: false,
+                kinks: None,
                 rtols: None,
                 perturb: 0,
             },
@@ -478,7 +480,7 @@ fn section_c(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
-                kinks: false,
+                kinks: None,
                 rtols: None,
                 perturb: 0,
             },
@@ -499,7 +501,7 @@ fn section_c(ctx: &Ctx) {
                 reps: 1,
                 formulation: None,
                 methods: None,
-                kinks: false,
+                kinks: None,
                 rtols: None,
                 perturb: 0,
             },
@@ -817,8 +819,8 @@ fn formulation_label(f: Option<FormulationName>) -> String {
 /// `t_end`, `rows` trajectory rows per revolution.
 struct RunPath<'a> {
     stem: &'a str,
-    /// The scene to run instead of `cases/press/{stem}.json` (q with `--kinks`: a copy with
-    /// `kink_events` on).
+    /// The scene to run instead of `cases/press/{stem}.json` (q: a copy with its perturbed
+    /// initial state and `kink_events` as `--kinks` / `--no-kinks` say).
     case: Option<std::path::PathBuf>,
     t_end: f64,
     rows: usize,
@@ -1129,10 +1131,13 @@ const PERTURB_STEP: f64 = 1e-6;
 
 /// The dry press scene `stem` of the catalogue, perturbed as scan `k` of `--perturb`
 /// ([`PERTURB_STEP`]), with `kink_events` as given.
-fn perturbed_dry_scene(stem: &str, k: usize, kinks: bool) -> lash_model::Scene {
+fn perturbed_dry_scene(stem: &str, k: usize, kinks: Option<bool>) -> lash_model::Scene {
     let path = lash_benches::cases_dir().join(format!("{stem}.json"));
     let mut scene = lash_model::Scene::from_path(&path).expect("the catalogue's scene");
-    assert!(!scene.kink_events, "the scene sets kink_events itself");
+    assert!(
+        scene.kink_events.is_none(),
+        "the scene sets kink_events itself"
+    );
     scene.kink_events = kinks;
     let angle = (k as f64 * 137.5).to_radians();
     let e = k as f64 * PERTURB_STEP;
@@ -1162,7 +1167,7 @@ fn dry_through_lash_run(ctx: &Ctx) {
     // The dimension `lash run` integrates: the scene's own formulation (`auto` resolves to
     // `minimal` for the press, 4 states) unless `--formulation` names one.
     let n = {
-        let mut scene = perturbed_dry_scene(stem, 0, false);
+        let mut scene = perturbed_dry_scene(stem, 0, Some(false));
         if let Some(f) = ctx.formulation {
             scene.formulation = f;
         }
@@ -1172,12 +1177,16 @@ fn dry_through_lash_run(ctx: &Ctx) {
     };
     let dir = std::env::temp_dir().join(format!("lash-targets-fd-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let resolved = Mechanism::from_scene(&perturbed_dry_scene(stem, 0, ctx.kinks))
+        .expect("the scene assembles")
+        .kink_events();
     println!(
-        "  lash's side with kink events {}",
-        if ctx.kinks {
-            "on (--kinks)"
-        } else {
-            "as the scene says (off)"
+        "  lash's side with kink events {} ({})",
+        if resolved { "on" } else { "off" },
+        match ctx.kinks {
+            Some(true) => "--kinks",
+            Some(false) => "--no-kinks",
+            None => "the scene's automatic choice",
         }
     );
     let adaptive: Vec<Method> = Method::ALL
@@ -1204,7 +1213,7 @@ fn dry_through_lash_run(ctx: &Ctx) {
             let mut s = scene.clone();
             s.t_end = None;
             s.revolutions = Some(0.5);
-            s.kink_events = true;
+            s.kink_events = Some(true);
             if let Some(f) = f {
                 s.formulation = f;
             }
@@ -1414,7 +1423,7 @@ fn main() {
     let mut at = (Method::Bdf, 1e-10);
     let mut hand_rtol = 3.2e-10;
     let mut methods = None;
-    let mut kinks = false;
+    let mut kinks = None;
     let mut rtols = None;
     let mut perturb = 0;
     let mut sections = Vec::new();
@@ -1452,7 +1461,8 @@ fn main() {
                         .collect(),
                 );
             }
-            "--kinks" => kinks = true,
+            "--kinks" => kinks = Some(true),
+            "--no-kinks" => kinks = Some(false),
             "--perturb" => {
                 perturb = it
                     .next()
@@ -1480,7 +1490,7 @@ fn main() {
                 eprintln!(
                     "unknown argument {other}: expected a, b, c, d, e, f, g, p, q, --reps N, \
                      --formulation F, --at METHOD:RTOL, --hand-rtol R, --methods M,.., \
-                     --kinks, --rtols R,.., --perturb K"
+                     --kinks, --no-kinks, --rtols R,.., --perturb K"
                 );
                 std::process::exit(2);
             }

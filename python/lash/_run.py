@@ -33,9 +33,11 @@ class Event(NamedTuple):
         crossing zero upwards / downwards), ``"eps_cap_reached"`` / ``"eps_cap_left"`` (the
         eccentricity ratio of a lubricated joint crossing the film's cap ε_cap),
         ``"corner_contact_onset"`` / ``"corner_contact_loss"`` (a corner of a prismatic
-        clearance joint), docs/model.md §7; with the scene's ``"kink_events": true`` also
-        ``"kink_full_damping_rising"`` … (``kink_full_damping``, ``kink_force_clip``,
-        ``kink_slip_v0``, ``kink_slip_v1``, each ``_rising`` / ``_falling``).
+        clearance joint), docs/model.md §7; with kink events (the scene's ``"kink_events"``,
+        by default on for a dry revolute clearance joint whose laws have kinks, off for
+        ``rk4``; ``summary["kink_events"]`` says) also ``"kink_full_damping_rising"`` …
+        (``kink_full_damping``, ``kink_force_clip``, ``kink_slip_v0``, ``kink_slip_v1``, each
+        ``_rising`` / ``_falling``).
     """
 
     time: float

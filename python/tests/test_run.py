@@ -84,13 +84,18 @@ def test_the_press_run_equals_the_commands_files(tmp_path, scene, flags, kwargs)
 def test_events_are_the_runs_contacts():
     """Every contact onset of the dry press is followed by a loss of contact (it ends in
     flight or the run ends), and the onsets inside the metrics window (the last revolution,
-    docs/outputs.md) are the summary's contact_onsets."""
+    docs/outputs.md) are the summary's contact_onsets. The dry joint's laws have kinks, so the
+    run also restarts at those by default (docs/model.md §7, "The default")."""
     r = lash.run(DRY)
+    assert r.summary["kink_events"] is True
     assert r.summary["events"] == len(r.events) > 0
     times = [e.time for e in r.events]
     assert times == sorted(times)
     assert {e.name for e in r.events} == {"rod_slider"}
-    kinds = [e.kind for e in r.events]
+    assert {e.kind for e in r.events if not e.kind.startswith("contact")} <= {
+        f"kink_{k}_{d}" for k in ("full_damping", "force_clip", "slip_v0", "slip_v1")
+        for d in ("rising", "falling")}
+    kinds = [e.kind for e in r.events if e.kind.startswith("contact")]
     assert set(kinds) == {"contact_onset", "contact_loss"}
     # Onsets and losses alternate, starting with an onset (the journal starts centred).
     assert all(k == ("contact_onset" if i % 2 == 0 else "contact_loss")
@@ -107,13 +112,16 @@ def test_events_are_the_runs_contacts():
 
 
 def test_kink_events_add_kinks_and_keep_the_contacts():
-    """With "kink_events": true (docs/model.md §7) the dry press's run reports the kinks of its
-    force laws as well; its contact onsets and losses stay those of the plain run (the first
-    0.1 s: seven contact phases, default options), to the integration tolerance."""
+    """With kink events (docs/model.md §7: the dry press's default) the dry press's run
+    reports the kinks of its force laws as well; its contact onsets and losses stay those of
+    the run with "kink_events": false (the first 0.1 s: seven contact phases, default
+    options), to the integration tolerance."""
     scene = json.loads(DRY.read_text())
-    plain = lash.run(scene, t_end=0.1)
-    scene["kink_events"] = True
+    assert "kink_events" not in scene
     kinked = lash.run(scene, t_end=0.1)
+    scene["kink_events"] = False
+    plain = lash.run(scene, t_end=0.1)
+    assert kinked.summary["kink_events"] is True and plain.summary["kink_events"] is False
     kinds = {e.kind for e in kinked.events}
     assert {"kink_full_damping_rising", "kink_full_damping_falling",
             "kink_slip_v0_rising", "kink_slip_v0_falling"} <= kinds

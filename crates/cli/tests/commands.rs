@@ -22,9 +22,9 @@ fn short_press(dir: &Path, name: &str, joint: PressJoint, c: f64, t_end: f64) ->
     p
 }
 
-// A mechanism run's: `formulation`, `metrics_window` are absent for built-in test problems,
-// `crank_revolutions` without a crank (docs/outputs.md).
-const SUMMARY_KEYS: [&str; 18] = [
+// A mechanism run's: `formulation`, `kink_events`, `metrics_window` are absent for built-in
+// test problems, `crank_revolutions` without a crank (docs/outputs.md).
+const SUMMARY_KEYS: [&str; 19] = [
     "atol",
     "case",
     "controller",
@@ -32,6 +32,7 @@ const SUMMARY_KEYS: [&str; 18] = [
     "events",
     "final_state",
     "formulation",
+    "kink_events",
     "method",
     "metrics",
     "metrics_window",
@@ -70,6 +71,9 @@ fn run_writes_summary_trajectory_and_figures() {
     assert_eq!(keys, SUMMARY_KEYS);
     assert_eq!(s["formulation"], "lagrange_baumgarte");
     assert!(out.contains("  formulation: lagrange_baumgarte\n"), "{out}");
+    // No clearance joint, so no kink events, and no line about them.
+    assert_eq!(s["kink_events"], false);
+    assert!(!out.contains("kink events"), "{out}");
     assert_eq!(s["case"], "ideal_short");
     assert_eq!(s["scene_sha256"].as_str().unwrap().len(), 64);
     assert_eq!(
@@ -162,6 +166,30 @@ fn run_lubricated_and_dry_cases() {
     assert!(s["rtol"].is_null() && s["atol"].is_null() && s["controller"].is_null());
     assert_eq!(s["events"], 0);
     assert!(s["metrics"]["contact_onsets"].as_u64().unwrap() >= 1);
+    // The paper's RK4 runs without the dry joint's default kink events (docs/model.md §7).
+    assert_eq!(s["kink_events"], false);
+    // tsit54 on it restarts at the kinks of its laws by default, and says so.
+    let out = ok(
+        &[
+            "run",
+            dry.to_str().unwrap(),
+            "--method",
+            "tsit54",
+            "--out",
+            "dry_tsit54",
+        ],
+        d.path(),
+    );
+    assert!(
+        out.contains(
+            "  kink events: on (a restart at each, with exact event steps; docs/model.md §7)\n"
+        ),
+        "{out}"
+    );
+    assert_eq!(
+        json(&d.path().join("dry_tsit54/summary.json"))["kink_events"],
+        true
+    );
     // Four stages per step and the initial evaluation.
     let acc = s["stats"]["accepted"].as_u64().unwrap();
     assert!(acc == 500 || acc == 501, "{acc}");

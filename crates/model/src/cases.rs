@@ -238,7 +238,7 @@ pub fn press_scene(joint: PressJoint, rpm: f64, clearance: f64) -> Scene {
         t_end: None,
         revolutions: Some(2.0),
         roles,
-        kink_events: false,
+        kink_events: None,
         formulation: Default::default(),
         augmented_lagrangian: Default::default(),
         solver: Default::default(),

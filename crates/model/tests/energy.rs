@@ -130,5 +130,8 @@ fn restitution_laws_store_the_impact_velocity_at_contact_onset() {
     let (e0, _) = energy(&m, 0.0, &m.initial_state());
     let (e1, _) = energy(&m, 0.2, &sol.y_final);
     assert!(e1 < e0);
-    assert_eq!(m.n_events(), 1);
+    // δ, and the clip of F_N: a dry joint whose restitution law (c_r < 1) can clip gets that
+    // kink event by default (docs/model.md §7, "The default"); the law adds no other.
+    assert_eq!(m.n_events(), 2);
+    assert_eq!(m.event_name(1).unwrap().0, "kink_force_clip");
 }

@@ -5,7 +5,10 @@
 //!   tolerance) and each kind the press's laws have fires;
 //! - they leave the contact onsets and losses where they were;
 //! - they give the fixed-step RK4 its order back through a contact: a C⁰ kink of the force
-//!   stepped across costs a local error O(h²) (global order 2), a restart at it nothing.
+//!   stepped across costs a local error O(h²) (global order 2), a restart at it nothing;
+//! - a scene without the field gets them exactly when a revolute clearance joint is dry and
+//!   its laws have a kink (docs/model.md §7, "The default"); `true`/`false` win, and the
+//!   field round-trips through the scene's JSON.
 
 mod common;
 
@@ -135,4 +138,104 @@ fn rk4_keeps_its_order_through_a_contact_with_kink_events() {
         orders[0]
     );
     assert!(orders[1] > 2.7, "with kink events: order {:.2}", orders[1]);
+}
+
+/// The mechanism of the dry press with its clearance joint's laws and film replaced as given
+/// (`None`: left as the press has them) and `kink_events` absent.
+fn press_with(
+    normal: Option<serde_json::Value>,
+    friction: Option<serde_json::Value>,
+    film: Option<serde_json::Value>,
+) -> Mechanism {
+    let mut v = common::dry_press_value();
+    assert!(
+        v.get("kink_events").is_none(),
+        "the catalogue leaves it out"
+    );
+    let joint = v["joints"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|j| j["type"] == "clearance")
+        .unwrap();
+    for (key, value) in [("normal", normal), ("friction", friction), ("film", film)] {
+        if let Some(value) = value {
+            joint[key] = value;
+        }
+    }
+    common::build(&v).unwrap()
+}
+
+#[test]
+fn kink_events_are_on_by_default_exactly_for_a_dry_joint_whose_laws_have_a_kink() {
+    use serde_json::json;
+    let on = |m: &Mechanism| {
+        let kinds: Vec<&str> = (0..m.n_events())
+            .map(|i| m.event_name(i).unwrap().0)
+            .collect();
+        // The flag and the event list agree: with it, the kinks follow δ.
+        assert_eq!(
+            m.kink_events(),
+            kinds.iter().any(|k| k.starts_with("kink_"))
+        );
+        m.kink_events()
+    };
+    // The dry press: IMPACT with c_max > 0 and Coulomb with v0 > 0, v1 > v0: on, all four.
+    let dry = press_with(None, None, None);
+    assert!(on(&dry));
+    assert_eq!(dry.n_events(), 5);
+    // Each kinked law alone turns them on; an elastic law without friction has no kink.
+    let elastic = json!({"law": "lankarani_nikravesh", "k": 2.34e10, "restitution": 1.0});
+    let no_friction = json!({"law": "none"});
+    let coulomb = json!({"law": "coulomb", "mu": 0.01, "v0": 1e-4, "v1": 2e-4});
+    let damped = json!({"law": "lankarani_nikravesh", "k": 2.34e10, "restitution": 0.8});
+    for (normal, friction, expected) in [
+        (elastic.clone(), no_friction.clone(), false),
+        (elastic.clone(), coulomb.clone(), true),
+        (damped.clone(), no_friction.clone(), true),
+        (
+            json!({"law": "impact", "k": 2.34e10, "c_max": 0.0, "d_max": 1e-5}),
+            no_friction.clone(),
+            false,
+        ),
+    ] {
+        let m = press_with(Some(normal.clone()), Some(friction.clone()), None);
+        assert_eq!(on(&m), expected, "{normal} {friction}");
+    }
+    // A film: off, whatever the laws (the lubricated press has all four kinks).
+    let film = json!({"viscosity": 0.4, "length": 0.1});
+    assert!(!on(&press_with(None, None, Some(film))));
+    // The scene's word wins both ways.
+    let mut v = common::dry_press_value();
+    v["kink_events"] = json!(false);
+    assert!(!on(&common::build(&v).unwrap()));
+    let mut v = common::dry_press_value();
+    assert_eq!(v["joints"][4]["type"], "clearance");
+    v["joints"][4]["film"] = json!({"viscosity": 0.4, "length": 0.1});
+    v["kink_events"] = json!(true);
+    let lubricated = common::build(&v).unwrap();
+    assert!(
+        on(&lubricated) && lubricated.n_events() == 6,
+        "δ, ε − ε_cap, four kinks"
+    );
+}
+
+#[test]
+fn kink_events_round_trip_through_the_scene_json() {
+    // Absent stays absent (the automatic choice), and an explicit false is kept: it no longer
+    // means the same as the field's absence.
+    for given in [None, Some(false), Some(true)] {
+        let mut v = common::dry_press_value();
+        if let Some(b) = given {
+            v["kink_events"] = serde_json::json!(b);
+        }
+        let scene = lash_model::Scene::from_json_str(&v.to_string()).unwrap();
+        assert_eq!(scene.kink_events, given);
+        let back: serde_json::Value = serde_json::from_str(&scene.to_json_pretty()).unwrap();
+        assert_eq!(back.get("kink_events").and_then(|b| b.as_bool()), given);
+        assert_eq!(
+            lash_model::Scene::from_json_str(&back.to_string()).unwrap(),
+            scene
+        );
+    }
 }

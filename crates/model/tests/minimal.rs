@@ -270,7 +270,14 @@ fn state_at(m: &Mechanism, t: f64) -> Vec<f64> {
 #[test]
 fn minimal_time_derivative_matches_differences_of_f() {
     for joint in [PressJoint::Lubricated, PressJoint::Dry] {
-        let m = with(press_scene(joint, 150.0, 1e-4), FormulationName::Minimal);
+        // Without kink events (the dry press's default since docs/model.md §7, "The
+        // default"): the states are those of the BDF path the bound was measured on (δ = 2.6e-6
+        // and 1.4e-5 m at 0.31 and 0.55 s). With them the path reaches δ = 3.5e-5 m at 0.55 s,
+        // where the extrapolated differences are themselves off by 4.4e-8 of the row: they
+        // still converge to f_t as the step falls (1.8e-4 at 1e-7 s, 1.0e-5 at 1e-8 s).
+        let mut scene = press_scene(joint, 150.0, 1e-4);
+        scene.kink_events = Some(false);
+        let m = with(scene, FormulationName::Minimal);
         assert!(m.has_time_derivative());
         for t in [0.05, 0.31, 0.55] {
             let y = state_at(&m, t);

@@ -447,6 +447,17 @@ impl Revolute {
         }
     }
 
+    /// Whether the joint is dry (no film) and its laws have at least one kink ([`Kink`]): what
+    /// turns a scene's kink events on when the scene does not say (docs/model.md §7, "Kink
+    /// events"). Without a film the contact laws are the joint's only forces, and an explicit
+    /// pair stepping across one of their kinks loses its order; a lubricated joint is left out
+    /// (its film carries the journal, contact is rare, and its runs are stiff ones, whose
+    /// implicit methods gain nothing from a restart), and so is a dry joint whose laws have no
+    /// kink (an undamped Hertz law without friction: nothing to restart at).
+    pub(crate) fn is_dry_with_kinks(&self) -> bool {
+        self.film.is_none() && Kink::ALL.into_iter().any(|k| self.has_kink(k))
+    }
+
     /// ε − ε_cap and ε̇ at the clearance state `st`.
     #[inline]
     pub(crate) fn eps_cap_value(&self, st: &ClearanceState) -> (f64, f64) {

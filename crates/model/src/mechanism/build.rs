@@ -90,11 +90,16 @@ impl Mechanism {
         forces: Forces,
         formulation: Formulation,
     ) -> Mechanism {
+        // The scene's kink_events, or the automatic choice (docs/model.md §7): on when some
+        // revolute clearance joint is dry and its laws have a kink.
+        let kink_events = scene
+            .kink_events
+            .unwrap_or_else(|| forces.revolute.iter().any(|c| c.is_dry_with_kinks()));
         let events = event_list(
             &forces.revolute,
             &forces.prismatic,
             &forces.elements,
-            scene.kink_events,
+            kink_events,
         );
         let scratch = Scratch::new(
             bodies.info.len(),
@@ -113,6 +118,7 @@ impl Mechanism {
             forces,
             formulation,
             events,
+            kink_events,
             projection: Default::default(),
             t_start: scene.t_start,
             t_end: 0.0,

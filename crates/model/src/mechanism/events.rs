@@ -202,9 +202,12 @@ mod tests {
 
     #[test]
     fn a_mechanism_names_and_labels_every_event_function_by_its_owner() {
-        // The dry press: δ of its clearance joint, then (kink_events) the kinks of its IMPACT
-        // law (c_max > 0; it can clip) and of its Coulomb friction (v₀ > 0, v₁ > v₀).
+        // The dry press: δ of its clearance joint, then (kink_events, on by default for its dry
+        // joint) the kinks of its IMPACT law (c_max > 0; it can clip) and of its Coulomb
+        // friction (v₀ > 0, v₁ > v₀).
         let mut m = Mechanism::from_scene(&press_scene(PressJoint::Dry, 150.0, 1e-4)).unwrap();
+        assert!(m.kink_events());
+        m.set_kink_events(false);
         let kinds = |m: &Mechanism| -> Vec<(&'static str, String)> {
             (0..m.n_events())
                 .map(|i| {

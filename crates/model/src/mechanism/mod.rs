@@ -64,6 +64,9 @@ pub struct Mechanism {
     forces: Forces,
     formulation: Formulation,
     events: Vec<EventKind>,
+    /// Whether the kink events are on: the scene's `kink_events`, or the automatic choice
+    /// (build.rs; docs/model.md §7), or [`Mechanism::set_kink_events`].
+    kink_events: bool,
     projection: ProjectionReport,
     t_start: f64,
     t_end: f64,

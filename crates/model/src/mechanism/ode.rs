@@ -113,11 +113,16 @@ impl Mechanism {
     pub fn set_kink_events(&mut self, on: bool) {
         let f = &self.forces;
         self.events = event_list(&f.revolute, &f.prismatic, &f.elements, on);
+        self.kink_events = on;
     }
 
-    /// Whether the kink events are on ([`Mechanism::set_kink_events`]).
+    /// Whether the kink events are on: the scene's `kink_events` where it gives one, else the
+    /// automatic choice — on when some revolute clearance joint is dry (no film) and its laws
+    /// have a kink (docs/model.md §7, "Kink events") — or the last
+    /// [`Mechanism::set_kink_events`]. The one place where the effective value is decided; a
+    /// run turns the solver's exact event steps on with it.
     pub fn kink_events(&self) -> bool {
-        self.events.iter().any(|e| matches!(e, EventKind::Kink(..)))
+        self.kink_events
     }
 
     /// Sets the stored impact velocity δ̇⁻ of clearance joint `k` (m/s), as the contact-onset

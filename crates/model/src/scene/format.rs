@@ -63,9 +63,12 @@ pub struct Scene {
     pub roles: RoleNames,
     /// Events at the kinks of the revolute clearance joints' force laws (δ = d_max, the clip
     /// of F_N at 0, |v_T| = v₀ and v₁; docs/model.md §7), so that an integration restarts at
-    /// each. Default false.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub kink_events: bool,
+    /// each. `None` (the field absent): automatic, on for a scene with a dry revolute
+    /// clearance joint whose laws have a kink ([`crate::Mechanism::kink_events`] holds the
+    /// value a mechanism resolved); `Some(_)` as the scene says. Serialised only when given,
+    /// so a scene round-trips.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kink_events: Option<bool>,
     /// How the constraint equations are enforced (the state layout and the acceleration
     /// solve: crates/model/src/mechanism/formulation). Default `auto`.
     #[serde(default, skip_serializing_if = "FormulationName::is_default")]

@@ -303,6 +303,16 @@ pub fn describe_run(r: &RunResult) -> String {
         }
         out.push('\n');
     }
+    if s.kink_events == Some(true) {
+        let exact = if s.method.is_fixed_step() {
+            "not located by a fixed-step method: their crossings are counted"
+        } else if s.method.is_diffsol() {
+            "a restart at each"
+        } else {
+            "a restart at each, with exact event steps"
+        };
+        out.push_str(&format!("  kink events: on ({exact}; docs/model.md §7)\n"));
+    }
     if let Some(u) = &s.until_periodic {
         out.push_str(&format!("  {}\n", u.describe()));
     }

@@ -135,6 +135,13 @@ pub struct Summary {
     /// docs/model.md §12); absent for built-in test problems.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub formulation: Option<String>,
+    /// Whether the run's mechanism had the kink events of its clearance joints' force laws
+    /// (the scene's `kink_events`, or the automatic choice: on with a dry revolute clearance
+    /// joint whose laws have a kink, off for the paper's RK4; docs/model.md §7); with them an
+    /// adaptive one-step method also takes exact event steps. Absent for built-in test
+    /// problems.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kink_events: Option<bool>,
     /// The formulation's iteration statistics over the run (the augmented Lagrangian's:
     /// evaluations, iterations, max_iterations, unconverged); absent for one that does not
     /// iterate.
@@ -179,6 +186,7 @@ impl Summary {
             metrics_window: None,
             crank_revolutions: None,
             formulation: None,
+            kink_events: None,
             formulation_stats: None,
             law_range: None,
         }

@@ -428,12 +428,18 @@ pub(crate) fn simulate_mechanism(
 }
 
 /// The scene a run with `method` builds: the paper's method stays the paper's
-/// (docs/model.md §12) — fixed-step RK4 on a scene whose formulation is `auto` runs
-/// `lagrange_baumgarte`, as Peng et al. did; every other choice is the scene's.
+/// (docs/model.md §12, §7) — fixed-step RK4 on a scene whose formulation is `auto` runs
+/// `lagrange_baumgarte`, and on a scene that leaves `kink_events` to the automatic choice runs
+/// without kink events, as Peng et al. did (a run without event location only counts their
+/// crossings; its numbers are the same either way, crates/validation/src/run/tests/kinks.rs);
+/// every other choice is the scene's.
 pub(crate) fn paper_formulation(scene: &Scene, method: lash_solver::Method) -> Scene {
     let mut s = scene.clone();
-    if method == lash_solver::Method::Rk4 && s.formulation == lash_model::FormulationName::Auto {
-        s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+    if method == lash_solver::Method::Rk4 {
+        if s.formulation == lash_model::FormulationName::Auto {
+            s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+        }
+        s.kink_events.get_or_insert(false);
     }
     s
 }
@@ -607,6 +613,7 @@ fn pass(
     let mut summary = d.summary(p, opts, t_end);
     summary.metrics = Some(metrics);
     summary.formulation = Some(mech.formulation_name().to_string());
+    summary.kink_events = Some(mech.kink_events());
     summary.formulation_stats = formulation_stats;
     summary.law_range = (!obs.laws.is_empty()).then(|| obs.laws.records().to_vec());
     summary.metrics_window = Some([window.t_end - window.period, window.t_end]);

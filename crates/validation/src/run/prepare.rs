@@ -26,11 +26,14 @@
 //!                proportionality holds down to rtol = 1e-13.
 //!                An atol in the request (SolverChoice::atol, `--atol`) replaces the whole vector.
 //! event_samples  4: g is also sampled at 4 interior points of every step
-//! exact event    on for scenes with `kink_events` (off otherwise): the step that contains an
-//!  steps         event is taken again to end exactly on it and the run restarts from that
-//!                step's end (lash_solver::integrator, "Exact event steps"), so that no step
-//!                of a one-step method spans a kink; the kink events exist for that
-//!                (docs/model.md §7)
+//! exact event    on for scenes with kink events (the scene's `kink_events`, else on when a
+//!  steps         revolute clearance joint is dry and its laws have a kink: the mechanism
+//!                decides, lash_model::Mechanism::kink_events; off otherwise and for fixed-step
+//!                methods, which locate no events): the step that contains an event is
+//!                taken again to end exactly on it and the run restarts from that step's end
+//!                (lash_solver::integrator, "Exact event steps"), so that no step of a
+//!                one-step method spans a kink; the kink events exist for that (docs/model.md
+//!                §7)
 //! h_max          ∞
 //! step limit     h_max_near_events = T/100 (T the crank period; off without a crank driver
 //!  near contact  or without a clearance joint, where nothing can be stepped over): the
@@ -148,6 +151,10 @@ pub(crate) struct MechanismInfo {
     pub joint: Option<JointInfo>,
     /// Whether some clearance joint has no oil film (dry contact: chaotic, docs/model.md §9).
     pub has_dry_joint: bool,
+    /// Whether the scene's mechanism has kink events (`lash_model::Mechanism::kink_events`:
+    /// the scene's `kink_events`, else on with a dry revolute clearance joint whose laws have
+    /// a kink); the default options take exact event steps with them.
+    pub kink_events: bool,
     /// State dimension.
     pub dim: usize,
     /// Whether the scene is an in-line slider-crank with a closed-form ideal.
@@ -383,7 +390,7 @@ impl Prepared {
                     .atol
                     .map_or_else(|| self.default_atol(rtol), Atol::Scalar);
                 o.event_samples = DEFAULT_EVENT_SAMPLES;
-                o.exact_event_steps = self.scene().is_some_and(|s| s.kink_events);
+                o.exact_event_steps = i.kink_events;
                 o.h_max_near_events = match (i.period, i.clearance_min) {
                     (Some(t), Some(_)) => t * H_MAX_PER_PERIOD,
                     _ => f64::INFINITY,
@@ -440,6 +447,8 @@ impl Prepared {
         }
         if self.info.is_some() {
             o.events = !o.method.is_fixed_step();
+            // Exact event steps retake a step at a located event: none without location.
+            o.exact_event_steps &= o.events;
         }
         Ok(o.validate(self.dim())?)
     }
@@ -503,6 +512,7 @@ fn mechanism_info(scene: &Scene, mech: &Mechanism) -> MechanismInfo {
         clearance_min: c_min,
         joint,
         has_dry_joint: dry,
+        kink_events: mech.kink_events(),
         dim: mech.dim(),
         has_ideal: mech.ideal_slider_crank().is_some(),
         state_names,

@@ -3,6 +3,7 @@
 
 mod edges;
 mod energy;
+mod kinks;
 mod simulate;
 mod steady;
 mod window;
