@@ -150,6 +150,20 @@ impl Forces {
 
     /// ∂g/∂(q, q̇) (nq × n, column-major, into `fw.dg`) at the evaluation in `sc` (module doc).
     pub(crate) fn jacobian(&self, bodies: &Bodies, t: f64, sc: &Scratch, fw: &mut ForceJacWork) {
+        let int_of = self.revolute_jacobian(bodies, sc, fw);
+        if !(self.elements.is_empty() && self.prismatic.is_empty()) {
+            self.element_jacobian(bodies, &int_of, t, sc, &mut fw.dg);
+        }
+    }
+
+    /// `fw.dg` zeroed (nq × 2nq) with the revolute clearance joints' closed forms added; returns
+    /// the bodies' integrated indices for the other parts.
+    fn revolute_jacobian(
+        &self,
+        bodies: &Bodies,
+        sc: &Scratch,
+        fw: &mut ForceJacWork,
+    ) -> Vec<Option<usize>> {
         let nq = bodies.nq();
         let n = 2 * nq;
         let int_of = bodies.int_of();
@@ -158,9 +172,7 @@ impl Forces {
         for (c, ev) in self.revolute.iter().zip(&sc.revolute) {
             c.force_jacobian(ev, &kin, &int_of, n, dg, &mut fw.du);
         }
-        if !(self.elements.is_empty() && self.prismatic.is_empty()) {
-            self.element_jacobian(bodies, &int_of, t, sc, dg);
-        }
+        int_of
     }
 
     /// Whether ∂g/∂(q, q̇) can be nonzero: some clearance joint or force element acts
@@ -182,18 +194,12 @@ impl Forces {
         if !self.prismatic.is_empty() {
             return false;
         }
-        let nq = bodies.nq();
-        let n = 2 * nq;
-        let int_of = bodies.int_of();
-        let dg = zeroed(&mut fw.dg, nq * n);
+        let int_of = self.revolute_jacobian(bodies, sc, fw);
         let kin = sc.kin();
-        for (c, ev) in self.revolute.iter().zip(&sc.revolute) {
-            c.force_jacobian(ev, &kin, &int_of, n, dg, &mut fw.du);
-        }
         let mut fj = ForceJacobian {
             int_of: &int_of,
-            nq,
-            dg,
+            nq: bodies.nq(),
+            dg: &mut fw.dg,
         };
         self.elements.iter().all(|e| e.jacobian(t, &kin, &mut fj))
     }
