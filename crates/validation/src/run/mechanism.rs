@@ -434,13 +434,22 @@ pub(crate) fn simulate_mechanism(
 /// crossings; its numbers are the same either way, crates/validation/src/run/tests/kinks.rs);
 /// every other choice is the scene's.
 pub(crate) fn paper_formulation(scene: &Scene, method: lash_solver::Method) -> Scene {
-    let mut s = scene.clone();
     if method == lash_solver::Method::Rk4 {
-        if s.formulation == lash_model::FormulationName::Auto {
-            s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
-        }
-        s.kink_events.get_or_insert(false);
+        paper_scene(scene)
+    } else {
+        scene.clone()
     }
+}
+
+/// `scene` as the paper computed it: `auto` runs `lagrange_baumgarte`, and a scene that leaves
+/// `kink_events` to the automatic choice runs without them; what the scene states is kept.
+/// For the paper's RK4 ([`paper_formulation`]) and every run of the paper's study.
+pub(crate) fn paper_scene(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    if s.formulation == lash_model::FormulationName::Auto {
+        s.formulation = lash_model::FormulationName::LagrangeBaumgarte;
+    }
+    s.kink_events.get_or_insert(false);
     s
 }
 

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use lash_model::scene::JointSpec;
-use lash_model::{FormulationName, IdealSliderCrank, Scene};
+use lash_model::{IdealSliderCrank, Scene};
 use lash_solver::{SolverOptions, Stats};
 use rayon::prelude::*;
 
@@ -18,6 +18,7 @@ use crate::error::Error;
 use crate::progress::Progress;
 use crate::report::metrics::{self, Metrics, Sample};
 use crate::run::case::Case;
+use crate::run::mechanism::paper_scene;
 use crate::run::plan::RunRequest;
 use crate::run::prepare::Prepared;
 use crate::run::press::Kind;
@@ -90,12 +91,7 @@ pub(crate) fn run_case(
     // The paper's method stays the paper's (docs/model.md §12): `auto` runs Lagrange–Baumgarte,
     // and without kink events unless the scene asks for them (docs/model.md §7: the study's
     // BDF takes no exact event steps, so a restart at a kink buys it no order).
-    let mut scene = scene.clone();
-    if scene.formulation == FormulationName::Auto {
-        scene.formulation = FormulationName::LagrangeBaumgarte;
-    }
-    scene.kink_events.get_or_insert(false);
-    let p = Prepared::with_scene(Case::press(case), scene)?;
+    let p = Prepared::with_scene(Case::press(case), paper_scene(scene))?;
     let info = p
         .info
         .as_ref()
