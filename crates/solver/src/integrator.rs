@@ -100,6 +100,7 @@
 //! [`SolveError::EventNan`] naming it: NaN has no sign, so skipping it could miss a crossing
 //! silently.
 
+mod brent;
 mod exact;
 mod span;
 
@@ -500,7 +501,13 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         {
             let y = self.stepper.y();
             let bound = self.opts.divergence_bound;
-            if !y.iter().all(|v| v.is_finite() && v.abs() <= bound) {
+            // |v| ≤ a finite bound fails for NaN and ±∞ alike: one comparison per entry.
+            let bounded = if bound.is_finite() {
+                y.iter().all(|v| v.abs() <= bound)
+            } else {
+                y.iter().all(|v| v.is_finite())
+            };
+            if !bounded {
                 return Err(SolveError::NonFiniteState {
                     t: self.t_cur,
                     y: self.y_cur.clone(),
@@ -581,13 +588,29 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         let t_a0 = self.stepper.t_prev();
         self.eval_end(t_b)?;
         let mut samples = self.opts.event_samples;
-        if self.rates && samples > 0 {
+        if self.rates {
             let h = t_b - t_a0;
-            let far = (0..m)
-                .all(|i| far_from_zero(self.g_a[i], self.gd_a[i], self.g_b[i], self.gd_b[i], h));
+            let (a, b) = (
+                self.g_a.iter().zip(&self.gd_a),
+                self.g_b.iter().zip(&self.gd_b),
+            );
+            let far = a
+                .zip(b)
+                .all(|((&g_a, &gd_a), (&g_b, &gd_b))| far_from_zero(g_a, gd_a, g_b, gd_b, h));
             if far {
                 self.samples_skipped += samples;
                 samples = 0;
+                // Every g_i also on the side its recorded sign says: the scan below would find
+                // no crossing at the end and update no sign.
+                if self
+                    .signs
+                    .iter()
+                    .zip(&self.g_b)
+                    .all(|(&s, &g)| s == sign(g))
+                {
+                    self.end_without_event(h);
+                    return Ok(None);
+                }
             }
         }
         let mut t_a = t_a0;
@@ -666,112 +689,32 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         self.g_l = g_l;
         self.g_s = g_s;
         if found.is_none() {
-            // No event: the end of this step is the start of the next one, so g there becomes
-            // the left bracket value of the next step's root finding.
-            let h = t_b - t_a0;
-            let mut limit = None;
-            if let Some(h_near) = self.h_near {
-                let reach = (0..m)
-                    .map(|i| {
-                        reach_limit(self.g_b[i], self.gd_b[i], (self.gd_b[i] - self.gd_a[i]) / h)
-                    })
-                    .fold(f64::INFINITY, f64::min);
-                limit = Some(h_near.max(reach).min(self.opts.h_max));
-            }
-            if self.crossing_limit_on() {
-                limit = Some(self.crossing_limit(limit.unwrap_or(self.opts.h_max), h));
-            }
-            if let Some(limit) = limit {
-                self.stepper.set_h_max(limit);
-            }
-            self.g_a.copy_from_slice(&self.g_b);
-            self.gd_a.copy_from_slice(&self.gd_b);
+            self.end_without_event(t_b - t_a0);
         }
         Ok(found)
     }
 
-    /// Brent's method (Brent 1973, ch. 4: bisection, secant and inverse quadratic
-    /// interpolation, as `zeroin`) on g_i(t, y_dense(t)) over [ta, tb], g(ta) = ga and
-    /// g(tb) = gb of opposite signs, until the bracket is at most 4 ulps of t wide
-    /// (`|b − c| ≤ 2 ε |b|`), or g is exactly zero. Returns the end of the final bracket on the
-    /// side after the crossing (where g has the sign of gb, the sign the event's direction
-    /// gives it), or the point where g is exactly zero.
-    fn brent(&mut self, i: usize, ta: f64, ga: f64, tb: f64, gb: f64) -> Result<f64, SolveError> {
-        let mut g = std::mem::take(&mut self.g_t);
-        let new_sign = sign(gb);
-        // b: best estimate; c: the other end of the bracket (g(b), g(c) of opposite signs);
-        // a: the previous b.
-        let (mut a, mut fa, mut b, mut fb) = (ta, ga, tb, gb);
-        let (mut c, mut fc) = (a, fa);
-        let mut d = b - a;
-        let mut e = d;
-        let mut root = None;
-        for _ in 0..200 {
-            if sign(fb) == sign(fc) {
-                c = a;
-                fc = fa;
-                d = b - a;
-                e = d;
-            }
-            if fc.abs() < fb.abs() {
-                a = b;
-                b = c;
-                c = a;
-                fa = fb;
-                fb = fc;
-                fc = fa;
-            }
-            // ε|b| is 1 to 2 ulps of b, so a step of tol always moves b; the bracket [b, c] is
-            // final once |c − b| ≤ 2 ε |b| (at most 4 ulps).
-            let tol = f64::EPSILON * b.abs().max(f64::MIN_POSITIVE);
-            let m = 0.5 * (c - b);
-            if fb == 0.0 {
-                root = Some(b);
-                break;
-            }
-            if m.abs() <= tol {
-                break;
-            }
-            if e.abs() >= tol && fa.abs() > fb.abs() {
-                // Secant (a = c) or inverse quadratic interpolation.
-                let s = fb / fa;
-                let (mut p, mut q);
-                if a == c {
-                    p = 2.0 * m * s;
-                    q = 1.0 - s;
-                } else {
-                    let qa = fa / fc;
-                    let r = fb / fc;
-                    p = s * (2.0 * m * qa * (qa - r) - (b - a) * (r - 1.0));
-                    q = (qa - 1.0) * (r - 1.0) * (s - 1.0);
-                }
-                if p > 0.0 {
-                    q = -q;
-                } else {
-                    p = -p;
-                }
-                if 2.0 * p < (3.0 * m * q - (tol * q).abs()).min((e * q).abs()) {
-                    e = d;
-                    d = p / q;
-                } else {
-                    d = m;
-                    e = m;
-                }
-            } else {
-                d = m;
-                e = m;
-            }
-            a = b;
-            fa = fb;
-            b += if d.abs() > tol { d } else { tol.copysign(m) };
-            if let Err(e) = self.eval_g_dense(b, &mut g) {
-                self.g_t = g;
-                return Err(e);
-            }
-            fb = g[i];
+    /// After a step of length `h` without an event: the step limit for the next step (the
+    /// contact-aware one, the predicted crossing's) and g, ġ at its end become the next
+    /// step's start values (the left bracket of its root finding): swapped in, not copied,
+    /// as the end values are written afresh after every step.
+    fn end_without_event(&mut self, h: f64) {
+        let mut limit = None;
+        if let Some(h_near) = self.h_near {
+            let ends = self.g_b.iter().zip(&self.gd_b).zip(&self.gd_a);
+            let reach = ends
+                .map(|((&g, &gd), &gd_a)| reach_limit(g, gd, (gd - gd_a) / h))
+                .fold(f64::INFINITY, f64::min);
+            limit = Some(h_near.max(reach).min(self.opts.h_max));
         }
-        self.g_t = g;
-        Ok(root.unwrap_or(if sign(fb) == new_sign { b } else { c }))
+        if self.crossing_limit_on() {
+            limit = Some(self.crossing_limit(limit.unwrap_or(self.opts.h_max), h));
+        }
+        if let Some(limit) = limit {
+            self.stepper.set_h_max(limit);
+        }
+        std::mem::swap(&mut self.g_a, &mut self.g_b);
+        std::mem::swap(&mut self.gd_a, &mut self.gd_b);
     }
 
     fn handle_event(
