@@ -784,8 +784,15 @@ where
         with_solver!(&mut *solver, s => {
             *s.config_mut().as_base_mut().minimum_timestep = floor;
         });
-        let before = with_solver!(&*solver, s => s.get_statistics().clone());
-        with_solver!(&*solver, s => self.quad.before(B::slice(s.state().g)));
+        // The live solver's failures so far (the counters are fresh after every step and
+        // start), for the error below.
+        let (newton_before, error_before) = (
+            self.stats.rejected_newton - self.base.rejected_newton,
+            self.stats.rejected_error - self.base.rejected_error,
+        );
+        if self.quad.is_on() {
+            with_solver!(&*solver, s => self.quad.before(B::slice(s.state().g)));
+        }
         let result = with_solver!(&mut *solver, s => s.step());
         let (t_new, h_state) = with_solver!(&*solver, s => (s.state().t, s.state().h));
         let reached = match result {
@@ -793,10 +800,8 @@ where
             Ok(_) => false,
             Err(e) => {
                 let after = with_solver!(&*solver, s => s.get_statistics().clone());
-                let newton = after.number_of_nonlinear_solver_fails
-                    - before.number_of_nonlinear_solver_fails;
-                let error_test =
-                    after.number_of_error_test_failures - before.number_of_error_test_failures;
+                let newton = after.number_of_nonlinear_solver_fails - newton_before;
+                let error_test = after.number_of_error_test_failures - error_before;
                 self.update_stats();
                 // A step-size failure means the trial step fell below the floor; BDF keeps
                 // it in its state, the SDIRK methods only their starting step.
@@ -844,7 +849,9 @@ where
                 y: self.y.clone(),
             });
         }
-        with_solver!(&*solver, s => self.quad.after(B::slice(s.state().g)));
+        if self.quad.is_on() {
+            with_solver!(&*solver, s => self.quad.after(B::slice(s.state().g)));
+        }
         self.t_prev = self.t;
         self.t = t_new;
         let h = self.t - self.t_prev;

@@ -50,6 +50,12 @@ impl Track {
         (B::V::zeros(m, ctx), B::V::from_slice(&dg, ctx))
     }
 
+    /// Whether the system has quadrature variables: without them `before` and `after` have
+    /// nothing to record (and `write` reports none), so the step skips them.
+    pub(super) fn is_on(&self) -> bool {
+        !self.before.is_empty()
+    }
+
     /// Before a step of diffsol's: its g.
     pub(super) fn before(&mut self, g: &[f64]) {
         self.step = None;
