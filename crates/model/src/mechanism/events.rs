@@ -11,6 +11,7 @@
 use crate::clearance::geometry::ClearanceState;
 use crate::clearance::prismatic::{self, Prismatic};
 use crate::clearance::revolute::{self, Kink, Revolute};
+use crate::elements::input::Kin;
 use crate::elements::Element;
 use crate::labels::EventLabels;
 use crate::mechanism::forces::Forces;
@@ -84,35 +85,47 @@ pub(crate) fn values(
 ) {
     let kin = sc.kin();
     // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
-    // the last one computed is kept.
+    // the last one computed is kept, and read in place.
     let mut last: Option<(usize, ClearanceState)> = None;
-    let mut state = |k: usize| match last {
-        Some((j, st)) if j == k => st,
-        _ => {
-            let st = forces.revolute[k].state(&kin);
-            last = Some((k, st));
-            st
-        }
-    };
     for (i, ev) in events.iter().enumerate() {
         let (v, d) = match *ev {
             EventKind::Contact(k) => {
-                let st = state(k);
+                let st = joint_state(&mut last, forces, &kin, k);
                 (st.delta, st.delta_dot)
             }
             EventKind::EpsCap(k) => {
-                let st = state(k);
-                forces.revolute[k].eps_cap_value(&st)
+                let st = joint_state(&mut last, forces, &kin, k);
+                forces.revolute[k].eps_cap_value(st)
             }
             EventKind::Corner(k, c) => forces.prismatic[k].corner_gap(c, &kin),
             EventKind::Element(k, i) => forces.elements[k].event(i, t, &kin),
-            EventKind::Kink(k, kink) => forces.revolute[k].kink_value(kink, state(k)),
+            EventKind::Kink(k, kink) => {
+                let st = *joint_state(&mut last, forces, &kin, k);
+                forces.revolute[k].kink_value(kink, st)
+            }
         };
         g[i] = v;
         if let Some(gd) = g_dot.as_deref_mut() {
             gd[i] = d;
         }
     }
+}
+
+/// The clearance state of revolute joint `k`: the one in `last` when it is joint k's, else
+/// computed into `last`.
+#[inline]
+fn joint_state<'c>(
+    last: &'c mut Option<(usize, ClearanceState)>,
+    forces: &Forces,
+    kin: &Kin<'_>,
+    k: usize,
+) -> &'c ClearanceState {
+    if !matches!(last, Some((j, _)) if *j == k) {
+        *last = None;
+    }
+    &last
+        .get_or_insert_with(|| (k, forces.revolute[k].state(kin)))
+        .1
 }
 
 /// The labels of an event function, and the index of its owner among the revolute clearance
