@@ -26,6 +26,7 @@
 
 mod jacobian;
 pub(crate) mod loops;
+mod small;
 pub(crate) mod tree;
 
 use std::cell::RefCell;
