@@ -509,7 +509,7 @@ fn factor_unrolled(s: &mut [f64], n: usize, all: &[usize]) -> Result<(), usize> 
 
 /// [`block_cholesky_inv`] with m = N and every block in order.
 #[inline(always)]
-fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
+pub(super) fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
     let s = &mut s[..N * N];
     for j in 0..N {
         let mut d = s[j * N + j];
@@ -587,7 +587,7 @@ fn solve_unrolled(l: &[f64], n: usize, b: &mut [f64]) {
 
 /// [`cholesky_solve`] with m = N.
 #[inline(always)]
-fn solve_fixed<const N: usize>(l: &[f64], b: &mut [f64]) {
+pub(super) fn solve_fixed<const N: usize>(l: &[f64], b: &mut [f64]) {
     let l = &l[..N * N];
     let b = &mut b[..N];
     for i in 0..N {
