@@ -22,7 +22,9 @@
 //! R is stored dense (n_q × n); Rᵀ M R and Rᵀ (Q − M a_c) are summed only where R can be
 //! nonzero (each body's rows in its own and its integrated ancestors' columns,
 //! `Tree::columns_of`), and Rᵀ M R is factored densely: O(n³) per right-hand side, which is
-//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
+//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12). On a tree
+//! of at most six coordinates the integrator's right-hand side takes small.rs instead: the
+//! same sums and factorisation on the stack, θ̈ alone (no q̈), the same bits.
 
 mod jacobian;
 pub(crate) mod loops;
