@@ -12,9 +12,7 @@ impl OdeSystem for Mechanism {
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        let mut sc = self.scratch.borrow_mut();
-        let ok = self.evaluate(t, y, &mut sc, false);
-        self.formulation.derivative(y, &sc.qdd, ok, dy);
+        self.rhs_into(t, y, &mut self.scratch.borrow_mut(), dy);
     }
 
     fn has_jacobian(&self) -> bool {

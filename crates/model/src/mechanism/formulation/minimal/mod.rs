@@ -22,10 +22,13 @@
 //! R is stored dense (n_q × n); Rᵀ M R and Rᵀ (Q − M a_c) are summed only where R can be
 //! nonzero (each body's rows in its own and its integrated ancestors' columns,
 //! `Tree::columns_of`), and Rᵀ M R is factored densely: O(n³) per right-hand side, which is
-//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12).
+//! why `auto` keeps large scenes on the augmented Lagrangian (docs/model.md §12). On a tree
+//! of at most six coordinates the integrator's right-hand side takes small.rs instead: the
+//! same sums and factorisation on the stack, θ̈ alone (no q̈), the same bits.
 
 mod jacobian;
 pub(crate) mod loops;
+mod small;
 pub(crate) mod tree;
 
 use std::cell::RefCell;
@@ -508,7 +511,7 @@ fn factor_unrolled(s: &mut [f64], n: usize, all: &[usize]) -> Result<(), usize> 
 
 /// [`block_cholesky_inv`] with m = N and every block in order.
 #[inline(always)]
-fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
+pub(super) fn factor_fixed<const N: usize>(s: &mut [f64]) -> Result<(), usize> {
     let s = &mut s[..N * N];
     for j in 0..N {
         let mut d = s[j * N + j];
@@ -586,7 +589,7 @@ fn solve_unrolled(l: &[f64], n: usize, b: &mut [f64]) {
 
 /// [`cholesky_solve`] with m = N.
 #[inline(always)]
-fn solve_fixed<const N: usize>(l: &[f64], b: &mut [f64]) {
+pub(super) fn solve_fixed<const N: usize>(l: &[f64], b: &mut [f64]) {
     let l = &l[..N * N];
     let b = &mut b[..N];
     for i in 0..N {
