@@ -84,18 +84,19 @@ pub(crate) fn values(
     mut g_dot: Option<&mut [f64]>,
 ) {
     let kin = sc.kin();
-    // A joint's clearance state serves all of its event functions (δ, ε − ε_cap, kinks):
-    // the last one computed is kept, and read in place.
+    // A joint's δ, δ̇, ε, ε̇ serve its functions δ and ε − ε_cap, its clearance state its
+    // kinks: the last one of each computed is kept.
+    let mut gap: Option<(usize, [f64; 4])> = None;
     let mut last: Option<(usize, ClearanceState)> = None;
     for (i, ev) in events.iter().enumerate() {
         let (v, d) = match *ev {
             EventKind::Contact(k) => {
-                let st = joint_state(&mut last, forces, &kin, k);
-                (st.delta, st.delta_dot)
+                let [delta, delta_dot, _, _] = joint_gap(&mut gap, forces, &kin, k);
+                (delta, delta_dot)
             }
             EventKind::EpsCap(k) => {
-                let st = joint_state(&mut last, forces, &kin, k);
-                forces.revolute[k].eps_cap_value(st)
+                let [_, _, eps, eps_dot] = joint_gap(&mut gap, forces, &kin, k);
+                forces.revolute[k].eps_cap_value(eps, eps_dot)
             }
             EventKind::Corner(k, c) => forces.prismatic[k].corner_gap(c, &kin),
             EventKind::Element(k, i) => forces.elements[k].event(i, t, &kin),
@@ -107,6 +108,25 @@ pub(crate) fn values(
         g[i] = v;
         if let Some(gd) = g_dot.as_deref_mut() {
             gd[i] = d;
+        }
+    }
+}
+
+/// δ, δ̇, ε, ε̇ of revolute joint `k` ([`Revolute::gap_and_rate`]): the ones in `gap` when
+/// they are joint k's, else computed into `gap`.
+#[inline]
+fn joint_gap(
+    gap: &mut Option<(usize, [f64; 4])>,
+    forces: &Forces,
+    kin: &Kin<'_>,
+    k: usize,
+) -> [f64; 4] {
+    match *gap {
+        Some((j, v)) if j == k => v,
+        _ => {
+            let v = forces.revolute[k].gap_and_rate(kin);
+            *gap = Some((k, v));
+            v
         }
     }
 }
