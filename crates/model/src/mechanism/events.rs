@@ -114,7 +114,7 @@ pub(crate) fn values(
 
 /// δ, δ̇, ε, ε̇ of revolute joint `k` ([`Revolute::gap_and_rate`]): the ones in `gap` when
 /// they are joint k's, else computed into `gap`.
-#[inline]
+#[inline(always)]
 fn joint_gap(
     gap: &mut Option<(usize, [f64; 4])>,
     forces: &Forces,
