@@ -192,8 +192,50 @@ mod tests {
     //! Python package has always reported (python/tests/test_run.py).
     use super::*;
     use crate::cases::{press_scene, PressJoint};
-    use crate::Mechanism;
+    use crate::{FormulationName, Mechanism};
     use lash_solver::OdeSystem;
+
+    /// The event functions δ and ε − ε_cap and their rates come from
+    /// [`Revolute::gap_and_rate`] without the rest of the clearance state: its δ, δ̇, ε, ε̇
+    /// are the full state's bit for bit (the same expressions), so no event time moves. Over
+    /// states of the lubricated and the dry press spread across a crank revolution and across
+    /// the clearance circle (the rod's angle and rate moved), under both the absolute and
+    /// the minimal formulation.
+    #[test]
+    fn the_gap_and_its_rate_are_the_clearance_states_bits() {
+        let mut checked = 0;
+        for joint in [PressJoint::Lubricated, PressJoint::Dry] {
+            for kind in [FormulationName::LagrangeBaumgarte, FormulationName::Minimal] {
+                let mut scene = press_scene(joint, 150.0, 1e-4);
+                scene.formulation = kind;
+                let m = Mechanism::from_scene(&scene).unwrap();
+                let y0 = m.initial_state();
+                let n = y0.len() / 2;
+                for j in 0..40 {
+                    let mut y = y0.clone();
+                    // Positions moved by up to ±0.6 clearances, rates by up to ±2 m/s or rad/s.
+                    for (i, v) in y.iter_mut().enumerate() {
+                        let w = ((j * 7 + i * 3) as f64 * 0.61).sin();
+                        *v += if i < n { 6e-5 * w } else { 2.0 * w };
+                    }
+                    let t = 0.4 * j as f64 / 40.0;
+                    let mut sc = m.scratch();
+                    m.kinematics(t, &y, &mut sc);
+                    let c = &m.forces.revolute[0];
+                    let st = c.state(&sc.kin());
+                    let [d, dd, e, ed] = c.gap_and_rate(&sc.kin());
+                    let bits = |v: [f64; 4]| v.map(f64::to_bits);
+                    assert_eq!(
+                        bits([d, dd, e, ed]),
+                        bits([st.delta, st.delta_dot, st.eps, st.eps_dot]),
+                        "{joint:?} {kind:?} state {j}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 160);
+    }
 
     #[test]
     fn each_kind_has_the_labels_its_owner_declares() {
