@@ -458,11 +458,11 @@ impl Revolute {
         self.film.is_none() && Kink::ALL.into_iter().any(|k| self.has_kink(k))
     }
 
-    /// ε − ε_cap and ε̇ at the clearance state `st`.
+    /// ε − ε_cap and ε̇ at the eccentricity ratio `eps` and its rate `eps_dot`.
     #[inline]
-    pub(crate) fn eps_cap_value(&self, st: &ClearanceState) -> (f64, f64) {
+    pub(crate) fn eps_cap_value(&self, eps: f64, eps_dot: f64) -> (f64, f64) {
         let cap = self.film.and_then(|f| f.eps_cap).unwrap_or(1.0);
-        (st.eps - cap, st.eps_dot)
+        (eps - cap, eps_dot)
     }
 
     /// The value and rate of a kink function ([`Kink`]) at the clearance state `st`. The rate
@@ -522,6 +522,27 @@ impl Revolute {
             rows.push(row.with_rate(self.e0_rate[axis], t0));
         }
         rows
+    }
+
+    /// δ, δ̇, ε and ε̇ of the joint (what its event functions δ and ε − ε_cap read), without
+    /// the rest of [`Revolute::state`] (v_T, γ̇, Ω): the same expressions as
+    /// [`ClearanceState::compute`], so the same bits.
+    #[inline]
+    pub(crate) fn gap_and_rate(&self, kin: &Kin<'_>) -> [f64; 4] {
+        let (r_b, v_b, _) = self.bearing.point(kin);
+        let (r_j, v_j, _) = self.journal.point(kin);
+        let c = self.rb - self.rj;
+        let e = [r_j[0] - r_b[0], r_j[1] - r_b[1]];
+        let ed = [v_j[0] - v_b[0], v_j[1] - v_b[1]];
+        let e_norm = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let centred = e_norm < 1e-12 * c || e_norm == 0.0;
+        let n = if centred {
+            [1.0, 0.0]
+        } else {
+            [e[0] / e_norm, e[1] / e_norm]
+        };
+        let delta_dot = n[0] * ed[0] + n[1] * ed[1];
+        [e_norm - c, delta_dot, e_norm / c, delta_dot / c]
     }
 }
 
