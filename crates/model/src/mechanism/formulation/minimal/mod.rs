@@ -141,7 +141,7 @@ pub(crate) struct Minimal {
     /// The terms of Rᵀ M R and of Rᵀ (Q − M a_c) (`terms`).
     mass_terms: Vec<Term>,
     force_terms: Vec<Term>,
-    /// Whether the tree is flat (small.rs, `is_flat`: Rᵀ M R diagonal).
+    /// Whether the tree is flat (`Tree::is_flat`: Rᵀ M R diagonal; small.rs).
     small_flat: bool,
 }
 
@@ -187,7 +187,7 @@ impl Minimal {
         Minimal {
             mass_terms,
             force_terms,
-            small_flat: small::is_flat(&tree),
+            small_flat: tree.is_flat(),
             tree,
             nq,
             mass,

@@ -5,9 +5,9 @@
 //! bodies):
 //!   g_b of every integrated body on the stack (Forces::applied_small: gravity, the revolute
 //!     clearance joints' loads, the elements'; the general path's sums, so its bits)
-//!   flat tree (every body on the ground or on a prescribed body; the press): M̄ = Rᵀ M R is
-//!     diagonal and constant (flat_diagonal, at build), θ̈_c = (R_bᵀ (g_b − M_b a_c,b))_c / M̄_cc
-//!     of its own body b alone
+//!   flat tree (Tree::is_flat: every body on the ground or on a prescribed body; the
+//!     press): M̄ = Rᵀ M R is diagonal, θ̈_c = (R_bᵀ (g_b − M_b a_c,b))_c / M̄_cc of its own
+//!     body b alone, by the dense path's operations (small_flat)
 //!   any other tree:
 //!   R_b (3 × n) and a_c,b (3) of every body b, parents before children, each entry by the
 //!     expression of Tree::velocity_matrix_and_bias
@@ -20,11 +20,13 @@
 //! Fixed-size arrays (const generic N = n) instead of the general path's R (n_q × n, in the
 //! formulation's buffers behind a RefCell), term tables and slices; q̈ of the absolute
 //! coordinates, the bodies' accelerations, `Scratch::g` and the clearance joints'
-//! evaluations (`Scratch::revolute`) are not written: the integrator reads θ̈ only. On a tree
-//! that is not flat the same operations in the same order as the general path, so the same
-//! bits (tested below on every kind of link and parent, contact and film included); on a
-//! flat tree the last bits differ from the general path's (the constant M̄ against its
-//! sums, |b|² = |s|² to rounding, and a term that is exactly 0 left out; tested to 1e-13).
+//! evaluations (`Scratch::revolute`) are not written: the integrator reads θ̈ only. The same
+//! operations in the same order as the general path (on a flat tree without its ±0 terms),
+//! so the same bits (tested below on every kind of link and parent, flat and not, contact and
+//! film included): every pinned count and digest stays. (A flat tree's M̄ as a constant
+//! diagonal, m|s|² + I and m, solved by one division was measured too: 1 194 instead of
+//! 1 279 instructions a call on the press, but its last bits move the BDF path both ways by
+//! ±8 % of the steps: BENCHMARKS.md, "The press targets through `lash run` (issue 26)".)
 //! Everything that reads q̈, the bodies' accelerations or the evaluation's buffers (the
 //! Jacobian, ∂f/∂t, outputs, full evaluations, the initial check) runs its own evaluation
 //! through the general path (`Mechanism::evaluate`), so after this right-hand side
@@ -37,7 +39,7 @@
 
 use crate::mechanism::bodies::Bodies;
 use crate::mechanism::forces::Forces;
-use crate::mechanism::formulation::minimal::tree::{Link, Parent, Tree};
+use crate::mechanism::formulation::minimal::tree::{Link, Parent};
 use crate::mechanism::formulation::minimal::{factor_fixed, solve_fixed, Minimal};
 use crate::mechanism::scratch::Scratch;
 use crate::planar::{perp, rot};
@@ -199,7 +201,7 @@ impl Minimal {
         qbar.iter().all(|v| v.is_finite())
     }
 
-    /// θ̈ on a flat tree ([`is_flat`]: M̄ diagonal): each coordinate's θ̈_c from its own
+    /// θ̈ on a flat tree (`Tree::is_flat`: M̄ diagonal): each coordinate's θ̈_c from its own
     /// body b alone, by the operations of the dense path with the ±0 terms of the other
     /// bodies and of M̄'s zero entries left out (they change no bit: a sum from +0 never
     /// turns −0), so its bits:
@@ -286,21 +288,6 @@ impl Minimal {
         }
         out[..self.tree.n].iter().all(|v| v.is_finite())
     }
-}
-
-/// Whether `tree` is flat: every integrated body hangs from the ground or a prescribed body
-/// (no revolute link to an integrated parent), so each body's rows of R reach its own
-/// coordinates only and M̄ = Rᵀ M R is diagonal (a free body's block diag(m, m, I)).
-pub(super) fn is_flat(tree: &Tree) -> bool {
-    tree.bodies.iter().all(|tb| {
-        !matches!(
-            tb.link,
-            Link::Revolute {
-                parent: Parent::Integrated(..),
-                ..
-            }
-        )
-    })
 }
 
 #[cfg(test)]
