@@ -384,6 +384,31 @@ impl Revolute {
         ev
     }
 
+    /// [`Revolute::forces`] without the elastic part (`elastic` left 0): the forces alone,
+    /// for a right-hand side that reads nothing else (its square root saved; the small-tree
+    /// path of the minimal formulation). The same operations for the forces, so their bits.
+    #[inline]
+    pub(crate) fn forces_only(&self, st: ClearanceState) -> RevoluteEval {
+        let mut ev = RevoluteEval {
+            st,
+            ..RevoluteEval::default()
+        };
+        if st.delta > 0.0 {
+            ev.f_n = self
+                .normal
+                .force(st.delta, st.delta_dot, self.impact_velocity.get());
+            if let Some(fr) = &self.friction {
+                ev.f_t = fr.force(st.v_t, ev.f_n);
+            }
+        }
+        if let Some(film) = &self.film {
+            let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
+            ev.f_r = fr;
+            ev.f_tf = ft;
+        }
+        ev
+    }
+
     /// The loads of one evaluation on the joint's bodies, handed to `apply` in the order they
     /// are applied: the contact pair at the contact points Q_J, Q_B (δ > 0), then the film
     /// pair at the joint centres (lubricated). (Handed over one by one: an array of them

@@ -18,8 +18,9 @@ use crate::elements::input::Load;
 use crate::elements::interface::ForceJacobian;
 use crate::elements::Element;
 use crate::linalg::zeroed;
-use crate::mechanism::bodies::Bodies;
+use crate::mechanism::bodies::{Bodies, Owner};
 use crate::mechanism::scratch::Scratch;
+use crate::planar::cross;
 use crate::scene::format::{JointSpec, Scene};
 
 /// Everything that puts forces on the bodies, compiled.
@@ -106,6 +107,51 @@ impl Forces {
         }
         if !(self.elements.is_empty() && self.prismatic.is_empty()) {
             self.element_forces(bodies, t, sc, full, &[]);
+        }
+    }
+
+    /// [`Forces::applied`] into `g` (one row (f_x, f_y, m_z) per integrated body, by integrated
+    /// index, +0 on entry) instead of `sc.g`: the small-tree right-hand side's (minimal,
+    /// formulation/minimal/small.rs). Each entry's terms in the order and by the expressions
+    /// of [`Forces::applied`] (gravity, then each revolute clearance joint's loads, then the
+    /// elements and prismatic joints through `sc.g`), so its bits; no clearance evaluation is
+    /// kept in `sc.revolute` and no elastic part computed (what reads them runs
+    /// [`Forces::applied`] itself: outputs, the Jacobian, full evaluations).
+    #[inline]
+    pub(crate) fn applied_small(
+        &self,
+        bodies: &Bodies,
+        t: f64,
+        sc: &mut Scratch,
+        g: &mut [[f64; 3]],
+    ) {
+        if let Some(gv) = self.gravity {
+            for (gi, &k) in g.iter_mut().zip(&bodies.int_bodies) {
+                let m = bodies.info[k].mass;
+                gi[0] += m * gv[0];
+                gi[1] += m * gv[1];
+            }
+        }
+        for c in &self.revolute {
+            let ev = c.forces_only(c.state(&sc.kin()));
+            c.each_load(&ev, &sc.cs, |(b, arm, f)| {
+                if let Owner::Int(i) = bodies.info[b].owner {
+                    let gi = &mut g[i];
+                    gi[0] += f[0];
+                    gi[1] += f[1];
+                    gi[2] += cross(arm, f);
+                }
+            });
+        }
+        if !(self.elements.is_empty() && self.prismatic.is_empty()) {
+            // Through sc.g, added to what is there (as in Forces::applied).
+            for (d, gi) in sc.g.chunks_exact_mut(3).zip(g.iter()) {
+                d.copy_from_slice(gi);
+            }
+            self.element_forces(bodies, t, sc, false, &[]);
+            for (gi, d) in g.iter_mut().zip(sc.g.chunks_exact(3)) {
+                gi.copy_from_slice(d);
+            }
         }
     }
 

@@ -330,18 +330,17 @@ impl Mechanism {
 
     /// The integrator's right-hand side ẏ at (t, y) into `dy`, in the scratch `sc`. Under
     /// `minimal` on a small tree (formulation/minimal/small.rs) θ̈ alone, on the stack: no
-    /// q̈, no bodies' accelerations, no copy of (t, y) or of R into the formulation's
-    /// buffers (whatever reads those evaluates first); otherwise [`Mechanism::evaluate`] and
-    /// the formulation's ẏ.
+    /// q̈, no bodies' accelerations, no `sc.g` or clearance evaluations, no copy of (t, y) or
+    /// of R into the formulation's buffers (whatever reads those evaluates first); otherwise
+    /// [`Mechanism::evaluate`] and the formulation's ẏ.
     #[inline]
     pub(crate) fn rhs_into(&self, t: f64, y: &[f64], sc: &mut Scratch, dy: &mut [f64]) {
         if let Formulation::Minimal(f) = &self.formulation {
             if f.takes_small_path() {
                 let n = f.n();
                 f.positions(t, y, &self.bodies, sc);
-                self.forces.applied(&self.bodies, t, sc, false);
                 dy[..n].copy_from_slice(&y[n..2 * n]);
-                if !f.small_accelerations(sc, &mut dy[n..2 * n]) {
+                if !f.small_accelerations(&self.bodies, &self.forces, t, sc, &mut dy[n..2 * n]) {
                     dy[n..2 * n].iter_mut().for_each(|v| *v = f64::NAN);
                 }
                 return;

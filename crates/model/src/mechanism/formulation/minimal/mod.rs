@@ -141,6 +141,8 @@ pub(crate) struct Minimal {
     /// The terms of Rᵀ M R and of Rᵀ (Q − M a_c) (`terms`).
     mass_terms: Vec<Term>,
     force_terms: Vec<Term>,
+    /// Whether the tree is flat (`Tree::is_flat`: Rᵀ M R diagonal; small.rs).
+    small_flat: bool,
 }
 
 impl Minimal {
@@ -185,6 +187,7 @@ impl Minimal {
         Minimal {
             mass_terms,
             force_terms,
+            small_flat: tree.is_flat(),
             tree,
             nq,
             mass,

@@ -3,6 +3,12 @@
 //! ```text
 //! a tree without closing joints with n ≤ SMALL_MAX coordinates (so at most n integrated
 //! bodies):
+//!   g_b of every integrated body on the stack (Forces::applied_small: gravity, the revolute
+//!     clearance joints' loads, the elements'; the general path's sums, so its bits)
+//!   flat tree (Tree::is_flat: every body on the ground or on a prescribed body; the
+//!     press): M̄ = Rᵀ M R is diagonal, θ̈_c = (R_bᵀ (g_b − M_b a_c,b))_c / M̄_cc of its own
+//!     body b alone, by the dense path's operations (small_flat)
+//!   any other tree:
 //!   R_b (3 × n) and a_c,b (3) of every body b, parents before children, each entry by the
 //!     expression of Tree::velocity_matrix_and_bias
 //!   M̄ = Σ_b R_bᵀ M_b R_b (lower triangle), Q̄ = Σ_b R_bᵀ (g_b − M_b a_c,b), by integrated
@@ -13,18 +19,26 @@
 //! ```
 //! Fixed-size arrays (const generic N = n) instead of the general path's R (n_q × n, in the
 //! formulation's buffers behind a RefCell), term tables and slices; q̈ of the absolute
-//! coordinates and the bodies' accelerations are not formed: the integrator reads θ̈ only.
-//! The same operations in the same order as the general path, so the same bits (tested
-//! below on every kind of link and parent, contact and film included): every pinned count
-//! and digest stays. Everything that reads q̈, the bodies' accelerations or the evaluation's
-//! buffers (the Jacobian, ∂f/∂t, outputs, full evaluations, the initial check) runs its own
-//! evaluation through the general path (`Mechanism::evaluate`), so after this right-hand
-//! side `Scratch::qdd`, the integrated bodies' `Scratch::acc` and the formulation's `Work`
-//! hold what the last general evaluation left there.
+//! coordinates, the bodies' accelerations, `Scratch::g` and the clearance joints'
+//! evaluations (`Scratch::revolute`) are not written: the integrator reads θ̈ only. The same
+//! operations in the same order as the general path (on a flat tree without its ±0 terms),
+//! so the same bits (tested below on every kind of link and parent, flat and not, contact and
+//! film included): every pinned count and digest stays. (A flat tree's M̄ as a constant
+//! diagonal, m|s|² + I and m, solved by one division was measured too: 1 194 instead of
+//! 1 279 instructions a call on the press, but its last bits move the BDF path both ways by
+//! ±8 % of the steps: BENCHMARKS.md, "The press targets through `lash run` (issue 26)".)
+//! Everything that reads q̈, the bodies' accelerations or the evaluation's buffers (the
+//! Jacobian, ∂f/∂t, outputs, full evaluations, the initial check) runs its own evaluation
+//! through the general path (`Mechanism::evaluate`), so after this right-hand side
+//! `Scratch::qdd`, `Scratch::g`, `Scratch::revolute`, the integrated bodies' `Scratch::acc`
+//! and the formulation's `Work` hold what the last general evaluation left there (the
+//! kinematics, `pose`, `vel`, `cs`, are this right-hand side's).
 //!
 //! (An LDLᵀ solve without square roots was measured too: it changes the last bits, and with
 //! them the BDF path of the dry press, without a measurable gain: 2 052 against 2 044 RHS.)
 
+use crate::mechanism::bodies::Bodies;
+use crate::mechanism::forces::Forces;
 use crate::mechanism::formulation::minimal::tree::{Link, Parent};
 use crate::mechanism::formulation::minimal::{factor_fixed, solve_fixed, Minimal};
 use crate::mechanism::scratch::Scratch;
@@ -41,25 +55,46 @@ impl Minimal {
         self.loops.is_none() && (1..=SMALL_MAX).contains(&self.tree.n)
     }
 
-    /// θ̈ (n) into `thdd` from the applied forces `sc.g` at the kinematics in `sc` (module
-    /// doc); false if M̄ is not positive definite in f64 or θ̈ is not finite. Only where
-    /// [`Minimal::takes_small_path`].
+    /// θ̈ (n) into `thdd` at the kinematics in `sc`, the applied forces on the stack
+    /// (`Forces::applied_small`) (module doc); false if M̄ is not positive definite in f64 or
+    /// θ̈ is not finite. Only where [`Minimal::takes_small_path`].
     #[inline]
-    pub(crate) fn small_accelerations(&self, sc: &Scratch, thdd: &mut [f64]) -> bool {
+    pub(crate) fn small_accelerations(
+        &self,
+        bodies: &Bodies,
+        forces: &Forces,
+        t: f64,
+        sc: &mut Scratch,
+        thdd: &mut [f64],
+    ) -> bool {
         match self.tree.n {
-            1 => self.small::<1>(sc, thdd),
-            2 => self.small::<2>(sc, thdd),
-            3 => self.small::<3>(sc, thdd),
-            4 => self.small::<4>(sc, thdd),
-            5 => self.small::<5>(sc, thdd),
-            6 => self.small::<6>(sc, thdd),
+            1 => self.small::<1>(bodies, forces, t, sc, thdd),
+            2 => self.small::<2>(bodies, forces, t, sc, thdd),
+            3 => self.small::<3>(bodies, forces, t, sc, thdd),
+            4 => self.small::<4>(bodies, forces, t, sc, thdd),
+            5 => self.small::<5>(bodies, forces, t, sc, thdd),
+            6 => self.small::<6>(bodies, forces, t, sc, thdd),
             _ => false,
         }
     }
 
     /// [`Minimal::small_accelerations`] with n = N.
     #[inline(always)]
-    fn small<const N: usize>(&self, sc: &Scratch, out: &mut [f64]) -> bool {
+    fn small<const N: usize>(
+        &self,
+        bodies: &Bodies,
+        forces: &Forces,
+        t: f64,
+        sc: &mut Scratch,
+        out: &mut [f64],
+    ) -> bool {
+        // The applied forces of every integrated body (by integrated index: at most N).
+        let nb = self.tree.bodies.len();
+        let mut g = [[0.0f64; 3]; N];
+        forces.applied_small(bodies, t, sc, &mut g[..nb]);
+        if self.small_flat {
+            return self.small_flat(&g, sc, out);
+        }
         // R's rows and a_c of every integrated body (by integrated index: at most N of them,
         // each has a coordinate); the entries a body's rows do not reach stay +0.
         let mut rows = [[[0.0f64; N]; 3]; N];
@@ -137,7 +172,7 @@ impl Minimal {
             .take(self.tree.bodies.len())
         {
             let q = 3 * i;
-            let (m, g) = (&self.mass[q..q + 3], &sc.g[q..q + 3]);
+            let (m, g) = (&self.mass[q..q + 3], &g[i]);
             let f = [
                 g[0] - m[0] * ac[0],
                 g[1] - m[1] * ac[1],
@@ -164,6 +199,94 @@ impl Minimal {
         solve_fixed::<N>(&mbar[..N * N], &mut qbar);
         out[..N].copy_from_slice(&qbar);
         qbar.iter().all(|v| v.is_finite())
+    }
+
+    /// θ̈ on a flat tree (`Tree::is_flat`: M̄ diagonal): each coordinate's θ̈_c from its own
+    /// body b alone, by the operations of the dense path with the ±0 terms of the other
+    /// bodies and of M̄'s zero entries left out (they change no bit: a sum from +0 never
+    /// turns −0), so its bits:
+    /// ```text
+    /// M̄_cc = Σ_rows r m r,  Q̄_c = Σ_rows r (g − m a_c),  l = 1/√M̄_cc,  θ̈_c = (Q̄_c l) l
+    /// ```
+    /// (r: column c of R_b; a NaN or infinite θ̈ in any coordinate fails the whole solve, as
+    /// it does on the dense path, where 0 · NaN spreads it).
+    #[inline(always)]
+    fn small_flat(&self, g: &[[f64; 3]], sc: &Scratch, out: &mut [f64]) -> bool {
+        // θ̈_c of column r and a_c of body i: one coordinate of the dense path.
+        let coordinate = |r: [f64; 3], ac: [f64; 3], i: usize| -> Option<f64> {
+            let q = 3 * i;
+            let (m, g) = (&self.mass[q..q + 3], &g[i]);
+            let f = [
+                g[0] - m[0] * ac[0],
+                g[1] - m[1] * ac[1],
+                g[2] - m[2] * ac[2],
+            ];
+            let mut d = 0.0;
+            d += r[0] * m[0] * r[0];
+            d += r[1] * m[1] * r[1];
+            d += r[2] * m[2] * r[2];
+            let mut s = 0.0;
+            s += r[0] * f[0];
+            s += r[1] * f[1];
+            s += r[2] * f[2];
+            if !(d > 0.0) {
+                return None;
+            }
+            let l = 1.0 / d.sqrt();
+            Some(s * l * l)
+        };
+        for tb in &self.tree.bodies {
+            let (k, c, i) = (tb.body, tb.col, tb.int);
+            match tb.link {
+                Link::Free => {
+                    for d in 0..3 {
+                        let mut r = [0.0; 3];
+                        r[d] = 1.0;
+                        let Some(v) = coordinate(r, [0.0; 3], i) else {
+                            return false;
+                        };
+                        out[c + d] = v;
+                    }
+                }
+                Link::Slider { u, .. } => {
+                    let ac = [0.0 * u[0], 0.0 * u[1], 0.0];
+                    let Some(v) = coordinate([u[0], u[1], 0.0], ac, i) else {
+                        return false;
+                    };
+                    out[c] = v;
+                }
+                Link::Revolute { parent, s } => {
+                    // The parent's point's acceleration at θ̈ = 0 (the ground or a
+                    // prescribed body: a flat tree has no integrated parent).
+                    let ap = match parent {
+                        Parent::Prescribed(kp, sp) | Parent::Integrated(kp, _, sp) => {
+                            let a = rot(sc.cs[kp], sp);
+                            let b = perp(a);
+                            let [ax, ay, alp] = sc.acc[kp];
+                            let w = sc.vel[kp][2];
+                            [
+                                ax + alp * b[0] - w * w * a[0],
+                                ay + alp * b[1] - w * w * a[1],
+                            ]
+                        }
+                        Parent::Ground(_) => [0.0; 2],
+                    };
+                    let a = rot(sc.cs[k], s);
+                    let b = perp(a);
+                    let w = sc.vel[k][2];
+                    let ac = [
+                        ap[0] - 0.0 * b[0] + w * w * a[0],
+                        ap[1] - 0.0 * b[1] + w * w * a[1],
+                        0.0,
+                    ];
+                    let Some(v) = coordinate([-b[0], -b[1], 1.0], ac, i) else {
+                        return false;
+                    };
+                    out[c] = v;
+                }
+            }
+        }
+        out[..self.tree.n].iter().all(|v| v.is_finite())
     }
 }
 
@@ -252,7 +375,37 @@ mod tests {
     #[test]
     fn the_small_path_gives_the_general_path_on_a_chain_a_free_body_and_a_crank() {
         let m = crate::Mechanism::from_scene(&chain_free_and_crank()).unwrap();
+        let Formulation::Minimal(f) = m.formulation() else {
+            panic!("minimal")
+        };
+        // A link on an integrated parent: not flat, the dense sums and Cholesky.
+        assert!(!f.small_flat);
         // Gravity and the turned links make every θ̈ of size: numbers, not zeros, compared.
+        assert!(compare(&m, 4, 0.1) > 1.0);
+    }
+
+    /// A flat tree of every kind of link but the slider (which the press has): a link
+    /// pinned to the ground, a free body held at its end by a dry clearance joint, a rod on
+    /// a driven crank; gravity, under `minimal`: θ = (l1, x_f, y_f, φ_f, rod), n = 5.
+    #[test]
+    fn the_small_path_gives_the_general_path_on_a_flat_tree() {
+        let mut scene = serde_json::to_value(chain_free_and_crank()).unwrap();
+        let bodies = scene["bodies"].as_array_mut().unwrap();
+        bodies.retain(|b| b["name"] != "l2");
+        // The free body's pin at l1's end E, (1, 0).
+        let f = bodies.iter_mut().find(|b| b["name"] == "f").unwrap();
+        f["position"] = serde_json::json!([1.5, 0.0]);
+        let joints = scene["joints"].as_array_mut().unwrap();
+        joints.retain(|j| j["name"] != "p2");
+        let j = joints.iter_mut().find(|j| j["name"] == "j").unwrap();
+        j["bearing"]["body"] = serde_json::json!("l1");
+        let scene = crate::Scene::from_json_str(&scene.to_string()).unwrap();
+        let m = crate::Mechanism::from_scene(&scene).unwrap();
+        let Formulation::Minimal(f) = m.formulation() else {
+            panic!("minimal")
+        };
+        assert_eq!(f.n(), 5);
+        assert!(f.small_flat);
         assert!(compare(&m, 4, 0.1) > 1.0);
     }
 
@@ -263,6 +416,12 @@ mod tests {
         let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/press/lubricated_150rpm_c0.1.json");
         let m = crate::Mechanism::from_scene(&crate::Scene::from_path(p).unwrap()).unwrap();
+        let Formulation::Minimal(f) = m.formulation() else {
+            panic!("minimal")
+        };
+        // Rod on the prescribed crank, slider on the ground: flat, M̄ diagonal, each θ̈ from
+        // its own body (small_flat), the dense path's bits.
+        assert!(f.small_flat);
         assert!(compare(&m, 4, 3e-5) > 1.0);
     }
 

@@ -335,6 +335,21 @@ impl Tree {
         &self.reach[self.reach_at[int]..self.reach_at[int + 1]]
     }
 
+    /// Whether the tree is flat: every integrated body hangs from the ground or a prescribed
+    /// body (no revolute link to an integrated parent), so each body's rows of R reach its
+    /// own coordinates only and Rᵀ M R is diagonal (a free body's block diag(m, m, I)).
+    pub(crate) fn is_flat(&self) -> bool {
+        self.bodies.iter().all(|tb| {
+            !matches!(
+                tb.link,
+                Link::Revolute {
+                    parent: Parent::Integrated(..),
+                    ..
+                }
+            )
+        })
+    }
+
     /// The bodies that coordinate `c` of θ (or of θ̇) moves, as indices into
     /// [`Tree::bodies`] in its order: the body it belongs to and its descendants. The
     /// kinematics of every other body do not read it.
