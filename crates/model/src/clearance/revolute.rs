@@ -363,23 +363,9 @@ impl Revolute {
     /// friction, elastic part (δ > 0 only) and film forces (when lubricated).
     #[inline]
     pub(crate) fn forces(&self, st: ClearanceState) -> RevoluteEval {
-        let mut ev = RevoluteEval {
-            st,
-            ..RevoluteEval::default()
-        };
+        let mut ev = self.forces_only(st);
         if st.delta > 0.0 {
-            ev.f_n = self
-                .normal
-                .force(st.delta, st.delta_dot, self.impact_velocity.get());
             ev.elastic = self.normal.stiffness() * st.delta * st.delta.sqrt();
-            if let Some(fr) = &self.friction {
-                ev.f_t = fr.force(st.v_t, ev.f_n);
-            }
-        }
-        if let Some(film) = &self.film {
-            let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
-            ev.f_r = fr;
-            ev.f_tf = ft;
         }
         ev
     }

@@ -171,13 +171,7 @@ impl Minimal {
             .enumerate()
             .take(self.tree.bodies.len())
         {
-            let q = 3 * i;
-            let (m, g) = (&self.mass[q..q + 3], &g[i]);
-            let f = [
-                g[0] - m[0] * ac[0],
-                g[1] - m[1] * ac[1],
-                g[2] - m[2] * ac[2],
-            ];
+            let (m, f) = self.body_force(&g[i], ac, i);
             for x in 0..N {
                 for y in 0..=x {
                     let mut s = mbar[x * N + y];
@@ -201,6 +195,21 @@ impl Minimal {
         qbar.iter().all(|v| v.is_finite())
     }
 
+    /// Integrated body i's masses (m, m, I) and its applied force less its mass times a_c,
+    /// g_i − M_i a_c,i: the terms of Rᵀ (Q − M a_c) in the general path's order.
+    #[inline(always)]
+    fn body_force(&self, g: &[f64; 3], ac: &[f64; 3], i: usize) -> (&[f64], [f64; 3]) {
+        let m = &self.mass[3 * i..3 * i + 3];
+        (
+            m,
+            [
+                g[0] - m[0] * ac[0],
+                g[1] - m[1] * ac[1],
+                g[2] - m[2] * ac[2],
+            ],
+        )
+    }
+
     /// θ̈ on a flat tree (`Tree::is_flat`: M̄ diagonal): each coordinate's θ̈_c from its own
     /// body b alone, by the operations of the dense path with the ±0 terms of the other
     /// bodies and of M̄'s zero entries left out (they change no bit: a sum from +0 never
@@ -214,13 +223,7 @@ impl Minimal {
     fn small_flat(&self, g: &[[f64; 3]], sc: &Scratch, out: &mut [f64]) -> bool {
         // θ̈_c of column r and a_c of body i: one coordinate of the dense path.
         let coordinate = |r: [f64; 3], ac: [f64; 3], i: usize| -> Option<f64> {
-            let q = 3 * i;
-            let (m, g) = (&self.mass[q..q + 3], &g[i]);
-            let f = [
-                g[0] - m[0] * ac[0],
-                g[1] - m[1] * ac[1],
-                g[2] - m[2] * ac[2],
-            ];
+            let (m, f) = self.body_force(&g[i], &ac, i);
             let mut d = 0.0;
             d += r[0] * m[0] * r[0];
             d += r[1] * m[1] * r[1];
