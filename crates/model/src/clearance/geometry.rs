@@ -73,15 +73,11 @@ pub struct ClearanceInput {
 }
 
 impl ClearanceState {
-    /// Evaluates the clearance kinematics of docs/model.md §2 (see the type's equations).
-    ///
-    /// Centred guard: when |e| < 1e-12·c (or |e| = 0) the normal is n = (1, 0) and γ̇ = 0, so
-    /// Ω = φ̇_J + φ̇_B. The result is finite for finite input with R_B > R_J.
-    #[inline]
-    pub fn compute(inp: &ClearanceInput) -> ClearanceState {
-        let c = inp.radius_b - inp.radius_j;
-        let e = [inp.r_j[0] - inp.r_b[0], inp.r_j[1] - inp.r_b[1]];
-        let ed = [inp.v_j[0] - inp.v_b[0], inp.v_j[1] - inp.v_b[1]];
+    /// |e|, whether the journal counts as centred (|e| < 1e-12·c, or 0), and the unit normal
+    /// n = e/|e| ((1, 0) when centred) of the eccentricity e at clearance c: the start of
+    /// [`ClearanceState::compute`], shared with the event functions' gap and rate.
+    #[inline(always)]
+    pub(crate) fn normal_of(e: [f64; 2], c: f64) -> (f64, bool, [f64; 2]) {
         let e_norm = (e[0] * e[0] + e[1] * e[1]).sqrt();
         // `e_norm == 0` also covers a degenerate c ≤ 0, where the relative test alone would
         // let 0/0 through.
@@ -91,6 +87,19 @@ impl ClearanceState {
         } else {
             [e[0] / e_norm, e[1] / e_norm]
         };
+        (e_norm, centred, n)
+    }
+
+    /// Evaluates the clearance kinematics of docs/model.md §2 (see the type's equations).
+    ///
+    /// Centred guard: when |e| < 1e-12·c (or |e| = 0) the normal is n = (1, 0) and γ̇ = 0, so
+    /// Ω = φ̇_J + φ̇_B. The result is finite for finite input with R_B > R_J.
+    #[inline]
+    pub fn compute(inp: &ClearanceInput) -> ClearanceState {
+        let c = inp.radius_b - inp.radius_j;
+        let e = [inp.r_j[0] - inp.r_b[0], inp.r_j[1] - inp.r_b[1]];
+        let ed = [inp.v_j[0] - inp.v_b[0], inp.v_j[1] - inp.v_b[1]];
+        let (e_norm, centred, n) = ClearanceState::normal_of(e, c);
         let t = [-n[1], n[0]];
         let delta_dot = n[0] * ed[0] + n[1] * ed[1];
         let v_t = t[0] * ed[0] + t[1] * ed[1] + inp.radius_j * inp.phi_dot_j

@@ -545,13 +545,7 @@ impl Revolute {
         let c = self.rb - self.rj;
         let e = [r_j[0] - r_b[0], r_j[1] - r_b[1]];
         let ed = [v_j[0] - v_b[0], v_j[1] - v_b[1]];
-        let e_norm = (e[0] * e[0] + e[1] * e[1]).sqrt();
-        let centred = e_norm < 1e-12 * c || e_norm == 0.0;
-        let n = if centred {
-            [1.0, 0.0]
-        } else {
-            [e[0] / e_norm, e[1] / e_norm]
-        };
+        let (e_norm, _, n) = ClearanceState::normal_of(e, c);
         let delta_dot = n[0] * ed[0] + n[1] * ed[1];
         [e_norm - c, delta_dot, e_norm / c, delta_dot / c]
     }
