@@ -394,6 +394,16 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
     }
 }
 
+/// What the stepper reads of its `SolverOptions` while it runs: the first step and the step
+/// bounds (`h_max` replaced by the contact-aware limit, [`Stepper::set_h_max`]). Copied from
+/// the options rather than the options cloned, which may carry an output grid.
+#[derive(Clone, Copy, Debug)]
+struct StepOptions {
+    h0: Option<f64>,
+    h_min: f64,
+    h_max: f64,
+}
+
 /// The stepper on the linear algebra `B`.
 struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
     problem: &'p Problem<'a, S, B>,
@@ -404,7 +414,8 @@ struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
     /// (the starting-step estimate keeps its probe inside it: `initial_h`).
     pending: Option<Vec<f64>>,
     method: Method,
-    opts: SolverOptions,
+    /// The step options of the validated `SolverOptions` (h_max: the limit in force).
+    opts: StepOptions,
     budget: Budget,
     t: f64,
     t_prev: f64,
@@ -489,7 +500,11 @@ where
             solver: None,
             pending: None,
             method,
-            opts: opts.clone(),
+            opts: StepOptions {
+                h0: opts.h0,
+                h_min: opts.h_min,
+                h_max: opts.h_max,
+            },
             budget: Budget::new(Budgets::new(opts.max_steps, opts.max_wall_time)?),
             t: t0,
             t_prev: t0,
@@ -619,7 +634,7 @@ where
         h: Option<f64>,
         problem: &Problem<'a, S, B>,
         order: usize,
-        opts: &SolverOptions,
+        opts: &StepOptions,
         span: f64,
     ) {
         match h {

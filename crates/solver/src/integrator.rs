@@ -195,14 +195,22 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
     /// matrix), so dopri54's loop stands in for them: it goes to the end in steps that
     /// change nothing.
     pub fn new(sys: &'a S, opts: &SolverOptions) -> Result<Self, SolveError> {
-        let mut config = opts.configure(sys.dim())?;
-        let mut opts = opts.clone();
+        let config = opts.configure(sys.dim())?;
+        Self::configured(sys, opts.clone(), config)
+    }
+
+    /// [`Problem::new`] from options `opts` already validated for `sys` into `config`
+    /// ([`SolverOptions::configure`]), which the problem keeps without copying them again.
+    fn configured(
+        sys: &'a S,
+        mut opts: SolverOptions,
+        mut config: Config,
+    ) -> Result<Self, SolveError> {
         if sys.dim() == 0 && matches!(config, Config::Diffsol(_)) {
             opts.method = Method::Dopri54;
             opts.controller = None;
             config = opts.configure(0)?;
         }
-        let opts = &opts;
         // diffsol's methods check their own matrices: dense or sparse (crate::linear_algebra).
         let diffsol = match &config {
             Config::Diffsol(c) => Some(DiffsolProblem::new(
@@ -234,7 +242,7 @@ impl<'a, S: OdeSystem + ?Sized> Problem<'a, S> {
         }
         Ok(Problem {
             sys,
-            opts: opts.clone(),
+            opts,
             config,
             diffsol,
             rodas_sparse,
@@ -854,7 +862,12 @@ pub fn solve<S: OdeSystem + ?Sized>(
     y0: &[f64],
     opts: &SolverOptions,
 ) -> Result<Solution, SolveError> {
-    Problem::new(sys, opts)?.solve(t_span, y0)
+    // The options are validated as given (the output grid included); the problem keeps a copy
+    // without the grid, which only `drive` reads, here from `opts` itself.
+    let config = opts.configure(sys.dim())?;
+    let problem = Problem::configured(sys, opts.without_output(), config)?;
+    let it = problem.integrator(t_span.0, t_span.1, y0)?;
+    drive(it, t_span.0, y0, &opts.output)
 }
 
 /// Runs an integrator to its end, recording what `output` asks for.
