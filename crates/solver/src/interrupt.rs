@@ -79,6 +79,12 @@ pub fn deadline_passed() -> Option<f64> {
         .and_then(|(d, w)| (std::time::Instant::now() >= d).then_some(w))
 }
 
+/// Whether the call running on this thread has a deadline ([`deadline_scope`]), passed or
+/// not; no clock read.
+pub(crate) fn deadline_set() -> bool {
+    DEADLINE.with(|d| d.get().is_some())
+}
+
 /// Restores the deadline that was in force before [`deadline_scope`] when dropped.
 #[must_use = "the deadline holds only while the scope is alive"]
 #[derive(Debug)]

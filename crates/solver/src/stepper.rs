@@ -172,7 +172,27 @@ impl Budget {
 
     /// Checks the budgets before an attempt, with `attempts` made so far; the error carries
     /// the time and state of the last accepted step.
+    ///
+    /// Every check runs before every attempt. Without a wall-clock budget of its own or of the
+    /// thread ([`crate::interrupt::deadline_scope`]) the answer is known from a flag, a count
+    /// and whether there is a deadline, tested inline; the clock is read, and an error built,
+    /// only out of line (`check_all`).
+    #[inline]
     pub fn check(&self, attempts: usize, t: f64, y: &[f64]) -> Result<(), SolveError> {
+        if crate::interrupt::stop_requested()
+            || attempts >= self.max_steps
+            || self.deadline.is_some()
+            || crate::interrupt::deadline_set()
+        {
+            return self.check_all(attempts, t, y);
+        }
+        Ok(())
+    }
+
+    /// [`Budget::check`]'s checks one by one, in their order, with their errors.
+    #[cold]
+    #[inline(never)]
+    fn check_all(&self, attempts: usize, t: f64, y: &[f64]) -> Result<(), SolveError> {
         if crate::interrupt::stop_requested() {
             return Err(SolveError::Interrupted { t, y: y.to_vec() });
         }
