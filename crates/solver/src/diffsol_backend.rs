@@ -387,7 +387,7 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
         with_core!(&mut self.inner, c => c.restart(t, y))
     }
     fn stats(&self) -> Stats {
-        with_core!(&self.inner, c => c.stats)
+        with_core!(&self.inner, c => c.stats())
     }
     fn step_quadrature(&self, value: &mut [f64], _estimate: &mut [f64]) -> StepQuadrature {
         with_core!(&self.inner, c => c.quad.write(value))
@@ -402,6 +402,16 @@ struct StepOptions {
     h0: Option<f64>,
     h_min: f64,
     h_max: f64,
+}
+
+impl From<&SolverOptions> for StepOptions {
+    fn from(opts: &SolverOptions) -> Self {
+        StepOptions {
+            h0: opts.h0,
+            h_min: opts.h_min,
+            h_max: opts.h_max,
+        }
+    }
 }
 
 /// The stepper on the linear algebra `B`.
@@ -434,9 +444,12 @@ struct Core<'p, 'a, S: OdeSystem + ?Sized, B: La> {
     /// The problem's rhs/jac counters when this stepper was built (the problem may serve
     /// several integrations).
     counts_at_start: Stats,
-    /// Solver counters of replaced solvers (restarts).
+    /// Solver counters of replaced solvers (restarts) and of Euler slivers.
     base: Stats,
-    stats: Stats,
+    /// The smallest and largest accepted steps (`h_min_used`, `h_max_used`; its counters
+    /// stay 0). The counters are read from `base`, the live solver and the problem when
+    /// asked ([`Core::stats`]), not copied after every step.
+    sizes: Stats,
     buf: RefCell<B::V>,
     /// The quadrature's increments (diffsol_backend::quadrature).
     quad: quadrature::Track,
@@ -500,11 +513,7 @@ where
             solver: None,
             pending: None,
             method,
-            opts: StepOptions {
-                h0: opts.h0,
-                h_min: opts.h_min,
-                h_max: opts.h_max,
-            },
+            opts: StepOptions::from(opts),
             budget: Budget::new(Budgets::new(opts.max_steps, opts.max_wall_time)?),
             t: t0,
             t_prev: t0,
@@ -515,12 +524,11 @@ where
             sliver: None,
             counts_at_start: counts(problem),
             base: Stats::default(),
-            stats: Stats::default(),
+            sizes: Stats::default(),
             buf: RefCell::new(B::V::zeros(n, ctx)),
             quad: quadrature::Track::new(problem.eqn.out.m),
         };
         st.start(t0, y0)?;
-        st.update_stats();
         Ok(st)
     }
 
@@ -592,7 +600,7 @@ where
         let solver = match self.method {
             Method::Bdf => {
                 let mut state = BdfState::<B::V>::new_from_common(common);
-                Self::initial_h(&mut state, h, problem, order, &self.opts, span);
+                Self::initial_h(&mut state, h, problem, order, self.opts, span);
                 Solver::Bdf(Box::new(
                     Bdf::new(problem, state, B::lu(problem.eqn.rhs.kkt.as_ref())).map_err(err)?,
                 ))
@@ -604,7 +612,7 @@ where
                     Tableau::<f64>::esdirk34()
                 };
                 let mut state = RkState::<B::V>::new_from_common(common);
-                Self::initial_h(&mut state, h, problem, order, &self.opts, span);
+                Self::initial_h(&mut state, h, problem, order, self.opts, span);
                 Solver::Sdirk(Box::new(
                     Sdirk::new(problem, state, tableau, B::lu(problem.eqn.rhs.kkt.as_ref()))
                         .map_err(err)?,
@@ -634,9 +642,10 @@ where
         h: Option<f64>,
         problem: &Problem<'a, S, B>,
         order: usize,
-        opts: &StepOptions,
+        opts: impl Into<StepOptions>,
         span: f64,
     ) {
+        let opts: StepOptions = opts.into();
         match h {
             Some(h) => *state.as_mut().h = h,
             None => {
@@ -689,7 +698,6 @@ where
         let dt = t_stop - self.t;
         let y_new: Vec<f64> = self.y.iter().zip(&f).map(|(y, f)| y + dt * f).collect();
         if !y_new.iter().all(|v| v.is_finite()) {
-            self.update_stats();
             return Err(SolveError::NonFiniteState {
                 t: self.t,
                 y: self.y.clone(),
@@ -700,22 +708,22 @@ where
         self.t_prev = t_old;
         self.sliver = Some(y_old);
         self.base.accepted += 1;
-        self.update_stats();
-        self.stats.record_step_size(dt);
+        self.sizes.record_step_size(dt);
         Ok(())
     }
 
-    /// Refreshes the counters from the live solver.
-    fn update_stats(&mut self) {
+    /// The counters so far: those of replaced solvers (`base`) plus the live solver's
+    /// (none between a start and the first step after it), the right-hand sides and
+    /// Jacobians made through the problem since this stepper was built, and the step sizes.
+    fn stats(&self) -> Stats {
         let counts = counts(self.problem);
-        // No live solver between a start and the first step after it: the base counters.
         let d = self
             .solver
             .as_ref()
             .map(|solver| with_solver!(solver, s => s.get_statistics().clone()))
             .unwrap_or_default();
         let b = &self.base;
-        let st = &mut self.stats;
+        let mut st = self.sizes;
         st.accepted = b.accepted + d.number_of_steps;
         st.rejected_error = b.rejected_error + d.number_of_error_test_failures;
         st.rejected_newton = b.rejected_newton + d.number_of_nonlinear_solver_fails;
@@ -724,6 +732,22 @@ where
         st.lu_factorizations = b.lu_factorizations + d.number_of_linear_solver_setups;
         st.rhs_evals = counts.rhs_evals - self.counts_at_start.rhs_evals;
         st.jac_evals = counts.jac_evals - self.counts_at_start.jac_evals;
+        st
+    }
+
+    /// Step attempts so far: [`Core::stats`]'s `steps`, from the three counters it adds
+    /// (the budget's count, before every attempt).
+    fn attempts(&self) -> usize {
+        let b = &self.base;
+        let live = self.solver.as_ref().map_or(0, |solver| {
+            with_solver!(solver, s => {
+                let d = s.get_statistics();
+                d.number_of_steps
+                    + d.number_of_error_test_failures
+                    + d.number_of_nonlinear_solver_fails
+            })
+        });
+        b.accepted + b.rejected_error + b.rejected_newton + live
     }
 }
 
@@ -734,7 +758,7 @@ where
 {
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError> {
         check_stop(self.t, t_stop)?;
-        self.budget.check(self.stats.steps, self.t, &self.y)?;
+        self.budget.check(self.attempts(), self.t, &self.y)?;
         self.sliver = None;
         if let Some(dy) = self.pending.take() {
             self.build(dy, t_stop)?;
@@ -799,12 +823,11 @@ where
         with_solver!(&mut *solver, s => {
             *s.config_mut().as_base_mut().minimum_timestep = floor;
         });
-        // The live solver's failures so far (the counters are fresh after every step and
-        // start), for the error below.
-        let (newton_before, error_before) = (
-            self.stats.rejected_newton - self.base.rejected_newton,
-            self.stats.rejected_error - self.base.rejected_error,
-        );
+        // The live solver's failures so far, for the error below.
+        let (newton_before, error_before) = with_solver!(&*solver, s => {
+            let d = s.get_statistics();
+            (d.number_of_nonlinear_solver_fails, d.number_of_error_test_failures)
+        });
         if self.quad.is_on() {
             with_solver!(&*solver, s => self.quad.before(B::slice(s.state().g)));
         }
@@ -817,7 +840,6 @@ where
                 let after = with_solver!(&*solver, s => s.get_statistics().clone());
                 let newton = after.number_of_nonlinear_solver_fails - newton_before;
                 let error_test = after.number_of_error_test_failures - error_before;
-                self.update_stats();
                 // A step-size failure means the trial step fell below the floor; BDF keeps
                 // it in its state, the SDIRK methods only their starting step.
                 let h_fail = h_state.min(floor);
@@ -858,7 +880,6 @@ where
             }
         });
         if !finite {
-            self.update_stats();
             return Err(SolveError::NonFiniteState {
                 t: self.t,
                 y: self.y.clone(),
@@ -870,8 +891,7 @@ where
         self.t_prev = self.t;
         self.t = t_new;
         let h = self.t - self.t_prev;
-        self.update_stats();
-        self.stats.record_step_size(h);
+        self.sizes.record_step_size(h);
         Ok(())
     }
 
@@ -915,11 +935,8 @@ where
 
     fn restart(&mut self, t: f64, y: &[f64]) -> Result<(), SolveError> {
         self.sliver = None;
-        self.update_stats();
-        self.base = self.stats;
-        self.start(t, y)?;
-        self.update_stats();
-        Ok(())
+        self.base = self.stats();
+        self.start(t, y)
     }
 }
 
