@@ -380,6 +380,9 @@ impl<S: OdeSystem + ?Sized> Stepper for DiffsolStepper<'_, '_, S> {
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         with_core!(&self.inner, c => c.interpolate(t, out))
     }
+    fn interpolate_many(&self, ts: &[f64], out: &mut [f64]) {
+        with_core!(&self.inner, c => c.interpolate_many(ts, out))
+    }
     fn set_h_max(&mut self, h_max: f64) {
         with_core!(&mut self.inner, c => c.set_h_max(h_max))
     }
@@ -921,6 +924,39 @@ where
             // Unreachable for t in [t_prev, t]; the end state is the safe answer.
             Err(_) => out.copy_from_slice(&self.y),
         }
+    }
+
+    /// [`Stepper::interpolate_many`]: `interpolate` at each time, the work buffer borrowed
+    /// and diffsol's solver chosen once; where `interpolate` would not ask diffsol (a step of
+    /// length 0, the Euler sliver, no live solver), it is called at each time.
+    fn interpolate_many(&self, ts: &[f64], out: &mut [f64]) {
+        let n = self.y.len();
+        let solver = match &self.solver {
+            Some(solver) if n > 0 && self.t != self.t_prev && self.sliver.is_none() => solver,
+            _ => {
+                if n > 0 {
+                    for (&t, o) in ts.iter().zip(out.chunks_exact_mut(n)) {
+                        self.interpolate(t, o);
+                    }
+                }
+                return;
+            }
+        };
+        let mut buf = self.buf.borrow_mut();
+        with_solver!(solver, s => {
+            let t_end = s.state().t;
+            for (&t, o) in ts.iter().zip(out.chunks_exact_mut(n)) {
+                if t >= self.t {
+                    o.copy_from_slice(&self.y);
+                    continue;
+                }
+                let tq = t.max(self.t_prev).min(t_end);
+                match s.interpolate_inplace(tq, &mut buf) {
+                    Ok(()) => o.copy_from_slice(B::slice(&buf)),
+                    Err(_) => o.copy_from_slice(&self.y),
+                }
+            }
+        })
     }
 
     fn set_h_max(&mut self, h_max: f64) {

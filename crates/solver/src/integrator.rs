@@ -900,20 +900,28 @@ fn drive<S: OdeSystem + ?Sized>(
         sol.t.push(t0);
         sol.y.extend_from_slice(y0);
     }
-    let mut buf = vec![0.0; n];
     loop {
         let outcome = it.step()?;
         let t_now = it.t();
         if let Output::Times(_) = output {
+            // The grid's times inside the step, before its end (the times are validated
+            // non-decreasing): the stepper's dense output, as `Integrator::interpolate` gives
+            // it before the end, for all of them at once and into the record in place.
+            let first = next_time;
+            while next_time < times.len() && times[next_time] < t_now {
+                next_time += 1;
+            }
+            if next_time > first {
+                let ts = &times[first..next_time];
+                let k = sol.y.len();
+                sol.y.resize(k + ts.len() * n, 0.0);
+                it.stepper.interpolate_many(ts, &mut sol.y[k..]);
+                sol.t.extend_from_slice(ts);
+            }
+            // At the end: the state itself (after the hook, at an event).
             while next_time < times.len() && times[next_time] <= t_now {
-                let tq = times[next_time];
-                if tq >= t_now {
-                    buf.copy_from_slice(it.y());
-                } else {
-                    it.interpolate(tq, &mut buf);
-                }
-                sol.t.push(tq);
-                sol.y.extend_from_slice(&buf);
+                sol.t.push(times[next_time]);
+                sol.y.extend_from_slice(it.y());
                 next_time += 1;
             }
         } else if matches!(output, Output::Steps) {

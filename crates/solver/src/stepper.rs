@@ -47,6 +47,19 @@ pub trait Stepper {
     fn step(&mut self, t_stop: f64) -> Result<(), SolveError>;
     /// Dense output: writes y(t) for t in [t_prev, t] into `out`.
     fn interpolate(&self, t: f64, out: &mut [f64]);
+    /// Dense output at several times of the last step, one state after another:
+    /// `out[k n..(k + 1) n]` = y(`ts[k]`), each as [`Stepper::interpolate`] writes it
+    /// (`out` holds `ts.len()` states of n = `y().len()`). The default calls it once a time;
+    /// a stepper overrides it to set up once for the whole grid of a step.
+    fn interpolate_many(&self, ts: &[f64], out: &mut [f64]) {
+        let n = self.y().len();
+        if n == 0 {
+            return;
+        }
+        for (&t, o) in ts.iter().zip(out.chunks_exact_mut(n)) {
+            self.interpolate(t, o);
+        }
+    }
     /// Restarts from (t, y), discarding all history (FSAL stage, controller history, multistep
     /// history and order). The next trial step is chosen as at the start: `opts.h0` when
     /// given, else the starting-step algorithm ([`initial_step`] or diffsol's equivalent).
