@@ -507,6 +507,7 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
         self.stepper.step(self.t_end)?;
         let t_b = self.stepper.t();
         {
+            // The new state, asked of the stepper once for both checks.
             let y = self.stepper.y();
             let bound = self.opts.divergence_bound;
             // |v| ≤ a finite bound fails for NaN and ±∞ alike: one comparison per entry.
@@ -521,17 +522,14 @@ impl<'p, S: OdeSystem + ?Sized> Integrator<'p, S> {
                     y: self.y_cur.clone(),
                 });
             }
-        }
-        if let Err(r) = self
-            .sys
-            .check_accepted(self.t_cur, &self.y_cur, t_b, self.stepper.y())
-        {
-            return Err(SolveError::StateRejected {
-                t: t_b,
-                y: self.stepper.y().to_vec(),
-                kind: r.kind,
-                reason: r.reason,
-            });
+            if let Err(r) = self.sys.check_accepted(self.t_cur, &self.y_cur, t_b, y) {
+                return Err(SolveError::StateRejected {
+                    t: t_b,
+                    y: y.to_vec(),
+                    kind: r.kind,
+                    reason: r.reason,
+                });
+            }
         }
         if !self.specs.is_empty() {
             if let Some((t_ev, hits)) = self.locate_events(t_b)? {
