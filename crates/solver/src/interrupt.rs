@@ -30,6 +30,7 @@ pub fn request_stop() {
 }
 
 /// Whether a stop has been requested.
+#[inline]
 pub fn stop_requested() -> bool {
     STOP.load(Ordering::Relaxed)
 }
@@ -81,6 +82,7 @@ pub fn deadline_passed() -> Option<f64> {
 
 /// Whether the call running on this thread has a deadline ([`deadline_scope`]), passed or
 /// not; no clock read.
+#[inline]
 pub(crate) fn deadline_set() -> bool {
     DEADLINE.with(|d| d.get().is_some())
 }
