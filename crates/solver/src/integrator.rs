@@ -135,10 +135,9 @@ pub fn reach_limit(g: f64, gd: f64, gdd: f64) -> f64 {
 /// documentation), from its values and rates at both ends.
 #[inline]
 pub fn far_from_zero(g_a: f64, gd_a: f64, g_b: f64, gd_b: f64, h: f64) -> bool {
-    let s = sign(g_a);
-    s != 0
-        && s == sign(g_b)
-        && g_a.abs().min(g_b.abs()) >= FAR_FACTOR * h * gd_a.abs().max(gd_b.abs())
+    // The same nonzero sign at both ends (NaN has none), without forming the signs.
+    let same_side = (g_a > 0.0 && g_b > 0.0) || (g_a < 0.0 && g_b < 0.0);
+    same_side && g_a.abs().min(g_b.abs()) >= FAR_FACTOR * h * gd_a.abs().max(gd_b.abs())
 }
 
 /// What one call of [`Integrator::step`] did, and where the state is afterwards.
