@@ -482,6 +482,15 @@ pub struct Film {
     pub mirror_width: f64,
 }
 
+/// A film's constants ([`Film::constants`]): computed once, read by [`Film::force_with`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FilmConstants {
+    /// The law's scale S (12 μ L R³/c², 12 π μ L R³/c² or μ R L³/(2 c²)).
+    pub scale: f64,
+    /// [`Film::eps_limit`].
+    pub limit: f64,
+}
+
 impl Film {
     /// Checks the parameters: μ, L, R, c, Ω₀ > 0 and 0 < ε_cap < 1 (when capped), all finite.
     /// With them, [`Film::force`] is finite for every finite (ε, ε̇, Ω) unless S·ε̇ or S·Ω
@@ -512,16 +521,49 @@ impl Film {
         )
     }
 
+    /// The law's constants, S and the largest ε it is evaluated at, by the expressions of
+    /// [`Film::force`]: computed once where the film is compiled and handed to
+    /// [`Film::force_with`] (the same numbers, so the same bits).
+    pub(crate) fn constants(&self) -> FilmConstants {
+        let (mu, l, r, c) = (self.viscosity, self.length, self.radius, self.clearance);
+        let pi = std::f64::consts::PI;
+        FilmConstants {
+            scale: match self.model {
+                FilmModel::LongGumbel | FilmModel::LongGumbelMirrored => {
+                    12.0 * mu * l * r * r * r / (c * c)
+                }
+                FilmModel::LongSommerfeld => 12.0 * pi * mu * l * r * r * r / (c * c),
+                FilmModel::ShortOcvirk | FilmModel::ShortOcvirkMirrored => {
+                    mu * r * l * l * l / (2.0 * c * c)
+                }
+            },
+            limit: self.eps_limit(),
+        }
+    }
+
     /// Film force (F_r, F_t) on the journal, radial along n and tangential along t (N).
     ///
     /// ε is replaced by ε_eff = min(ε, ε_cap), or min(ε, 1 − η) without a cap (and by 0 if
     /// negative); ε̇ and Ω are used as given. A NaN ε gives NaN forces (it is not hidden).
     #[inline]
     pub fn force(&self, eps: f64, eps_dot: f64, omega: f64) -> (f64, f64) {
+        self.force_with(&self.constants(), eps, eps_dot, omega)
+    }
+
+    /// [`Film::force`] with its constants `k` computed once ([`Film::constants`] of this film).
+    /// (Always inlined: a call from the small-tree right-hand side spilled its registers.)
+    #[inline(always)]
+    pub(crate) fn force_with(
+        &self,
+        k: &FilmConstants,
+        eps: f64,
+        eps_dot: f64,
+        omega: f64,
+    ) -> (f64, f64) {
         // ε_eff = min(ε, limit), and ε ≥ 0. Written with comparisons rather than
         // `f64::min/max` so that a NaN ε propagates (the solver reports it) instead of being
         // silently replaced by the limit.
-        let limit = self.eps_limit();
+        let limit = k.limit;
         let e = if eps > limit {
             limit
         } else if eps < 0.0 {
@@ -538,7 +580,7 @@ impl Film {
         } else {
             (1.0, omega)
         };
-        let (mu, l, r, c) = (self.viscosity, self.length, self.radius, self.clearance);
+        let s = k.scale;
         let e2 = e * e;
         // Without a cap ε comes arbitrarily close to 1, where 1 − ε² loses digits; (1 − ε)(1 + ε)
         // keeps them (1 − ε is exact for ε ≥ 1/2). The capped laws keep their arithmetic.
@@ -550,7 +592,6 @@ impl Film {
         let pi = std::f64::consts::PI;
         match self.model {
             FilmModel::LongGumbel | FilmModel::LongGumbelMirrored => {
-                let s = 12.0 * mu * l * r * r * r / (c * c);
                 let fr = -s
                     * (e2 * om / ((2.0 + e2) * one)
                         + eps_dot * (pi / 2.0 - 8.0 / (pi * (2.0 + e2))) / (one * one.sqrt()));
@@ -559,15 +600,11 @@ impl Film {
                         + sgn * (2.0 * e * eps_dot / ((2.0 + e2) * one)));
                 (fr, ft)
             }
-            FilmModel::LongSommerfeld => {
-                let s = 12.0 * pi * mu * l * r * r * r / (c * c);
-                (
-                    -s * eps_dot / (one * one.sqrt()),
-                    s * e * omega / ((2.0 + e2) * one.sqrt()),
-                )
-            }
+            FilmModel::LongSommerfeld => (
+                -s * eps_dot / (one * one.sqrt()),
+                s * e * omega / ((2.0 + e2) * one.sqrt()),
+            ),
             FilmModel::ShortOcvirk | FilmModel::ShortOcvirkMirrored => {
-                let s = mu * r * l * l * l / (2.0 * c * c);
                 let fr = -s
                     * (2.0 * e2 * om / (one * one)
                         + pi * (1.0 + 2.0 * e2) * eps_dot / (one * one * one.sqrt()));
@@ -854,6 +891,48 @@ mod tests {
         );
         assert_eq!(d[0], -0.1 * f_n / 1e-3);
         assert_eq!(FrictionLaw::None.force_derivatives(0.2, f_n), [0.0, 0.0]);
+    }
+
+    /// The constants computed once (`Film::constants`, read by `Film::force`): the scale S
+    /// of each law against its closed form at ε = 0, Ω = 0 (where F_r = −S ε̇ times
+    /// π/2 − 4/π, 1 and π), and the limit: beyond ε_cap the law is the law at ε_cap.
+    #[test]
+    fn film_constants_give_each_laws_scale_and_limit() {
+        let (mu, l, r, c) = (0.4, 0.1, 0.0499, 1e-4);
+        let pi = std::f64::consts::PI;
+        let r3 = r * r * r;
+        for (model, radial) in [
+            (
+                FilmModel::LongGumbel,
+                12.0 * mu * l * r3 / (c * c) * (pi / 2.0 - 4.0 / pi),
+            ),
+            (FilmModel::LongSommerfeld, 12.0 * pi * mu * l * r3 / (c * c)),
+            (
+                FilmModel::ShortOcvirk,
+                mu * r * l * l * l / (2.0 * c * c) * pi,
+            ),
+        ] {
+            let film = Film {
+                model,
+                viscosity: mu,
+                length: l,
+                radius: r,
+                clearance: c,
+                eps_cap: Some(0.99),
+                mirror_width: 0.01,
+            };
+            let (fr, ft) = film.force(0.0, 1.0, 0.0);
+            assert!(
+                (fr + radial).abs() <= 4e-16 * radial,
+                "{model:?}: {fr} against {radial}"
+            );
+            assert_eq!(ft, 0.0);
+            let k = film.constants();
+            assert_eq!(k.limit, 0.99);
+            let at = |eps: f64| film.force_with(&k, eps, -3.0, 25.0);
+            assert_eq!(at(2.0), at(0.99), "{model:?}");
+            assert_eq!(at(0.4), film.force(0.4, -3.0, 25.0), "{model:?}");
+        }
     }
 
     #[test]

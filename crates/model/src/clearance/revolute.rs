@@ -10,7 +10,7 @@ use crate::clearance::contact::{
 };
 use crate::clearance::geometry::{ClearanceInput, ClearanceState};
 use crate::clearance::laws::{
-    hertz_stiffness, Film, FilmModel, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH,
+    hertz_stiffness, Film, FilmConstants, FilmModel, FrictionLaw, NormalLaw, DEFAULT_MIRROR_WIDTH,
 };
 use crate::elements::input::Kin;
 use crate::labels::EventLabels;
@@ -175,6 +175,8 @@ pub(crate) struct Revolute {
     pub normal: NormalLaw,
     pub friction: Option<FrictionLaw>,
     pub film: Option<Film>,
+    /// The film's constants (`Film::constants`; unused without a film).
+    pub film_k: FilmConstants,
     pub e0: [f64; 2],
     /// ė(t_start) (m/s).
     pub e0_rate: [f64; 2],
@@ -285,6 +287,11 @@ impl Default for RevoluteEval {
 /// A force on a body: (body, global arm from its centre of mass, force).
 pub(crate) type PointLoad = (usize, [f64; 2], [f64; 2]);
 
+/// The journal's end of a joint, as [`Revolute::each_load_at`] names it.
+pub(crate) const JOURNAL: usize = 0;
+/// The bearing's end of a joint, as [`Revolute::each_load_at`] names it.
+pub(crate) const BEARING: usize = 1;
+
 impl Revolute {
     /// Builds the joint from its validated spec (scene joint `ji`).
     pub(crate) fn new(refs: &dyn SceneRefs, ji: usize, c: &ClearanceSpec) -> Revolute {
@@ -321,6 +328,13 @@ impl Revolute {
             c: rb - rj,
             normal: normal_law(&c.normal, stiffness),
             friction: friction_law(&c.friction),
+            film_k: film.map_or(
+                FilmConstants {
+                    scale: 0.0,
+                    limit: 0.0,
+                },
+                |f| f.constants(),
+            ),
             film,
             e0: c.initial_eccentricity,
             e0_rate: c.initial_eccentricity_rate,
@@ -331,6 +345,13 @@ impl Revolute {
     /// The clearance kinematics of the joint (docs/model.md §2).
     #[inline]
     pub(crate) fn state(&self, kin: &Kin<'_>) -> ClearanceState {
+        self.state_inline(kin)
+    }
+
+    /// [`Revolute::state`], always inlined: for the small-tree right-hand side, where the
+    /// state's fields stay in registers (no call, no copy of the state; the same operations).
+    #[inline(always)]
+    pub(crate) fn state_inline(&self, kin: &Kin<'_>) -> ClearanceState {
         let (r_b, v_b, w_b) = self.bearing.point(kin);
         let (r_j, v_j, w_j) = self.journal.point(kin);
         ClearanceState::compute(&ClearanceInput {
@@ -373,7 +394,8 @@ impl Revolute {
     /// [`Revolute::forces`] without the elastic part (`elastic` left 0): the forces alone,
     /// for a right-hand side that reads nothing else (its square root saved; the small-tree
     /// path of the minimal formulation). The same operations for the forces, so their bits.
-    #[inline]
+    /// (Always inlined: the small path then builds no [`RevoluteEval`] in memory.)
+    #[inline(always)]
     pub(crate) fn forces_only(&self, st: ClearanceState) -> RevoluteEval {
         let mut ev = RevoluteEval {
             st,
@@ -388,7 +410,7 @@ impl Revolute {
             }
         }
         if let Some(film) = &self.film {
-            let (fr, ft) = film.force(st.eps, st.eps_dot, st.omega);
+            let (fr, ft) = film.force_with(&self.film_k, st.eps, st.eps_dot, st.omega);
             ev.f_r = fr;
             ev.f_tf = ft;
         }
@@ -406,6 +428,19 @@ impl Revolute {
         cs: &[[f64; 2]],
         mut apply: impl FnMut(PointLoad),
     ) {
+        self.each_load_at(ev, cs, |_, l| apply(l));
+    }
+
+    /// [`Revolute::each_load`] with the end each load acts on ([`JOURNAL`] or [`BEARING`])
+    /// handed over beside it, always inlined (the small-tree right-hand side finds the
+    /// end's integrated body by it, in a table made once).
+    #[inline(always)]
+    pub(crate) fn each_load_at(
+        &self,
+        ev: &RevoluteEval,
+        cs: &[[f64; 2]],
+        mut apply: impl FnMut(usize, PointLoad),
+    ) {
         let st = &ev.st;
         // Dry contact.
         if st.delta > 0.0 {
@@ -416,12 +451,12 @@ impl Revolute {
             if let Some(kj) = self.journal.body {
                 let a = rot(cs[kj], self.journal.s);
                 let arm = [a[0] + self.rj * st.n[0], a[1] + self.rj * st.n[1]];
-                apply((kj, arm, f_j));
+                apply(JOURNAL, (kj, arm, f_j));
             }
             if let Some(kb) = self.bearing.body {
                 let a = rot(cs[kb], self.bearing.s);
                 let arm = [a[0] + self.rb * st.n[0], a[1] + self.rb * st.n[1]];
-                apply((kb, arm, [-f_j[0], -f_j[1]]));
+                apply(BEARING, (kb, arm, [-f_j[0], -f_j[1]]));
             }
         }
         // Oil film.
@@ -429,10 +464,13 @@ impl Revolute {
             let (fr, ft) = (ev.f_r, ev.f_tf);
             let f_j = [fr * st.n[0] + ft * st.t[0], fr * st.n[1] + ft * st.t[1]];
             if let Some(kj) = self.journal.body {
-                apply((kj, rot(cs[kj], self.journal.s), f_j));
+                apply(JOURNAL, (kj, rot(cs[kj], self.journal.s), f_j));
             }
             if let Some(kb) = self.bearing.body {
-                apply((kb, rot(cs[kb], self.bearing.s), [-f_j[0], -f_j[1]]));
+                apply(
+                    BEARING,
+                    (kb, rot(cs[kb], self.bearing.s), [-f_j[0], -f_j[1]]),
+                );
             }
         }
     }

@@ -48,7 +48,7 @@ impl Mechanism {
         let bodies = Bodies::prescribe(scene);
         let constraints = Constraints::build(scene, &bodies)?;
         checkpoint("building the constraints", t0)?;
-        let forces = Forces::build(scene);
+        let forces = Forces::build(scene, &bodies);
         let formulation = match scene.formulation {
             FormulationName::LagrangeBaumgarte => Formulation::LagrangeBaumgarte(
                 LagrangeBaumgarte::new(&constraints, &bodies, scene.baumgarte),

@@ -13,12 +13,12 @@
 //! Absent features (gravity, friction, film, force elements) run no code.
 
 use crate::clearance::prismatic::Prismatic;
-use crate::clearance::revolute::Revolute;
+use crate::clearance::revolute::{Revolute, BEARING, JOURNAL};
 use crate::elements::input::Load;
 use crate::elements::interface::ForceJacobian;
 use crate::elements::Element;
 use crate::linalg::zeroed;
-use crate::mechanism::bodies::{Bodies, Owner};
+use crate::mechanism::bodies::Bodies;
 use crate::mechanism::scratch::Scratch;
 use crate::planar::cross;
 use crate::scene::format::{JointSpec, Scene};
@@ -34,6 +34,18 @@ pub(crate) struct Forces {
     pub prismatic: Vec<Prismatic>,
     /// The force elements, in scene order.
     pub elements: Vec<Element>,
+    /// The small-tree path's tables, made once (`Forces::build`): m g of every integrated
+    /// body (by integrated index; empty without gravity) and the integrated index of each
+    /// revolute clearance joint's ends ([`JOURNAL`], [`BEARING`]; None: the ground or a
+    /// prescribed body).
+    small: SmallTables,
+}
+
+/// The tables of [`Forces::applied_small`] (see [`Forces`]).
+#[derive(Debug)]
+struct SmallTables {
+    weight: Vec<[f64; 2]>,
+    revolute_ends: Vec<[Option<usize>; 2]>,
 }
 
 /// The buffers of [`Forces::jacobian`], kept with the mechanism.
@@ -48,7 +60,7 @@ pub(crate) struct ForceJacWork {
 impl Forces {
     /// Build phase: the clearance joints and force elements of a validated scene (the
     /// elements' defaults of the initial state are set after the assembly: `set_initial`).
-    pub(crate) fn build(scene: &Scene) -> Forces {
+    pub(crate) fn build(scene: &Scene, bodies: &Bodies) -> Forces {
         let mut revolute = Vec::new();
         let mut prismatic = Vec::new();
         for (ji, joint) in scene.joints.iter().enumerate() {
@@ -58,11 +70,33 @@ impl Forces {
                 _ => {}
             }
         }
+        let gravity = (scene.gravity != [0.0, 0.0]).then_some(scene.gravity);
+        let int_of = bodies.int_of();
+        let small = SmallTables {
+            // The products of `applied`'s gravity loop.
+            weight: gravity.map_or(Vec::new(), |gv| {
+                let w = |k: usize| {
+                    let m = bodies.info[k].mass;
+                    [m * gv[0], m * gv[1]]
+                };
+                bodies.int_bodies.iter().map(|&k| w(k)).collect()
+            }),
+            revolute_ends: revolute
+                .iter()
+                .map(|c| {
+                    let mut ends = [None; 2];
+                    ends[JOURNAL] = c.journal.body.and_then(|b| int_of[b]);
+                    ends[BEARING] = c.bearing.body.and_then(|b| int_of[b]);
+                    ends
+                })
+                .collect(),
+        };
         Forces {
-            gravity: (scene.gravity != [0.0, 0.0]).then_some(scene.gravity),
+            gravity,
             revolute,
             prismatic,
             elements: scene.forces.iter().map(|f| f.compile(scene)).collect(),
+            small,
         }
     }
 
@@ -117,7 +151,10 @@ impl Forces {
     /// elements and prismatic joints through `sc.g`), so its bits; no clearance evaluation is
     /// kept in `sc.revolute` and no elastic part computed (what reads them runs
     /// [`Forces::applied`] itself: outputs, the Jacobian, full evaluations).
-    #[inline]
+    /// The products m g and each joint end's integrated body come from tables made once
+    /// (`SmallTables`), the joint's state and forces are inlined (no call, no evaluation in
+    /// memory): the same operations.
+    #[inline(always)]
     pub(crate) fn applied_small(
         &self,
         bodies: &Bodies,
@@ -125,17 +162,14 @@ impl Forces {
         sc: &mut Scratch,
         g: &mut [[f64; 3]],
     ) {
-        if let Some(gv) = self.gravity {
-            for (gi, &k) in g.iter_mut().zip(&bodies.int_bodies) {
-                let m = bodies.info[k].mass;
-                gi[0] += m * gv[0];
-                gi[1] += m * gv[1];
-            }
+        for (gi, w) in g.iter_mut().zip(&self.small.weight) {
+            gi[0] += w[0];
+            gi[1] += w[1];
         }
-        for c in &self.revolute {
-            let ev = c.forces_only(c.state(&sc.kin()));
-            c.each_load(&ev, &sc.cs, |(b, arm, f)| {
-                if let Owner::Int(i) = bodies.info[b].owner {
+        for (c, ends) in self.revolute.iter().zip(&self.small.revolute_ends) {
+            let ev = c.forces_only(c.state_inline(&sc.kin()));
+            c.each_load_at(&ev, &sc.cs, |end, (_, arm, f)| {
+                if let Some(i) = ends[end] {
                     let gi = &mut g[i];
                     gi[0] += f[0];
                     gi[1] += f[1];

@@ -26,6 +26,7 @@
 //! of at most six coordinates the integrator's right-hand side takes small.rs instead: the
 //! same sums and factorisation on the stack, θ̈ alone (no q̈), the same bits.
 
+mod flat;
 mod jacobian;
 pub(crate) mod loops;
 mod small;
@@ -40,6 +41,7 @@ use crate::mechanism::scratch::Scratch;
 use crate::scene::error::SceneError;
 use crate::scene::format::{AugmentedLagrangianParams, Scene};
 
+use self::flat::FlatPlan;
 use self::loops::Loops;
 use self::tree::{Link, Tree};
 
@@ -143,6 +145,8 @@ pub(crate) struct Minimal {
     force_terms: Vec<Term>,
     /// Whether the tree is flat (`Tree::is_flat`: Rᵀ M R diagonal; small.rs).
     small_flat: bool,
+    /// A flat tree's θ̈, planned coordinate by coordinate (flat.rs; empty if not flat).
+    flat: FlatPlan,
 }
 
 impl Minimal {
@@ -182,12 +186,13 @@ impl Minimal {
         let nq = bodies.nq();
         let n = tree.n;
         let m = cons.len();
-        let mass = bodies.inverse_masses().iter().map(|v| 1.0 / v).collect();
+        let mass: Vec<f64> = bodies.inverse_masses().iter().map(|v| 1.0 / v).collect();
         let (mass_terms, force_terms) = terms(&tree, nq);
         Minimal {
             mass_terms,
             force_terms,
             small_flat: tree.is_flat(),
+            flat: FlatPlan::new(&tree, &mass),
             tree,
             nq,
             mass,

@@ -7,7 +7,8 @@
 //!     clearance joints' loads, the elements'; the general path's sums, so its bits)
 //!   flat tree (Tree::is_flat: every body on the ground or on a prescribed body; the
 //!     press): M̄ = Rᵀ M R is diagonal, θ̈_c = (R_bᵀ (g_b − M_b a_c,b))_c / M̄_cc of its own
-//!     body b alone, by the dense path's operations (small_flat)
+//!     body b alone, by the dense path's operations, planned once per coordinate (flat.rs:
+//!     a fixed column's constants computed at assembly), without the dispatch on n
 //!   any other tree:
 //!   R_b (3 × n) and a_c,b (3) of every body b, parents before children, each entry by the
 //!     expression of Tree::velocity_matrix_and_bias
@@ -67,6 +68,13 @@ impl Minimal {
         sc: &mut Scratch,
         thdd: &mut [f64],
     ) -> bool {
+        if self.small_flat {
+            // The flat plan (flat.rs), the applied forces inlined: no dispatch on n.
+            let nb = self.tree.bodies.len();
+            let mut g = [[0.0f64; 3]; SMALL_MAX];
+            forces.applied_small(bodies, t, sc, &mut g[..nb]);
+            return self.flat.accelerations(&g, sc, thdd);
+        }
         match self.tree.n {
             1 => self.small::<1>(bodies, forces, t, sc, thdd),
             2 => self.small::<2>(bodies, forces, t, sc, thdd),
@@ -91,10 +99,7 @@ impl Minimal {
         // The applied forces of every integrated body (by integrated index: at most N).
         let nb = self.tree.bodies.len();
         let mut g = [[0.0f64; 3]; N];
-        forces.applied_small(bodies, t, sc, &mut g[..nb]);
-        if self.small_flat {
-            return self.small_flat(&g, sc, out);
-        }
+        applied_small(forces, bodies, t, sc, &mut g[..nb]);
         // R's rows and a_c of every integrated body (by integrated index: at most N of them,
         // each has a coordinate); the entries a body's rows do not reach stay +0.
         let mut rows = [[[0.0f64; N]; 3]; N];
@@ -209,88 +214,13 @@ impl Minimal {
             ],
         )
     }
+}
 
-    /// θ̈ on a flat tree (`Tree::is_flat`: M̄ diagonal): each coordinate's θ̈_c from its own
-    /// body b alone, by the operations of the dense path with the ±0 terms of the other
-    /// bodies and of M̄'s zero entries left out (they change no bit: a sum from +0 never
-    /// turns −0), so its bits:
-    /// ```text
-    /// M̄_cc = Σ_rows r m r,  Q̄_c = Σ_rows r (g − m a_c),  l = 1/√M̄_cc,  θ̈_c = (Q̄_c l) l
-    /// ```
-    /// (r: column c of R_b; a NaN or infinite θ̈ in any coordinate fails the whole solve, as
-    /// it does on the dense path, where 0 · NaN spreads it).
-    #[inline(always)]
-    fn small_flat(&self, g: &[[f64; 3]], sc: &Scratch, out: &mut [f64]) -> bool {
-        // θ̈_c of column r and a_c of body i: one coordinate of the dense path.
-        let coordinate = |r: [f64; 3], ac: [f64; 3], i: usize| -> Option<f64> {
-            let (m, f) = self.body_force(&g[i], &ac, i);
-            let mut d = 0.0;
-            d += r[0] * m[0] * r[0];
-            d += r[1] * m[1] * r[1];
-            d += r[2] * m[2] * r[2];
-            let mut s = 0.0;
-            s += r[0] * f[0];
-            s += r[1] * f[1];
-            s += r[2] * f[2];
-            if !(d > 0.0) {
-                return None;
-            }
-            let l = 1.0 / d.sqrt();
-            Some(s * l * l)
-        };
-        for tb in &self.tree.bodies {
-            let (k, c, i) = (tb.body, tb.col, tb.int);
-            match tb.link {
-                Link::Free => {
-                    for d in 0..3 {
-                        let mut r = [0.0; 3];
-                        r[d] = 1.0;
-                        let Some(v) = coordinate(r, [0.0; 3], i) else {
-                            return false;
-                        };
-                        out[c + d] = v;
-                    }
-                }
-                Link::Slider { u, .. } => {
-                    let ac = [0.0 * u[0], 0.0 * u[1], 0.0];
-                    let Some(v) = coordinate([u[0], u[1], 0.0], ac, i) else {
-                        return false;
-                    };
-                    out[c] = v;
-                }
-                Link::Revolute { parent, s } => {
-                    // The parent's point's acceleration at θ̈ = 0 (the ground or a
-                    // prescribed body: a flat tree has no integrated parent).
-                    let ap = match parent {
-                        Parent::Prescribed(kp, sp) | Parent::Integrated(kp, _, sp) => {
-                            let a = rot(sc.cs[kp], sp);
-                            let b = perp(a);
-                            let [ax, ay, alp] = sc.acc[kp];
-                            let w = sc.vel[kp][2];
-                            [
-                                ax + alp * b[0] - w * w * a[0],
-                                ay + alp * b[1] - w * w * a[1],
-                            ]
-                        }
-                        Parent::Ground(_) => [0.0; 2],
-                    };
-                    let a = rot(sc.cs[k], s);
-                    let b = perp(a);
-                    let w = sc.vel[k][2];
-                    let ac = [
-                        ap[0] - 0.0 * b[0] + w * w * a[0],
-                        ap[1] - 0.0 * b[1] + w * w * a[1],
-                        0.0,
-                    ];
-                    let Some(v) = coordinate([-b[0], -b[1], 1.0], ac, i) else {
-                        return false;
-                    };
-                    out[c] = v;
-                }
-            }
-        }
-        out[..self.tree.n].iter().all(|v| v.is_finite())
-    }
+/// [`Forces::applied_small`] in one place for the dense path's six sizes (not inlined into
+/// each).
+#[inline(never)]
+fn applied_small(forces: &Forces, bodies: &Bodies, t: f64, sc: &mut Scratch, g: &mut [[f64; 3]]) {
+    forces.applied_small(bodies, t, sc, g);
 }
 
 #[cfg(test)]
