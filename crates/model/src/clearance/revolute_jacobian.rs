@@ -243,9 +243,10 @@ impl Revolute {
         let mut add = |j: usize, d: [f64; 3]| {
             let col = &mut dg[j * nq..(j + 1) * nq];
             for &(i, sign, radius, a, _, _) in on {
-                col[3 * i] += sign * d[0];
-                col[3 * i + 1] += sign * d[1];
-                col[3 * i + 2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
+                let g = &mut col[3 * i..3 * i + 3];
+                g[0] += sign * d[0];
+                g[1] += sign * d[1];
+                g[2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
             }
         };
         for &(i, sign, _, a, wslot, w) in on {
