@@ -196,9 +196,10 @@ impl Revolute {
     /// that can be nonzero, in ascending order of u: the dense product over all six entries
     /// adds products with exact zeros besides, which change no nonzero sum, and a zero's sign
     /// does not reach ∂g (its entries are sums from +0, where a ±0 term changes nothing).
-    /// The ends are on different bodies (scene/validate.rs), so a column is one end's; were
-    /// they not, the two ends' parts of a column would be added one after the other (the
-    /// same derivative, rounded differently).
+    /// The ends are on different bodies (`check_ends` in clearance/revolute.rs refuses a
+    /// scene where they are not), so a column is one end's; were they not, the two ends'
+    /// parts of a column would be added one after the other (the same derivative, rounded
+    /// differently).
     pub(crate) fn force_jacobian(
         &self,
         ev: &RevoluteEval,
