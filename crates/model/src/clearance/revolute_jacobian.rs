@@ -32,7 +32,6 @@
 use crate::clearance::geometry::{ClearanceInput, ClearanceState};
 use crate::clearance::revolute::{Revolute, RevoluteEval};
 use crate::elements::input::Kin;
-use crate::linalg::zeroed;
 use crate::planar::{perp, rot};
 
 /// Relative step of the differences in the clearance variables u = (e, ė, φ̇_J, φ̇_B).
@@ -185,7 +184,22 @@ impl Revolute {
 
     /// Adds the joint's contribution to ∂g/∂y (nq × n, column-major in `dg`); `int_of` maps
     /// a scene body to its integrated index.
-    /// `du` is scratch (resized to n).
+    ///
+    /// ```text
+    /// ∂u/∂y of an integrated end (sign s = +1 journal, −1 bearing; a = A s_end, b = perp(a)):
+    ///   column x, y:    ∂e/∂(x, y) = s (1, 0), s (0, 1)
+    ///   column φ:       ∂e/∂φ = s b,  ∂ė/∂φ = −s ω a
+    ///   column ẋ, ẏ:    ∂ė/∂(ẋ, ẏ) = s (1, 0), s (0, 1)
+    ///   column ω:       ∂ė/∂ω = s b,  ∂φ̇_end/∂ω = 1
+    /// ```
+    /// Each column's (∂F, ∂T) = ∂(F, T)/∂u · ∂u/∂y_j is summed over the entries of ∂u/∂y_j
+    /// that can be nonzero, in ascending order of u: the dense product over all six entries
+    /// adds products with exact zeros besides, which change no nonzero sum, and a zero's sign
+    /// does not reach ∂g (its entries are sums from +0, where a ±0 term changes nothing).
+    /// The ends are on different bodies (`check_ends` in clearance/revolute.rs refuses a
+    /// scene where they are not), so a column is one end's; were they not, the two ends'
+    /// parts of a column would be added one after the other (the same derivative, rounded
+    /// differently).
     pub(crate) fn force_jacobian(
         &self,
         ev: &RevoluteEval,
@@ -193,7 +207,6 @@ impl Revolute {
         int_of: &[Option<usize>],
         n: usize,
         dg: &mut [f64],
-        du: &mut Vec<[f64; 6]>,
     ) {
         let nq = n / 2;
         let c = self;
@@ -207,69 +220,63 @@ impl Revolute {
             normal * ev.st.n[0] + tangential * ev.st.t[0],
             normal * ev.st.n[1] + tangential * ev.st.t[1],
         ];
-        // ∂u/∂y for each integrated end: e = ±(r + A s), ė = ±(v + ω perp(A s)), φ̇ of the body.
-        // Column index of (x, y, φ) of body i: 3i..3i+2; of (ẋ, ẏ, ω): nq + 3i..nq + 3i+2.
-        let du = zeroed(du, n);
-        let ends = [(c.journal, 1.0, 4usize), (c.bearing, -1.0, 5usize)];
-        for (end, sign, wslot) in ends {
-            let Some(kb) = end.body else { continue };
-            let Some(i) = int_of[kb] else {
-                continue;
-            };
-            let a = rot(kin.cs[kb], end.s);
-            let b = perp(a);
-            let w = kin.vel[kb][2];
-            let (px, py, pp, vx, vy, vw) = (
-                3 * i,
-                3 * i + 1,
-                3 * i + 2,
-                nq + 3 * i,
-                nq + 3 * i + 1,
-                nq + 3 * i + 2,
-            );
-            du[px][0] += sign;
-            du[py][1] += sign;
-            du[pp][0] += sign * b[0];
-            du[pp][1] += sign * b[1];
-            // ∂(ω perp(A s))/∂φ = −ω A s.
-            du[pp][2] -= sign * w * a[0];
-            du[pp][3] -= sign * w * a[1];
-            du[vx][2] += sign;
-            du[vy][3] += sign;
-            du[vw][2] += sign * b[0];
-            du[vw][3] += sign * b[1];
-            du[vw][wslot] += 1.0;
-        }
-        // dF/dy, dT/dy, then the generalized forces of both ends: each integrated end's
-        // (integrated index, sign, radius, A s) found once, not in every column.
-        let mut on = [(0usize, 0.0, 0.0, [0.0; 2]); 2];
+        // Each integrated end: (integrated index, sign, radius, A s, φ̇ slot of u, its body's
+        // ω), found once.
+        let mut on = [(0usize, 0.0, 0.0, [0.0; 2], 0usize, 0.0); 2];
         let mut n_on = 0;
-        for (end, sign, radius) in [(c.journal, 1.0, c.rj), (c.bearing, -1.0, c.rb)] {
+        for (end, sign, radius, wslot) in [(c.journal, 1.0, c.rj, 4), (c.bearing, -1.0, c.rb, 5)] {
             let Some(kb) = end.body else { continue };
             let Some(i) = int_of[kb] else {
                 continue;
             };
-            on[n_on] = (i, sign, radius, rot(kin.cs[kb], end.s));
+            on[n_on] = (
+                i,
+                sign,
+                radius,
+                rot(kin.cs[kb], end.s),
+                wslot,
+                kin.vel[kb][2],
+            );
             n_on += 1;
         }
-        for j in 0..n {
-            let dj = &du[j];
-            if dj.iter().all(|&v| v == 0.0) {
-                continue;
-            }
-            let mut d = [0.0; 3];
-            for (i, di) in d.iter_mut().enumerate() {
-                *di = (0..6).map(|l| lu[i][l] * dj[l]).sum();
-            }
+        let on = &on[..n_on];
+        // dF/dy_j, dT/dy_j = `d` into the generalized forces of both ends.
+        let mut add = |j: usize, d: [f64; 3]| {
             let col = &mut dg[j * nq..(j + 1) * nq];
-            for &(i, sign, radius, a) in &on[..n_on] {
-                col[3 * i] += sign * d[0];
-                col[3 * i + 1] += sign * d[1];
-                col[3 * i + 2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
+            for &(i, sign, radius, a, _, _) in on {
+                let g = &mut col[3 * i..3 * i + 3];
+                g[0] += sign * d[0];
+                g[1] += sign * d[1];
+                g[2] += sign * (a[0] * d[1] - a[1] * d[0] + radius * d[2]);
             }
+        };
+        for &(i, sign, _, a, wslot, w) in on {
+            let b = perp(a);
+            // The entries of ∂u/∂y_j as the dense rows had them (sums from 0).
+            let (sb, sw) = ([0.0 + sign * b[0], 0.0 + sign * b[1]], sign * w);
+            let (swa0, swa1) = (0.0 - sw * a[0], 0.0 - sw * a[1]);
+            let one = |l: usize| [lu[0][l] * sign, lu[1][l] * sign, lu[2][l] * sign];
+            add(3 * i, one(0));
+            add(3 * i + 1, one(1));
+            add(
+                3 * i + 2,
+                [0, 1, 2].map(|r| {
+                    let x = &lu[r];
+                    x[0] * sb[0] + x[1] * sb[1] + x[2] * swa0 + x[3] * swa1
+                }),
+            );
+            add(nq + 3 * i, one(2));
+            add(nq + 3 * i + 1, one(3));
+            add(
+                nq + 3 * i + 2,
+                [0, 1, 2].map(|r| {
+                    let x = &lu[r];
+                    x[2] * sb[0] + x[3] * sb[1] + x[wslot]
+                }),
+            );
         }
         // The moment arms A s turn with their own bodies: ∂((A s) × F)/∂φ = perp(A s) × F = −(A s)·F.
-        for &(i, sign, _, a) in &on[..n_on] {
+        for &(i, sign, _, a, _, _) in on {
             dg[(3 * i + 2) * nq + 3 * i + 2] -= sign * (a[0] * f[0] + a[1] * f[1]);
         }
     }

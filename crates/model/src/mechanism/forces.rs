@@ -53,8 +53,9 @@ struct SmallTables {
 pub(crate) struct ForceJacWork {
     /// ∂g/∂(q, q̇), nq × n column-major.
     pub dg: Vec<f64>,
-    /// ∂u/∂y of one clearance joint, one row per column of y.
-    du: Vec<[f64; 6]>,
+    /// The integrated index of every scene body ([`Bodies::int_of`]), built at the first
+    /// call (the bodies do not change).
+    int_of: Vec<Option<usize>>,
 }
 
 impl Forces {
@@ -230,29 +231,25 @@ impl Forces {
 
     /// ∂g/∂(q, q̇) (nq × n, column-major, into `fw.dg`) at the evaluation in `sc` (module doc).
     pub(crate) fn jacobian(&self, bodies: &Bodies, t: f64, sc: &Scratch, fw: &mut ForceJacWork) {
-        let int_of = self.revolute_jacobian(bodies, sc, fw);
+        self.revolute_jacobian(bodies, sc, fw);
         if !(self.elements.is_empty() && self.prismatic.is_empty()) {
-            self.element_jacobian(bodies, &int_of, t, sc, &mut fw.dg);
+            self.element_jacobian(bodies, &fw.int_of, t, sc, &mut fw.dg);
         }
     }
 
-    /// `fw.dg` zeroed (nq × 2nq) with the revolute clearance joints' closed forms added; returns
-    /// the bodies' integrated indices for the other parts.
-    fn revolute_jacobian(
-        &self,
-        bodies: &Bodies,
-        sc: &Scratch,
-        fw: &mut ForceJacWork,
-    ) -> Vec<Option<usize>> {
+    /// `fw.dg` zeroed (nq × 2nq) with the revolute clearance joints' closed forms added, and
+    /// `fw.int_of` (the bodies' integrated indices) for the other parts.
+    fn revolute_jacobian(&self, bodies: &Bodies, sc: &Scratch, fw: &mut ForceJacWork) {
         let nq = bodies.nq();
         let n = 2 * nq;
-        let int_of = bodies.int_of();
+        if fw.int_of.len() != bodies.info.len() {
+            fw.int_of = bodies.int_of();
+        }
         let dg = zeroed(&mut fw.dg, nq * n);
         let kin = sc.kin();
         for (c, ev) in self.revolute.iter().zip(&sc.revolute) {
-            c.force_jacobian(ev, &kin, &int_of, n, dg, &mut fw.du);
+            c.force_jacobian(ev, &kin, &fw.int_of, n, dg);
         }
-        int_of
     }
 
     /// Whether ∂g/∂(q, q̇) can be nonzero: some clearance joint or force element acts
@@ -274,10 +271,10 @@ impl Forces {
         if !self.prismatic.is_empty() {
             return false;
         }
-        let int_of = self.revolute_jacobian(bodies, sc, fw);
+        self.revolute_jacobian(bodies, sc, fw);
         let kin = sc.kin();
         let mut fj = ForceJacobian {
-            int_of: &int_of,
+            int_of: &fw.int_of,
             nq: bodies.nq(),
             dg: &mut fw.dg,
         };

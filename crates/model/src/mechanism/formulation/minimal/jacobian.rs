@@ -32,6 +32,7 @@
 //! h = ε^(1/5)/max(1, |ω|max). Cost: the forces' ∂g, four force evaluations, five passes of
 //! the kinematics and one solve; Rodas5P calls it once per step instead of two RHS.
 
+use faer::reborrow::ReborrowMut;
 use faer::MatMut;
 
 use crate::linalg::{cholesky_solve, first_order_jacobian_frame, zeroed};
@@ -47,6 +48,31 @@ fn sized(v: &mut Vec<f64>, len: usize) -> &mut [f64] {
         v.resize(len, 0.0);
     }
     &mut v[..len]
+}
+
+/// Column `j` of ∂f/∂y (2n rows, n = `lower.len()`): the upper rows [0 I]'s entries and
+/// `lower` below them, through the column's slice when its rows are contiguous (faer's
+/// indexed writes check every entry), else entry by entry.
+#[inline]
+fn write_column(jac: &mut MatMut<'_, f64>, j: usize, n: usize, lower: &[f64]) {
+    let upper = |i: usize| if j == n + i { 1.0 } else { 0.0 };
+    match jac.rb_mut().col_mut(j).try_as_col_major_mut() {
+        Some(c) => {
+            let c = &mut c.as_slice_mut()[..2 * n];
+            for (i, v) in c[..n].iter_mut().enumerate() {
+                *v = upper(i);
+            }
+            c[n..].copy_from_slice(lower);
+        }
+        None => {
+            for i in 0..n {
+                jac[(i, j)] = upper(i);
+            }
+            for (a, &v) in lower.iter().enumerate() {
+                jac[(n + a, j)] = v;
+            }
+        }
+    }
 }
 
 /// The five-point central difference (module doc): (offset in steps, weight); the derivative
@@ -72,13 +98,8 @@ impl Minimal {
             first_order_jacobian_frame(&mut jac, n, false);
             return;
         };
-        // The upper rows [0 I] (first_order_jacobian_frame's); the columns below write every
-        // entry of the lower rows.
-        for j in 0..2 * n {
-            for i in 0..n {
-                jac[(i, j)] = if j == n + i { 1.0 } else { 0.0 };
-            }
-        }
+        // Each column below writes its entries of the upper rows [0 I]
+        // (first_order_jacobian_frame's) and of the lower rows (`write_column`).
         let w = self.work.borrow();
         let mut jw = self.jac_work.borrow_mut();
         let JacWork {
@@ -89,10 +110,10 @@ impl Minimal {
             qdd0,
             rho,
             qd,
-            dq,
             dgq,
             dac,
             col,
+            ..
         } = &mut *jw;
         // The kinematics as the evaluation left them (the prescribed bodies' functions of t,
         // the integrated bodies' those of Tree::positions at y): a column recomputes the
@@ -119,7 +140,6 @@ impl Minimal {
         for v in [qd0, qd1, dgq, dac] {
             sized(v, nq);
         }
-        sized(dq, 2 * nq);
         // Loop closures (loops.rs): σ at the perturbed states, and the columns' KKT solve.
         let (mut sig, mut dsig): ([Vec<f64>; 2], Vec<f64>) = Default::default();
         if let Some(l) = &self.loops {
@@ -134,9 +154,7 @@ impl Minimal {
                 // A rate's column in closed form (module doc).
                 self.rate_column(j - n, moved, sc, dg, dac, dgq, col);
                 solve_unrolled(&w.mr, n, col);
-                for (a, &v) in col.iter().enumerate() {
-                    jac[(n + a, j)] = v;
-                }
+                write_column(&mut jac, j, n, col);
                 continue;
             }
             let h = 6e-6 * (1.0 + y[j].abs());
@@ -178,31 +196,31 @@ impl Minimal {
                 }
             }
             let hh = hs[0] + hs[1];
-            // ∂(q, q̇)/∂y_j.
-            if j < n {
-                dq[..nq].copy_from_slice(&w.r[j * nq..(j + 1) * nq]);
-                // The bodies not moved have q̇ unchanged: (q̇ − q̇)/hh = +0.
-                dq[nq..].fill(0.0);
-                for tb in moved.iter().map(|&b| &self.tree.bodies[b]) {
-                    for i in 3 * tb.int..3 * tb.int + 3 {
-                        dq[nq + i] = (qd[0][i] - qd[1][i]) / hh;
-                    }
-                }
-            } else {
-                dq[..nq].fill(0.0);
-                dq[nq..].copy_from_slice(&w.r[(j - n) * nq..(j - n + 1) * nq]);
-            }
-            // ρ' + Rᵀ ∂Q/∂(q, q̇) ∂(q, q̇)/∂y_j.
-            // Over the moved bodies' rows of q and of q̇, ascending (dq is +0 in the others,
-            // which the sum over every row skipped too).
+            // ρ' + Rᵀ ∂Q/∂(q, q̇) ∂(q, q̇)/∂y_j, with ∂(q, q̇)/∂y_j = (R_j, (q̇₊ − q̇₋)/hh)
+            // (θ_j) or (0, R_j) (θ̇_j, loop closures).
+            // Over the moved bodies' rows of q and of q̇, ascending: ∂(q, q̇)/∂y_j is +0 in
+            // the others (R_j's rows, and (q̇ − q̇)/hh of a body not moved), which the sum
+            // over every row skipped too.
             dgq.fill(0.0);
             let rows = self.tree.rows_moved_by(j % n);
-            for c in rows.iter().copied().chain(rows.iter().map(|&i| nq + i)) {
-                let d = dq[c];
+            let rj = &w.r[(j % n) * nq..(j % n + 1) * nq];
+            let mut add = |c: usize, d: f64| {
                 if d != 0.0 {
                     for (o, &v) in dgq.iter_mut().zip(&dg[c * nq..(c + 1) * nq]) {
                         *o += v * d;
                     }
+                }
+            };
+            if j < n {
+                for &i in rows {
+                    add(i, rj[i]);
+                }
+                for &i in rows {
+                    add(nq + i, (qd[0][i] - qd[1][i]) / hh);
+                }
+            } else {
+                for &i in rows {
+                    add(nq + i, rj[i]);
                 }
             }
             self.reduced_product(&w.r, dgq, col);
@@ -218,9 +236,7 @@ impl Minimal {
                     l.column(col, &dsig);
                 }
             }
-            for (a, &v) in col.iter().enumerate() {
-                jac[(n + a, j)] = v;
-            }
+            write_column(&mut jac, j, n, col);
         }
     }
 
