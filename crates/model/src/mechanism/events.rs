@@ -140,6 +140,7 @@ pub(crate) fn event_list(
 /// `sc` (positions and velocities only): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i,
 /// an element's own, a kink's (docs/model.md §2, §7, §11). Where every function is a δ or an
 /// ε − ε_cap, joint by joint ([`Events`]); else [`values_of`].
+#[inline]
 pub(crate) fn values(
     events: &Events,
     forces: &Forces,
@@ -176,7 +177,9 @@ pub(crate) fn values(
     }
 }
 
-/// [`values`] of any list of event functions, one function after the other.
+/// [`values`] of any list of event functions, one function after the other (not inlined:
+/// the joint-by-joint path keeps a small frame).
+#[inline(never)]
 pub(crate) fn values_of(
     events: &[EventKind],
     forces: &Forces,
@@ -386,7 +389,9 @@ mod tests {
                 values(e, f, t, &sc, &mut g, Some(&mut gd));
                 values_of(e, f, t, &sc, &mut g0, Some(&mut gd0));
                 values(e, f, t, &sc, &mut g1, None);
-                assert!(g.iter().chain(&gd).all(|v| v.is_finite()), "{joint:?} {j}");
+                // Numbers compared, not NaN (a kink's rate in contact is +∞ by design).
+                let numbers = g.iter().all(|v| v.is_finite()) && gd.iter().all(|v| !v.is_nan());
+                assert!(numbers, "{joint:?} {j}");
                 assert_eq!(bits(&g), bits(&g0), "{joint:?} {j}");
                 assert_eq!(bits(&gd), bits(&gd0), "{joint:?} {j}");
                 assert_eq!(bits(&g1), bits(&g0), "{joint:?} {j}");
