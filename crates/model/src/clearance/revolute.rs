@@ -576,7 +576,7 @@ impl Revolute {
     /// δ, δ̇, ε and ε̇ of the joint (what its event functions δ and ε − ε_cap read), without
     /// the rest of [`Revolute::state`] (v_T, γ̇, Ω): the same expressions as
     /// [`ClearanceState::compute`], so the same bits.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn gap_and_rate(&self, kin: &Kin<'_>) -> [f64; 4] {
         let (r_b, v_b, _) = self.bearing.point(kin);
         let (r_j, v_j, _) = self.journal.point(kin);

@@ -222,6 +222,7 @@ impl Bodies {
     }
 
     /// [`Bodies::prescribed_kinematics`], computed.
+    #[inline]
     fn compute_prescribed(&self, t: f64, sc: &mut Scratch) {
         for p in &self.pres {
             let phi = p.theta0 + p.omega * t;

@@ -32,13 +32,77 @@ pub(crate) enum EventKind {
     Kink(usize, Kink),
 }
 
+/// The event functions of a mechanism in their order (module doc, [`event_list`]) and, when
+/// every one of them is a revolute clearance joint's δ or ε − ε_cap (a scene of lubricated or
+/// dry revolute clearance joints without kink events, prismatic clearance joints or elements
+/// with events: the presses), their indices by joint. [`values`] then evaluates each joint's
+/// δ, δ̇, ε, ε̇ once and writes its functions, instead of the general loop over the
+/// functions with its lookups (the same expressions, so the same bits). Reads as the slice
+/// of its functions.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Events {
+    list: Vec<EventKind>,
+    /// By joint, in the order of its δ, when every function is a δ or an ε − ε_cap.
+    gaps: Option<Vec<GapEvents>>,
+}
+
+/// The event functions of revolute clearance joint `k` where every function is a δ or an
+/// ε − ε_cap ([`Events`]): the index of its δ and of its ε − ε_cap (None: its film has no cap,
+/// or it has no film).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct GapEvents {
+    k: usize,
+    contact: usize,
+    cap: Option<usize>,
+}
+
+impl std::ops::Deref for Events {
+    type Target = [EventKind];
+
+    fn deref(&self) -> &[EventKind] {
+        &self.list
+    }
+}
+
+impl Events {
+    /// The functions `list` and, when each is a δ, or an ε − ε_cap of a joint whose δ is in
+    /// the list too, their indices by joint.
+    fn new(list: Vec<EventKind>) -> Events {
+        let only_gaps = list.iter().all(|e| match *e {
+            EventKind::Contact(_) => true,
+            EventKind::EpsCap(k) => list.contains(&EventKind::Contact(k)),
+            _ => false,
+        });
+        let gaps = only_gaps.then(|| {
+            list.iter()
+                .enumerate()
+                .filter_map(|(i, e)| match *e {
+                    EventKind::Contact(k) => Some(GapEvents {
+                        k,
+                        contact: i,
+                        cap: list.iter().position(|x| *x == EventKind::EpsCap(k)),
+                    }),
+                    _ => None,
+                })
+                .collect()
+        });
+        Events { list, gaps }
+    }
+
+    /// Whether [`values`] evaluates them by joint (every function a δ or an ε − ε_cap).
+    #[cfg(test)]
+    pub(crate) fn by_joint(&self) -> bool {
+        self.gaps.is_some()
+    }
+}
+
 /// The event functions of a mechanism (module doc), with the kinks when `kinks`.
 pub(crate) fn event_list(
     revolute: &[Revolute],
     prismatic: &[Prismatic],
     elements: &[Element],
     kinks: bool,
-) -> Vec<EventKind> {
+) -> Events {
     let mut events = Vec::new();
     for k in 0..revolute.len() {
         events.push(EventKind::Contact(k));
@@ -69,13 +133,54 @@ pub(crate) fn event_list(
             }
         }
     }
-    events
+    Events::new(events)
 }
 
 /// The event functions at t and, when `g_dot` is given, their rates, from the kinematics in
 /// `sc` (positions and velocities only): δ and δ̇, ε − ε_cap and ε̇, a corner's δ_i and δ̇_i,
-/// an element's own, a kink's (docs/model.md §2, §7, §11).
+/// an element's own, a kink's (docs/model.md §2, §7, §11). Where every function is a δ or an
+/// ε − ε_cap, joint by joint ([`Events`]); else [`values_of`].
+#[inline]
 pub(crate) fn values(
+    events: &Events,
+    forces: &Forces,
+    t: f64,
+    sc: &Scratch,
+    g: &mut [f64],
+    g_dot: Option<&mut [f64]>,
+) {
+    let Some(gaps) = &events.gaps else {
+        return values_of(&events.list, forces, t, sc, g, g_dot);
+    };
+    let kin = sc.kin();
+    match g_dot {
+        Some(gd) => {
+            for j in gaps {
+                let c = &forces.revolute[j.k];
+                let [delta, delta_dot, eps, eps_dot] = c.gap_and_rate(&kin);
+                (g[j.contact], gd[j.contact]) = (delta, delta_dot);
+                if let Some(i) = j.cap {
+                    (g[i], gd[i]) = c.eps_cap_value(eps, eps_dot);
+                }
+            }
+        }
+        None => {
+            for j in gaps {
+                let c = &forces.revolute[j.k];
+                let [delta, _, eps, eps_dot] = c.gap_and_rate(&kin);
+                g[j.contact] = delta;
+                if let Some(i) = j.cap {
+                    g[i] = c.eps_cap_value(eps, eps_dot).0;
+                }
+            }
+        }
+    }
+}
+
+/// [`values`] of any list of event functions, one function after the other (not inlined:
+/// the joint-by-joint path keeps a small frame).
+#[inline(never)]
+pub(crate) fn values_of(
     events: &[EventKind],
     forces: &Forces,
     t: f64,
@@ -235,6 +340,65 @@ mod tests {
             }
         }
         assert_eq!(checked, 160);
+    }
+
+    /// Where every event function is a δ or an ε − ε_cap, `values` goes joint by joint and
+    /// gives the bits of the general loop (`values_of`) over the same functions, values and
+    /// rates, with and without the rates; with kink events it is the general loop. The
+    /// lubricated press (δ and ε − ε_cap of its joint; with its kinks switched on, the general
+    /// loop) and the dry press (δ alone without its kinks; with them, its default, the
+    /// general loop), at states across a crank revolution and the clearance circle.
+    #[test]
+    fn the_functions_by_joint_are_the_general_loops_bits() {
+        use crate::mechanism::events::EventKind::{Contact, EpsCap};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut checked = 0;
+        for (joint, kinks, by_joint, n) in [
+            (PressJoint::Lubricated, false, true, 2),
+            (PressJoint::Lubricated, true, false, 6),
+            (PressJoint::Dry, false, true, 1),
+            (PressJoint::Dry, true, false, 5),
+        ] {
+            let mut m = Mechanism::from_scene(&press_scene(joint, 150.0, 1e-4)).unwrap();
+            m.set_kink_events(kinks);
+            assert_eq!(
+                (m.events.by_joint(), m.events.len()),
+                (by_joint, n),
+                "{joint:?}"
+            );
+            if by_joint {
+                let list: &[EventKind] = &m.events;
+                assert_eq!(list, &[Contact(0), EpsCap(0)][..n], "{joint:?}");
+            }
+            let y0 = m.initial_state();
+            let half = y0.len() / 2;
+            for j in 0..20 {
+                let y: Vec<f64> = y0
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        let w = ((j * 5 + i * 3) as f64 * 0.73).sin();
+                        v + if i < half { 9e-5 * w } else { 2.0 * w }
+                    })
+                    .collect();
+                let t = 0.4 * j as f64 / 20.0;
+                let mut sc = m.scratch();
+                m.kinematics(t, &y, &mut sc);
+                let (f, e) = (&m.forces, &m.events);
+                let [mut g, mut gd, mut g0, mut gd0, mut g1] = [(); 5].map(|_| vec![f64::NAN; n]);
+                values(e, f, t, &sc, &mut g, Some(&mut gd));
+                values_of(e, f, t, &sc, &mut g0, Some(&mut gd0));
+                values(e, f, t, &sc, &mut g1, None);
+                // Numbers compared, not NaN (a kink's rate in contact is +∞ by design).
+                let numbers = g.iter().all(|v| v.is_finite()) && gd.iter().all(|v| !v.is_nan());
+                assert!(numbers, "{joint:?} {j}");
+                assert_eq!(bits(&g), bits(&g0), "{joint:?} {j}");
+                assert_eq!(bits(&gd), bits(&gd0), "{joint:?} {j}");
+                assert_eq!(bits(&g1), bits(&g0), "{joint:?} {j}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 80);
     }
 
     #[test]

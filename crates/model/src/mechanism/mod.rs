@@ -39,7 +39,7 @@ use std::cell::{RefCell, RefMut};
 use crate::labels::EventLabels;
 use crate::mechanism::bodies::{Bodies, BodyInfo};
 use crate::mechanism::constraints::Constraints;
-use crate::mechanism::events::EventKind;
+use crate::mechanism::events::{EventKind, Events};
 use crate::mechanism::forces::{ForceJacWork, Forces};
 use crate::mechanism::formulation::{Formulation, FormulationStats};
 use crate::mechanism::scratch::Scratch;
@@ -63,7 +63,7 @@ pub struct Mechanism {
     constraints: Constraints,
     forces: Forces,
     formulation: Formulation,
-    events: Vec<EventKind>,
+    events: Events,
     /// Whether the kink events are on: the scene's `kink_events`, or the automatic choice
     /// (build.rs; docs/model.md §7), or [`Mechanism::set_kink_events`].
     kink_events: bool,

@@ -367,6 +367,7 @@ impl Tree {
 
     /// Poses, velocities and (cos φ, sin φ) of the integrated bodies from (θ, θ̇) into `sc`
     /// (the prescribed bodies' must be there already).
+    #[inline]
     pub(crate) fn positions(&self, th: &[f64], thd: &[f64], sc: &mut Scratch) {
         for tb in &self.bodies {
             Self::place(tb, th, thd, sc);
