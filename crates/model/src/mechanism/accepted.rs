@@ -138,7 +138,16 @@ impl Mechanism {
         }
     }
 
+    /// Whether an accepted step has anything to check (module doc): constraint rows, and a
+    /// formulation other than minimal on a tree.
+    #[inline]
+    pub(crate) fn checks_accepted_steps(&self) -> bool {
+        !self.constraints.rows.is_empty()
+            && !matches!(&self.formulation, Formulation::Minimal(f) if f.closes_no_loop())
+    }
+
     /// The checks of the module doc on the accepted step (t_a, y_a) → (t_b, y_b).
+    #[inline(never)]
     pub(crate) fn check_accepted_state(
         &self,
         t_a: f64,
@@ -147,13 +156,8 @@ impl Mechanism {
         y_b: &[f64],
     ) -> Result<(), Rejection> {
         let cons = &self.constraints;
-        if cons.rows.is_empty() {
+        if !self.checks_accepted_steps() {
             return Ok(());
-        }
-        if let Formulation::Minimal(f) = &self.formulation {
-            if f.closes_no_loop() {
-                return Ok(());
-            }
         }
         let evals = self.rows_at(t_b, y_b);
         if let Formulation::LagrangeBaumgarte(f) = &self.formulation {

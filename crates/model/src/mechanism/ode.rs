@@ -71,6 +71,9 @@ impl OdeSystem for Mechanism {
 
     /// mechanism/accepted.rs: a singular configuration Lagrange–Baumgarte cannot pass, or a
     /// constraint violation over its tolerance.
+    /// (Inline: where there is nothing to check, a minimal tree or no constraint rows, the
+    /// call returns at once without entering the checks.)
+    #[inline]
     fn check_accepted(
         &self,
         t_a: f64,
@@ -78,6 +81,9 @@ impl OdeSystem for Mechanism {
         t_b: f64,
         y_b: &[f64],
     ) -> Result<(), Rejection> {
+        if !self.checks_accepted_steps() {
+            return Ok(());
+        }
         self.check_accepted_state(t_a, y_a, t_b, y_b)
     }
 

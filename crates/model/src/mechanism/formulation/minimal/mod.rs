@@ -221,6 +221,7 @@ impl Minimal {
 
     /// Whether every ideal joint is a tree joint (no joint closes a loop): the positions then
     /// meet every constraint by construction.
+    #[inline]
     pub(crate) fn closes_no_loop(&self) -> bool {
         self.tree.closing.is_empty()
     }
