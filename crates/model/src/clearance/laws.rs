@@ -482,8 +482,9 @@ pub struct Film {
     pub mirror_width: f64,
 }
 
-/// A film's constants ([`Film::constants`]): computed once, read by [`Film::force_with`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A film's constants ([`Film::constants`]): computed once, read by [`Film::force_with`]
+/// (the default, zeros, stands for a joint without a film, where nothing reads them).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct FilmConstants {
     /// The law's scale S (12 μ L R³/c², 12 π μ L R³/c² or μ R L³/(2 c²)).
     pub scale: f64,

@@ -328,13 +328,7 @@ impl Revolute {
             c: rb - rj,
             normal: normal_law(&c.normal, stiffness),
             friction: friction_law(&c.friction),
-            film_k: film.map_or(
-                FilmConstants {
-                    scale: 0.0,
-                    limit: 0.0,
-                },
-                |f| f.constants(),
-            ),
+            film_k: film.map(|f| f.constants()).unwrap_or_default(),
             film,
             e0: c.initial_eccentricity,
             e0_rate: c.initial_eccentricity_rate,

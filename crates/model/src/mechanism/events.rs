@@ -153,25 +153,19 @@ pub(crate) fn values(
         return values_of(&events.list, forces, t, sc, g, g_dot);
     };
     let kin = sc.kin();
-    match g_dot {
-        Some(gd) => {
-            for j in gaps {
-                let c = &forces.revolute[j.k];
-                let [delta, delta_dot, eps, eps_dot] = c.gap_and_rate(&kin);
-                (g[j.contact], gd[j.contact]) = (delta, delta_dot);
-                if let Some(i) = j.cap {
-                    (g[i], gd[i]) = c.eps_cap_value(eps, eps_dot);
-                }
-            }
+    let mut g_dot = g_dot;
+    for j in gaps {
+        let c = &forces.revolute[j.k];
+        let [delta, delta_dot, eps, eps_dot] = c.gap_and_rate(&kin);
+        let cap = j.cap.map(|i| (i, c.eps_cap_value(eps, eps_dot)));
+        g[j.contact] = delta;
+        if let Some((i, (v, _))) = cap {
+            g[i] = v;
         }
-        None => {
-            for j in gaps {
-                let c = &forces.revolute[j.k];
-                let [delta, _, eps, eps_dot] = c.gap_and_rate(&kin);
-                g[j.contact] = delta;
-                if let Some(i) = j.cap {
-                    g[i] = c.eps_cap_value(eps, eps_dot).0;
-                }
+        if let Some(gd) = g_dot.as_deref_mut() {
+            gd[j.contact] = delta_dot;
+            if let Some((i, (_, d))) = cap {
+                gd[i] = d;
             }
         }
     }

@@ -39,6 +39,9 @@ pub(crate) struct Forces {
     /// revolute clearance joint's ends ([`JOURNAL`], [`BEARING`]; None: the ground or a
     /// prescribed body).
     small: SmallTables,
+    /// The integrated index of every scene body ([`Bodies::int_of`]; None: the ground or a
+    /// prescribed body), made once: the small path's tables and the Jacobian read it.
+    int_of: Vec<Option<usize>>,
 }
 
 /// The tables of [`Forces::applied_small`] (see [`Forces`]).
@@ -53,9 +56,6 @@ struct SmallTables {
 pub(crate) struct ForceJacWork {
     /// ∂g/∂(q, q̇), nq × n column-major.
     pub dg: Vec<f64>,
-    /// The integrated index of every scene body ([`Bodies::int_of`]), built at the first
-    /// call (the bodies do not change).
-    int_of: Vec<Option<usize>>,
 }
 
 impl Forces {
@@ -98,6 +98,7 @@ impl Forces {
             prismatic,
             elements: scene.forces.iter().map(|f| f.compile(scene)).collect(),
             small,
+            int_of,
         }
     }
 
@@ -233,22 +234,18 @@ impl Forces {
     pub(crate) fn jacobian(&self, bodies: &Bodies, t: f64, sc: &Scratch, fw: &mut ForceJacWork) {
         self.revolute_jacobian(bodies, sc, fw);
         if !(self.elements.is_empty() && self.prismatic.is_empty()) {
-            self.element_jacobian(bodies, &fw.int_of, t, sc, &mut fw.dg);
+            self.element_jacobian(bodies, t, sc, &mut fw.dg);
         }
     }
 
-    /// `fw.dg` zeroed (nq × 2nq) with the revolute clearance joints' closed forms added, and
-    /// `fw.int_of` (the bodies' integrated indices) for the other parts.
+    /// `fw.dg` zeroed (nq × 2nq) with the revolute clearance joints' closed forms added.
     fn revolute_jacobian(&self, bodies: &Bodies, sc: &Scratch, fw: &mut ForceJacWork) {
         let nq = bodies.nq();
         let n = 2 * nq;
-        if fw.int_of.len() != bodies.info.len() {
-            fw.int_of = bodies.int_of();
-        }
         let dg = zeroed(&mut fw.dg, nq * n);
         let kin = sc.kin();
         for (c, ev) in self.revolute.iter().zip(&sc.revolute) {
-            c.force_jacobian(ev, &kin, &fw.int_of, n, dg);
+            c.force_jacobian(ev, &kin, &self.int_of, n, dg);
         }
     }
 
@@ -274,7 +271,7 @@ impl Forces {
         self.revolute_jacobian(bodies, sc, fw);
         let kin = sc.kin();
         let mut fj = ForceJacobian {
-            int_of: &fw.int_of,
+            int_of: &self.int_of,
             nq: bodies.nq(),
             dg: &mut fw.dg,
         };
@@ -284,19 +281,12 @@ impl Forces {
     /// Adds ∂g/∂y of the force elements and prismatic clearance joints (nq × n, column-major):
     /// each element's closed form where it has one, then central differences of the
     /// generalized forces of the others and of the prismatic clearance joints, all together.
-    fn element_jacobian(
-        &self,
-        bodies: &Bodies,
-        int_of: &[Option<usize>],
-        t: f64,
-        sc: &Scratch,
-        dg: &mut [f64],
-    ) {
+    fn element_jacobian(&self, bodies: &Bodies, t: f64, sc: &Scratch, dg: &mut [f64]) {
         let nq = bodies.nq();
         let n = 2 * nq;
         let kin = sc.kin();
         let mut fj = ForceJacobian {
-            int_of,
+            int_of: &self.int_of,
             nq,
             dg: &mut *dg,
         };

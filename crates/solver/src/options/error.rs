@@ -154,6 +154,7 @@ pub enum Allowed {
 
 impl Allowed {
     /// Whether `v` is allowed (NaN never is).
+    #[inline]
     pub fn contains(&self, v: f64) -> bool {
         match *self {
             Allowed::Finite => v.is_finite(),

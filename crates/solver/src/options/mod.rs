@@ -381,14 +381,14 @@ impl SolverOptions {
     }
 }
 
-/// Whether output times pass [`Rule::OUTPUT_TIME`] (each finite) and are non-decreasing: the
-/// checks of `configure_for`'s loop, without their errors.
+/// Whether output times pass [`Rule::OUTPUT_TIME`] and are non-decreasing: the checks of
+/// `configure_for`'s loop, without their errors.
 fn output_times_ok(ts: &[f64]) -> bool {
     let mut prev = f64::NEG_INFINITY;
     let mut ok = true;
     for &t in ts {
-        // Finite and not below the one before (NaN fails both).
-        ok &= t.is_finite() & (t >= prev);
+        // Allowed by the rule and not below the one before (NaN fails both).
+        ok &= Rule::OUTPUT_TIME.allowed.contains(t) & (t >= prev);
         prev = t;
     }
     ok

@@ -73,10 +73,7 @@ impl FlatPlan {
             let m = [mass[3 * i], mass[3 * i + 1], mass[3 * i + 2]];
             // A constant column r with a_c: the dense path's M̄_cc and m a_c.
             let fixed = |c: usize, r: [f64; 3], ac: [f64; 3]| {
-                let mut d = 0.0;
-                d += r[0] * m[0] * r[0];
-                d += r[1] * m[1] * r[1];
-                d += r[2] * m[2] * r[2];
+                let d = diagonal(r, m);
                 Coordinate::Fixed {
                     c,
                     i,
@@ -115,6 +112,12 @@ impl FlatPlan {
         FlatPlan { coords }
     }
 
+    /// Whether the tree was flat and has a plan.
+    #[inline]
+    pub(crate) fn is_planned(&self) -> bool {
+        !self.coords.is_empty()
+    }
+
     /// θ̈ into `out` from the applied forces `g` (one row per integrated body) at the
     /// kinematics in `sc` (module doc); false if some M̄_cc is not > 0 or some θ̈ not finite.
     #[inline(always)]
@@ -124,11 +127,7 @@ impl FlatPlan {
                 Coordinate::Fixed { c, i, r, mac, l } => {
                     let gi = &g[i];
                     let f = [gi[0] - mac[0], gi[1] - mac[1], gi[2] - mac[2]];
-                    let mut s = 0.0;
-                    s += r[0] * f[0];
-                    s += r[1] * f[1];
-                    s += r[2] * f[2];
-                    (c, s * l * l)
+                    (c, force(r, f) * l * l)
                 }
                 Coordinate::Revolute {
                     c,
@@ -167,14 +166,7 @@ impl FlatPlan {
                         gi[1] - m[1] * ac[1],
                         gi[2] - m[2] * ac[2],
                     ];
-                    let mut d = 0.0;
-                    d += r[0] * m[0] * r[0];
-                    d += r[1] * m[1] * r[1];
-                    d += r[2] * m[2] * r[2];
-                    let mut q = 0.0;
-                    q += r[0] * f[0];
-                    q += r[1] * f[1];
-                    q += r[2] * f[2];
+                    let (d, q) = (diagonal(r, m), force(r, f));
                     if !(d > 0.0) {
                         return false;
                     }
@@ -189,6 +181,27 @@ impl FlatPlan {
         }
         true
     }
+}
+
+/// M̄_cc = Σ_rows r m r of a column r, the rows summed in order from +0 (the dense path's
+/// sum, so its bits).
+#[inline(always)]
+fn diagonal(r: [f64; 3], m: [f64; 3]) -> f64 {
+    let mut d = 0.0;
+    d += r[0] * m[0] * r[0];
+    d += r[1] * m[1] * r[1];
+    d += r[2] * m[2] * r[2];
+    d
+}
+
+/// Q̄_c = Σ_rows r f of a column r and the body's g − m a_c, in the dense path's order.
+#[inline(always)]
+fn force(r: [f64; 3], f: [f64; 3]) -> f64 {
+    let mut s = 0.0;
+    s += r[0] * f[0];
+    s += r[1] * f[1];
+    s += r[2] * f[2];
+    s
 }
 
 #[cfg(test)]
@@ -238,7 +251,7 @@ mod tests {
         let Formulation::Minimal(f) = m.formulation() else {
             panic!("minimal")
         };
-        assert!(!f.small_flat);
+        assert!(!f.small_flat());
         assert!(f.flat.coords.is_empty());
     }
 }

@@ -143,9 +143,8 @@ pub(crate) struct Minimal {
     /// The terms of Rᵀ M R and of Rᵀ (Q − M a_c) (`terms`).
     mass_terms: Vec<Term>,
     force_terms: Vec<Term>,
-    /// Whether the tree is flat (`Tree::is_flat`: Rᵀ M R diagonal; small.rs).
-    small_flat: bool,
-    /// A flat tree's θ̈, planned coordinate by coordinate (flat.rs; empty if not flat).
+    /// A flat tree's θ̈, planned coordinate by coordinate (flat.rs; empty if not flat, and
+    /// then [`Minimal::small_flat`] is false).
     flat: FlatPlan,
 }
 
@@ -191,7 +190,6 @@ impl Minimal {
         Minimal {
             mass_terms,
             force_terms,
-            small_flat: tree.is_flat(),
             flat: FlatPlan::new(&tree, &mass),
             tree,
             nq,

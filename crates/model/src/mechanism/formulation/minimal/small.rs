@@ -56,6 +56,13 @@ impl Minimal {
         self.loops.is_none() && (1..=SMALL_MAX).contains(&self.tree.n)
     }
 
+    /// Whether the tree is flat (`Tree::is_flat`: Rᵀ M R diagonal) and its θ̈ planned
+    /// (flat.rs): the small path's flat case.
+    #[inline]
+    pub(crate) fn small_flat(&self) -> bool {
+        self.flat.is_planned()
+    }
+
     /// θ̈ (n) into `thdd` at the kinematics in `sc`, the applied forces on the stack
     /// (`Forces::applied_small`) (module doc); false if M̄ is not positive definite in f64 or
     /// θ̈ is not finite. Only where [`Minimal::takes_small_path`].
@@ -68,7 +75,7 @@ impl Minimal {
         sc: &mut Scratch,
         thdd: &mut [f64],
     ) -> bool {
-        if self.small_flat {
+        if self.small_flat() {
             // The flat plan (flat.rs), the applied forces inlined: no dispatch on n.
             let nb = self.tree.bodies.len();
             let mut g = [[0.0f64; 3]; SMALL_MAX];
@@ -312,7 +319,7 @@ mod tests {
             panic!("minimal")
         };
         // A link on an integrated parent: not flat, the dense sums and Cholesky.
-        assert!(!f.small_flat);
+        assert!(!f.small_flat());
         // Gravity and the turned links make every θ̈ of size: numbers, not zeros, compared.
         assert!(compare(&m, 4, 0.1) > 1.0);
     }
@@ -338,7 +345,7 @@ mod tests {
             panic!("minimal")
         };
         assert_eq!(f.n(), 5);
-        assert!(f.small_flat);
+        assert!(f.small_flat());
         assert!(compare(&m, 4, 0.1) > 1.0);
     }
 
@@ -354,7 +361,7 @@ mod tests {
         };
         // Rod on the prescribed crank, slider on the ground: flat, M̄ diagonal, each θ̈ from
         // its own body (small_flat), the dense path's bits.
-        assert!(f.small_flat);
+        assert!(f.small_flat());
         assert!(compare(&m, 4, 3e-5) > 1.0);
     }
 
